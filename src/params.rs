@@ -1,0 +1,214 @@
+//! The planner's parameters: one validated struct with the papers' names, units and ranges.
+//!
+//! Seed 002 §1 calls them *method-independent* parameters: they do not follow from the vehicle's
+//! physics and must be tuned (A_s⁺, A_r⁺, ε, n_γ, μ, F_max, v_max, σ, A⁻). Invalid values are
+//! rejected with a [`ParamError`] naming the parameter; nothing is clamped silently.
+//!
+//! Units: metres, seconds, radians. "Force" F is the potential difference across ε (seed 000
+//! eq. 2), integrated into velocity with period T (eq. 5), so it has units of m/s².
+
+/// Most gradient sample directions n_γ the planner precomputes (its sample table capacity).
+pub const N_GAMMA_MAX: usize = 32;
+
+/// How the force and commanded velocity are bounded.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Bounding {
+    /// Bound the modulus, keep the direction (seed 001 eq. 5 and 7).
+    Plain,
+    /// Bound the components along and across the direction of travel in the order that keeps a
+    /// heading-rate reserve (seed 001 §3.1).
+    Split,
+}
+
+/// The planner's parameters. Build from [`Params::default`] and change fields, then pass to
+/// [`Planner::new`](crate::planner::Planner::new) or
+/// [`Planner::set_params`](crate::planner::Planner::set_params), which validate.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Params {
+    /// T, the planner period in seconds (seed 000 eq. 5). 0.02 ..= 1.0 (50 Hz .. 1 Hz).
+    pub period_s: f32,
+    /// ε, radius of the gradient sample circle in metres (000 eq. 3, "spatial resolution").
+    /// 0.01 ..= 10.
+    pub epsilon_m: f32,
+    /// n_γ, number of gradient sample directions (000 eq. 4, "angular resolution").
+    /// 4 ..= [`N_GAMMA_MAX`].
+    pub n_gamma: u8,
+    /// μ, virtual viscous friction in 1/s (000 eq. 14, 001 eq. 4). 0 ..= 10.
+    pub mu: f32,
+    /// F_max, bound on the controlling force in m/s² (001 eq. 5). 0.001 ..= 100.
+    pub f_max: f32,
+    /// v_max, bound on the commanded speed in m/s (000 eq. 5, 001 eq. 7). 0.01 ..= 20.
+    pub v_max: f32,
+    /// A_s⁺, default static repulsiveness of an obstacle (000 eq. 9, 12; 002 eq. 1), m².
+    /// Obstacles may carry their own. 0.001 ..= 100.
+    pub a_plus: f32,
+    /// A_r⁺, rotor amplification (001 eq. 3, 002 eq. 3), potential per metre. 0 ..= 100
+    /// (0 turns rotors off).
+    pub a_rotor: f32,
+    /// A⁻, attractiveness of the goal-point (000 eq. 13). 0.001 ..= 10⁴.
+    pub a_minus: f32,
+    /// σ, attractor reach of the goal-point in metres (000 eq. 13). 0.1 ..= 10⁴.
+    pub sigma_m: f32,
+    /// Plain or split bounding (001 §3.1).
+    pub bounding: Bounding,
+    /// r₀ of the circle another vehicle is seen as, metres (000 §III: 0.5). 0.01 ..= 100.
+    pub agent_radius_m: f32,
+    /// A⁺ of the circle another vehicle is seen as (000 §III: 2.5). 0.001 ..= 100.
+    pub agent_a_plus: f32,
+    /// Distance to the goal-point under which the mission counts as reached, metres. Also the
+    /// distance inside which no local minimum is suspected. 0.01 ..= 100.
+    pub arrival_radius_m: f32,
+    /// λ of a ghost goal-point: fraction of the distance d to the goal along the line to it
+    /// (000 eq. 17). 0 ..= 1.
+    pub ghost_lambda: f32,
+    /// α of a ghost goal-point: multiple of d offset across the line to the goal (000 eq. 17).
+    /// 0.01 ..= 2.
+    pub ghost_alpha: f32,
+    /// ε_ghost: a ghost goal-point is removed once the vehicle is this close, metres (000 §III).
+    /// 0.01 ..= 100.
+    pub ghost_eps_m: f32,
+    /// Local-minimum test: planned speed below this, in m/s, ... 0 ..= v_max.
+    pub stall_speed: f32,
+    /// ... for this long, in seconds, while farther than `arrival_radius_m` from the active
+    /// goal-point. 0.1 ..= 600.
+    pub stall_time_s: f32,
+    /// A ghost goal-point is given up after this many seconds ("for a given period of time",
+    /// 000 §III). 1 ..= 3600.
+    pub ghost_timeout_s: f32,
+    /// Seed of the deterministic generator for the ghost's random side ρ (000 eq. 17).
+    pub seed: u32,
+}
+
+impl Default for Params {
+    /// A VideoRay-class default: 10 Hz, 1 m/s, the papers' μ = 0.4 and agent circle
+    /// {r₀ = 0.5, A⁺ = 2.5}. The other values are a starting point for the tuning of seed 002.
+    fn default() -> Self {
+        Params {
+            period_s: 0.1,
+            epsilon_m: 0.25,
+            n_gamma: 16,
+            mu: 0.4,
+            f_max: 0.5,
+            v_max: 1.0,
+            a_plus: 2.5,
+            a_rotor: 1.0,
+            a_minus: 50.0,
+            sigma_m: 40.0,
+            bounding: Bounding::Split,
+            agent_radius_m: 0.5,
+            agent_a_plus: 2.5,
+            arrival_radius_m: 1.0,
+            ghost_lambda: 0.5,
+            ghost_alpha: 0.5,
+            ghost_eps_m: 1.0,
+            stall_speed: 0.05,
+            stall_time_s: 5.0,
+            ghost_timeout_s: 60.0,
+            seed: 1,
+        }
+    }
+}
+
+/// What is wrong with a parameter.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum ParamProblem {
+    /// NaN or infinite.
+    NonFinite,
+    /// Outside its documented range.
+    OutOfRange,
+}
+
+/// A rejected parameter set: which parameter (its field name) and why.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct ParamError {
+    /// The field name in [`Params`].
+    pub name: &'static str,
+    /// What is wrong with it.
+    pub problem: ParamProblem,
+}
+
+impl core::fmt::Display for ParamError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        let why = match self.problem {
+            ParamProblem::NonFinite => "is not a finite number",
+            ParamProblem::OutOfRange => "is out of its documented range",
+        };
+        write!(f, "parameter `{}` {}", self.name, why)
+    }
+}
+
+fn check(name: &'static str, v: f32, lo: f32, hi: f32) -> Result<(), ParamError> {
+    let problem = if !v.is_finite() {
+        ParamProblem::NonFinite
+    } else if v < lo || v > hi {
+        ParamProblem::OutOfRange
+    } else {
+        return Ok(());
+    };
+    Err(ParamError { name, problem })
+}
+
+impl Params {
+    /// Checks every parameter against its documented range.
+    pub fn validate(&self) -> Result<(), ParamError> {
+        check("period_s", self.period_s, 0.02, 1.0)?;
+        check("epsilon_m", self.epsilon_m, 0.01, 10.0)?;
+        check("n_gamma", self.n_gamma as f32, 4.0, N_GAMMA_MAX as f32)?;
+        check("mu", self.mu, 0.0, 10.0)?;
+        check("f_max", self.f_max, 0.001, 100.0)?;
+        check("v_max", self.v_max, 0.01, 20.0)?;
+        check("a_plus", self.a_plus, 0.001, 100.0)?;
+        check("a_rotor", self.a_rotor, 0.0, 100.0)?;
+        check("a_minus", self.a_minus, 0.001, 1e4)?;
+        check("sigma_m", self.sigma_m, 0.1, 1e4)?;
+        check("agent_radius_m", self.agent_radius_m, 0.01, 100.0)?;
+        check("agent_a_plus", self.agent_a_plus, 0.001, 100.0)?;
+        check("arrival_radius_m", self.arrival_radius_m, 0.01, 100.0)?;
+        check("ghost_lambda", self.ghost_lambda, 0.0, 1.0)?;
+        check("ghost_alpha", self.ghost_alpha, 0.01, 2.0)?;
+        check("ghost_eps_m", self.ghost_eps_m, 0.01, 100.0)?;
+        check("stall_speed", self.stall_speed, 0.0, self.v_max)?;
+        check("stall_time_s", self.stall_time_s, 0.1, 600.0)?;
+        check("ghost_timeout_s", self.ghost_timeout_s, 1.0, 3600.0)?;
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn defaults_are_valid() {
+        assert_eq!(Params::default().validate(), Ok(()));
+    }
+
+    #[test]
+    fn each_bad_value_is_named() {
+        let mut p = Params::default();
+        p.mu = f32::NAN;
+        assert_eq!(
+            p.validate(),
+            Err(ParamError {
+                name: "mu",
+                problem: ParamProblem::NonFinite
+            })
+        );
+        let mut p = Params::default();
+        p.n_gamma = 64;
+        assert_eq!(p.validate().map_err(|e| e.name), Err("n_gamma"));
+        let mut p = Params::default();
+        p.period_s = 2.0;
+        assert_eq!(
+            p.validate().map_err(|e| e.problem),
+            Err(ParamProblem::OutOfRange)
+        );
+        let mut p = Params::default();
+        p.stall_speed = p.v_max * 2.0;
+        assert_eq!(p.validate().map_err(|e| e.name), Err("stall_speed"));
+    }
+}

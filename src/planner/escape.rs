@@ -1,0 +1,217 @@
+//! Escape from local minima with ghost goal-points, seed 000 §III eq. 16–17.
+//!
+//! **Detection** (the paper leaves the test open): the vehicle is in a local minimum when its
+//! planned speed has stayed below `stall_speed` for `stall_time_s` while it is farther than
+//! `arrival_radius_m` from the active goal-point. With friction the planner settles in a minimum,
+//! so a settled vehicle away from its goal is exactly the symptom of Fig. 4.
+//!
+//! **Placement** (eq. 16–17), from the vehicle at p towards the active goal-point g:
+//! ṽ = (g − p)/d, d = ‖g − p‖, and
+//! r_GGP = p + λ·d·ṽ + α·d·R(π(1 + 2ρ)/2)·ṽ,
+//! i.e. a fraction λ along the line to the goal and α·d to its left (ρ = 0) or right (ρ = 1).
+//! The paper's eq. 16 lists the components of ṽ as (Δy, Δx), an extraction slip we read as
+//! (Δx, Δy); its r_GGP is relative to the vehicle (as its Fig. 5 draws it). ρ comes from a seeded
+//! generator, so runs repeat.
+//!
+//! **Stack.** A ghost replaces the goal-point while it is active. Stuck again on the way to a
+//! ghost, the planner stacks another one computed towards that ghost. A ghost is removed when
+//! the vehicle comes within ε_ghost, or after `ghost_timeout_s` ("for a given period of time").
+//! The stack holds [`MAX_GHOSTS`]; when it is full a new ghost replaces the top one (the one that
+//! just failed), counted in `replaced_full`.
+
+use heapless::Vec;
+
+use crate::math::{Vec2, XorShift32};
+use crate::params::Params;
+
+/// Depth of the ghost goal-point stack.
+pub const MAX_GHOSTS: usize = 4;
+
+/// A ghost goal-point and when it was placed.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct GhostGoal {
+    /// Position, m.
+    pub position: Vec2,
+    /// When it was placed, ms.
+    pub placed_ms: u64,
+}
+
+/// Ghost goal-point bookkeeping, for telemetry and tests.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct EscapeCounters {
+    /// Ghosts placed.
+    pub placed: u32,
+    /// Ghosts removed because the vehicle reached them.
+    pub reached: u32,
+    /// Ghosts given up after the timeout.
+    pub timed_out: u32,
+    /// Ghosts that replaced the top of a full stack.
+    pub replaced_full: u32,
+}
+
+/// The local-minimum detector and the ghost stack.
+#[derive(Clone, Debug)]
+pub struct Escape {
+    stack: Vec<GhostGoal, MAX_GHOSTS>,
+    stall_since_ms: Option<u64>,
+    rng: XorShift32,
+    /// Counters.
+    pub counters: EscapeCounters,
+}
+
+impl Escape {
+    /// An empty stack with the generator seeded from `seed`.
+    pub fn new(seed: u32) -> Self {
+        Escape {
+            stack: Vec::new(),
+            stall_since_ms: None,
+            rng: XorShift32::new(seed),
+            counters: EscapeCounters::default(),
+        }
+    }
+
+    /// The ghosts, bottom first.
+    pub fn ghosts(&self) -> &[GhostGoal] {
+        &self.stack
+    }
+
+    /// The goal-point the field attracts to now: the top ghost, else the mission's goal.
+    pub fn active_target(&self, goal: Vec2) -> Vec2 {
+        self.stack.last().map_or(goal, |g| g.position)
+    }
+
+    /// Forgets all ghosts and the stall timer (new mission, hold).
+    pub fn reset(&mut self) {
+        self.stack.clear();
+        self.stall_since_ms = None;
+    }
+
+    /// One period of the detector: removes reached or expired ghosts, and places a ghost when
+    /// the vehicle at `p`, with planned speed `speed`, has been stalled long enough.
+    pub fn update(&mut self, now_ms: u64, p: Vec2, speed: f32, goal: Vec2, params: &Params) {
+        let timeout_ms = (params.ghost_timeout_s * 1000.0) as u64;
+        while let Some(top) = self.stack.last().copied() {
+            if (top.position - p).norm() <= params.ghost_eps_m {
+                self.counters.reached = self.counters.reached.saturating_add(1);
+            } else if now_ms.saturating_sub(top.placed_ms) >= timeout_ms {
+                self.counters.timed_out = self.counters.timed_out.saturating_add(1);
+            } else {
+                break;
+            }
+            self.stack.pop();
+            self.stall_since_ms = None;
+        }
+
+        let target = self.active_target(goal);
+        let far = (target - p).norm() > params.arrival_radius_m;
+        if !(far && speed < params.stall_speed) {
+            self.stall_since_ms = None;
+            return;
+        }
+        let since = *self.stall_since_ms.get_or_insert(now_ms);
+        if now_ms.saturating_sub(since) < (params.stall_time_s * 1000.0) as u64 {
+            return;
+        }
+        let ghost = GhostGoal {
+            position: self.place(p, target, params),
+            placed_ms: now_ms,
+        };
+        self.counters.placed = self.counters.placed.saturating_add(1);
+        if let Err(g) = self.stack.push(ghost) {
+            if let Some(top) = self.stack.last_mut() {
+                *top = g;
+            }
+            self.counters.replaced_full = self.counters.replaced_full.saturating_add(1);
+        }
+        self.stall_since_ms = None;
+    }
+
+    /// 000 eq. 16–17.
+    fn place(&mut self, p: Vec2, target: Vec2, params: &Params) -> Vec2 {
+        let to = target - p;
+        let d = to.norm();
+        let v = to.normalized(1e-6).unwrap_or(Vec2::new(1.0, 0.0));
+        // R(π/2)·ṽ for ρ = 0, R(3π/2)·ṽ for ρ = 1.
+        let side = if self.rng.next_bool() {
+            -v.perp()
+        } else {
+            v.perp()
+        };
+        p + v * (params.ghost_lambda * d) + side * (params.ghost_alpha * d)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn params() -> Params {
+        Params {
+            stall_time_s: 2.0,
+            ghost_timeout_s: 30.0,
+            ..Params::default()
+        }
+    }
+
+    #[test]
+    fn stall_far_from_goal_places_a_ghost_per_eq_17() {
+        let p = params();
+        let mut e = Escape::new(3);
+        let goal = Vec2::new(20.0, 0.0);
+        for k in 0..=20u64 {
+            e.update(k * 100, Vec2::ZERO, 0.0, goal, &p);
+        }
+        let g = e.ghosts().first().copied().unwrap();
+        // λ·d = 10 along the line, α·d = 10 across it.
+        assert!((g.position.x - 10.0).abs() < 1e-4);
+        assert!((g.position.y.abs() - 10.0).abs() < 1e-4);
+        assert_eq!(e.active_target(goal), g.position);
+    }
+
+    #[test]
+    fn no_ghost_when_moving_or_near_the_goal() {
+        let p = params();
+        let mut e = Escape::new(3);
+        for k in 0..100u64 {
+            e.update(k * 100, Vec2::ZERO, 0.5, Vec2::new(20.0, 0.0), &p);
+            e.update(k * 100, Vec2::ZERO, 0.0, Vec2::new(0.5, 0.0), &p);
+        }
+        assert!(e.ghosts().is_empty());
+    }
+
+    #[test]
+    fn ghosts_stack_replace_when_full_and_pop_when_reached_or_timed_out() {
+        let p = params();
+        let mut e = Escape::new(5);
+        let goal = Vec2::new(40.0, 0.0);
+        let mut t = 0u64;
+        while e.counters.placed < (MAX_GHOSTS + 1) as u32 {
+            e.update(t, Vec2::ZERO, 0.0, goal, &p);
+            t += 100;
+        }
+        assert_eq!(e.ghosts().len(), MAX_GHOSTS);
+        assert_eq!(e.counters.replaced_full, 1);
+        let top = e.active_target(goal);
+        e.update(t, top, 0.5, goal, &p);
+        assert_eq!(e.ghosts().len(), MAX_GHOSTS - 1);
+        assert_eq!(e.counters.reached, 1);
+        e.update(t + 31_000, Vec2::new(-100.0, 0.0), 0.5, goal, &p);
+        assert!(e.ghosts().is_empty());
+        assert_eq!(e.counters.timed_out, MAX_GHOSTS as u32 - 1);
+    }
+
+    #[test]
+    fn same_seed_same_sides() {
+        let p = params();
+        let run = |seed| {
+            let mut e = Escape::new(seed);
+            for k in 0..200u64 {
+                e.update(k * 100, Vec2::ZERO, 0.0, Vec2::new(20.0, 0.0), &p);
+            }
+            e.ghosts().iter().map(|g| g.position.y > 0.0).fold(0u32, |a, b| a * 2 + b as u32)
+        };
+        assert_eq!(run(9), run(9));
+    }
+}

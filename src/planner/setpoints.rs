@@ -1,0 +1,209 @@
+//! Decomposition of the planned motion into set-points for parallel PI-D autopilots, seed 001
+//! eq. 8–10 and the lines after them: surge (a_c, v_c, I_surge) and heading (α_c, ω_c, φ_c).
+//!
+//! Choices where the paper is ambiguous:
+//! - **Body frame ê₁.** Eq. 9 builds ê₁ from the previous command, but calls (ê₁, ê₂) the body
+//!   frame at k − 1, and §3.1 uses it as the direction of travel of the *true* velocity. We use
+//!   the true direction of travel (measured velocity; the compass heading when nearly stopped):
+//!   that is the axis a surge autopilot acts along.
+//! - **a_c.** The paper writes a_c = |F̄(k)|. As a surge acceleration command we take its
+//!   component along ê₁, ⟨F̄, ê₁⟩, which equals |F̄| when the force is along the travel direction
+//!   and has the right sign when it brakes.
+//! - **α_c.** The paper calls r = ω/v a turning radius (it is a curvature, κ) and writes
+//!   α_c = (r·a_c − v_c·ṙ)/r², the derivative of v/r. With κ = ω/v, the same derivative of
+//!   ω = κ·v is α = κ·a + v·κ̇, which needs no division by r² and is exact on straight lines
+//!   (κ = 0). κ̇ is (κ_c(k) − κ(k−1))/T. Below [`V_EPS`] the curvature is undefined and α_c is
+//!   the rate of change of ω: (ω_c(k) − ω(k−1))/T.
+//! - **I_surge** = ‖p(k) − p_c(k)‖ with p_c the double-integrator position, integrated from the
+//!   bounded command like 000 eq. 8. It is anti-wound: p_c is kept within [`I_SURGE_LIMIT_M`].
+
+use crate::math::{wrap_angle, Vec2};
+
+/// Speed below which curvature and course are not computed from velocity, m/s.
+pub const V_EPS: f32 = 0.05;
+/// Largest integral error I_surge, m: beyond it the idealised position is dragged along.
+pub const I_SURGE_LIMIT_M: f32 = 10.0;
+
+/// Set-points for parallel PI-D surge and heading autopilots (001 §2).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct PidSetpoints {
+    /// a_c, surge acceleration command (derivative channel), m/s².
+    pub a_c: f32,
+    /// v_c, surge speed command, m/s (⟨v̄_c, ê₁⟩: negative means back up).
+    pub v_c: f32,
+    /// I_surge, integral channel: distance from the idealised position, m.
+    pub i_surge: f32,
+    /// α_c, heading acceleration command (derivative channel), rad/s².
+    pub alpha_c: f32,
+    /// ω_c, heading rate command, rad/s.
+    pub omega_c: f32,
+    /// φ_c, heading command, rad in (−π, π].
+    pub phi_c: f32,
+}
+
+/// What the decomposition remembers between periods.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct SetpointState {
+    /// φ_c(k−1), ω(k−1)'s course φ(k−1), and the ideal position p_c(k−1); `None` after a reset.
+    prev: Option<Prev>,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Prev {
+    phi_c: f32,
+    course: f32,
+    v_cmd: Vec2,
+    p_c: Vec2,
+}
+
+/// The measured state the decomposition needs.
+#[derive(Clone, Copy, Debug)]
+pub struct Measured {
+    /// Position p(k), m.
+    pub position: Vec2,
+    /// Velocity over ground v(k−1), m/s.
+    pub velocity: Vec2,
+    /// Compass heading, rad (the course when nearly stopped).
+    pub heading: f32,
+}
+
+impl Measured {
+    /// ê₁: the direction of travel, or the heading when nearly stopped.
+    pub fn e1(&self) -> Vec2 {
+        self.velocity
+            .normalized(V_EPS)
+            .unwrap_or_else(|| Vec2::from_angle(self.heading))
+    }
+
+    /// φ: the course over ground, or the heading when nearly stopped.
+    fn course(&self) -> f32 {
+        if self.velocity.norm2() > V_EPS * V_EPS {
+            self.velocity.angle()
+        } else {
+            wrap_angle(self.heading)
+        }
+    }
+}
+
+impl SetpointState {
+    /// Forgets the history (new mission, hold): the next step starts from the measured state.
+    pub fn reset(&mut self) {
+        self.prev = None;
+    }
+
+    /// One period of the decomposition for the bounded force `f` and bounded velocity command
+    /// `v_cmd` over period `t` s.
+    pub fn decompose(&mut self, t: f32, f: Vec2, v_cmd: Vec2, m: &Measured) -> PidSetpoints {
+        let e1 = m.e1();
+        let course = m.course();
+        let prev = self.prev.unwrap_or(Prev {
+            phi_c: course,
+            course,
+            v_cmd: m.velocity,
+            p_c: m.position,
+        });
+        let a_c = f.dot(e1);
+        let v_c = v_cmd.dot(e1);
+        // Heading command: keep the last one while the command has no direction.
+        let phi_c = if v_cmd.norm2() > V_EPS * V_EPS {
+            v_cmd.angle()
+        } else {
+            prev.phi_c
+        };
+        let omega_c = wrap_angle(phi_c - prev.phi_c) / t;
+        let omega = wrap_angle(course - prev.course) / t;
+        let speed = m.velocity.norm();
+        let alpha_c = if v_c.abs() > V_EPS && speed > V_EPS {
+            let kappa_c = omega_c / v_c;
+            let kappa = omega / speed;
+            kappa_c * a_c + v_c * (kappa_c - kappa) / t
+        } else {
+            (omega_c - omega) / t
+        };
+        // Double integrator, bilinear like 000 eq. 8, held within the anti-windup limit.
+        let mut p_c = prev.p_c + (v_cmd + prev.v_cmd) * (0.5 * t);
+        let lag = p_c - m.position;
+        p_c = m.position + lag.bounded(I_SURGE_LIMIT_M);
+        self.prev = Some(Prev {
+            phi_c,
+            course,
+            v_cmd,
+            p_c,
+        });
+        PidSetpoints {
+            a_c,
+            v_c,
+            i_surge: (m.position - p_c).norm(),
+            alpha_c,
+            omega_c,
+            phi_c,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn straight_cruise_gives_no_turn_commands() {
+        let mut s = SetpointState::default();
+        let m = Measured {
+            position: Vec2::ZERO,
+            velocity: Vec2::new(1.0, 0.0),
+            heading: 0.0,
+        };
+        for _ in 0..3 {
+            let sp = s.decompose(0.1, Vec2::new(0.2, 0.0), Vec2::new(1.0, 0.0), &m);
+            assert_eq!((sp.omega_c, sp.alpha_c, sp.phi_c), (0.0, 0.0, 0.0));
+            assert!((sp.v_c - 1.0).abs() < 1e-6 && (sp.a_c - 0.2).abs() < 1e-6);
+        }
+    }
+
+    #[test]
+    fn turning_command_gives_rate_and_acceleration() {
+        let mut s = SetpointState::default();
+        let m = Measured {
+            position: Vec2::ZERO,
+            velocity: Vec2::new(1.0, 0.0),
+            heading: 0.0,
+        };
+        let v = Vec2::from_angle(0.1);
+        let sp = s.decompose(0.1, Vec2::ZERO, v, &m);
+        assert!((sp.omega_c - 1.0).abs() < 1e-4, "{sp:?}");
+        assert!((sp.phi_c - 0.1).abs() < 1e-6);
+        // κ_c = 1/|v_c|, κ = 0: α_c = v_c·κ_c/T ≈ 10 rad/s².
+        assert!((sp.alpha_c - 10.0).abs() < 0.1, "{sp:?}");
+    }
+
+    #[test]
+    fn stopped_vehicle_has_finite_setpoints() {
+        let mut s = SetpointState::default();
+        let m = Measured {
+            position: Vec2::ZERO,
+            velocity: Vec2::ZERO,
+            heading: 3.0,
+        };
+        let sp = s.decompose(0.1, Vec2::ZERO, Vec2::ZERO, &m);
+        assert!([sp.a_c, sp.v_c, sp.i_surge, sp.alpha_c, sp.omega_c, sp.phi_c]
+            .iter()
+            .all(|x| x.is_finite()));
+        assert!((sp.phi_c - 3.0).abs() < 1e-6);
+    }
+
+    #[test]
+    fn integral_channel_is_anti_wound() {
+        let mut s = SetpointState::default();
+        let m = Measured {
+            position: Vec2::ZERO,
+            velocity: Vec2::ZERO,
+            heading: 0.0,
+        };
+        let mut last = 0.0;
+        for _ in 0..1000 {
+            last = s.decompose(0.1, Vec2::ZERO, Vec2::new(1.0, 0.0), &m).i_surge;
+        }
+        assert!((last - I_SURGE_LIMIT_M).abs() < 1e-3);
+    }
+}

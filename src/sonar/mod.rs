@@ -1,0 +1,1 @@
+//! Sonar scanlines to obstacle features (placeholder).

@@ -1,0 +1,370 @@
+//! The planner's model of the theatre of operations: fixed-capacity tables of obstacles and of
+//! other vehicles (agents), with ids, ageing and a stated overflow policy.
+//!
+//! Time is milliseconds since boot (`now_ms`), always passed in: the core reads no clock.
+//!
+//! **Overflow policy.**
+//! - [`World::upsert_obstacle`] updates an entry with the same id, else appends; when the table
+//!   is full it hands the obstacle back in [`Full`] and counts it in `rejected_full`.
+//! - [`World::upsert_obstacle_or_evict`] (the sonar path) evicts, when full, the *sensed*
+//!   obstacle farthest from the vehicle if the newcomer is nearer; charted obstacles (from the
+//!   mission) are never evicted. Evictions are counted in `evicted`.
+//! - Agents follow the same rules with [`World::upsert_agent`] (no eviction: 8 is a fleet).
+//! - [`World::expire`] drops sensed obstacles and agents not seen for a given age.
+
+use heapless::Vec;
+
+use crate::field::{Shape, Stator};
+use crate::math::Vec2;
+
+/// Capacity of the obstacle table.
+pub const MAX_OBSTACLES: usize = 32;
+/// Capacity of the agent (other vehicle) table.
+pub const MAX_AGENTS: usize = 8;
+/// Fastest an obstacle or agent may be said to move, m/s (beyond any AUV, a unit error).
+pub const MAX_OBJECT_SPEED: f32 = 20.0;
+
+/// Where an obstacle came from, which decides its ageing and eviction.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Origin {
+    /// From the mission or a chart: kept until removed, never evicted.
+    Charted,
+    /// From the sonar: ages out, may be evicted by a nearer one when the table is full.
+    Sensed,
+}
+
+/// An obstacle: its geometry, its stator PDF and bookkeeping.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Obstacle {
+    /// Caller-chosen id; an upsert with the same id replaces the entry.
+    pub id: u16,
+    /// Geometry.
+    pub shape: Shape,
+    /// Velocity over ground, m/s (zero for static obstacles).
+    pub velocity: Vec2,
+    /// Where it came from.
+    pub origin: Origin,
+    /// When it was last seen or updated, ms.
+    pub seen_ms: u64,
+    stator: Stator,
+}
+
+/// Why an object was refused at the table's boundary.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum ObjectError {
+    /// A repulsiveness, position or velocity is NaN or infinite.
+    NonFinite,
+    /// Repulsiveness outside 0.001 ..= 100, or speed above [`MAX_OBJECT_SPEED`].
+    OutOfRange,
+}
+
+impl core::fmt::Display for ObjectError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str(match self {
+            ObjectError::NonFinite => "object has a non-finite position, velocity or repulsion",
+            ObjectError::OutOfRange => "object repulsion or speed out of range",
+        })
+    }
+}
+
+fn check_velocity(v: Vec2) -> Result<Vec2, ObjectError> {
+    if !v.is_finite() {
+        Err(ObjectError::NonFinite)
+    } else if v.norm2() > MAX_OBJECT_SPEED * MAX_OBJECT_SPEED {
+        Err(ObjectError::OutOfRange)
+    } else {
+        Ok(v)
+    }
+}
+
+impl Obstacle {
+    /// A static obstacle with repulsiveness A⁺ = `a_plus` (seed 000 eq. 9, 12).
+    pub fn new(
+        id: u16,
+        shape: Shape,
+        a_plus: f32,
+        origin: Origin,
+        now_ms: u64,
+    ) -> Result<Self, ObjectError> {
+        if !a_plus.is_finite() {
+            return Err(ObjectError::NonFinite);
+        }
+        if !(0.001..=100.0).contains(&a_plus) {
+            return Err(ObjectError::OutOfRange);
+        }
+        Ok(Obstacle {
+            id,
+            shape,
+            velocity: Vec2::ZERO,
+            origin,
+            seen_ms: now_ms,
+            stator: Stator::new(a_plus),
+        })
+    }
+
+    /// The same obstacle moving with `velocity` m/s.
+    pub fn moving(mut self, velocity: Vec2) -> Result<Self, ObjectError> {
+        self.velocity = check_velocity(velocity)?;
+        Ok(self)
+    }
+
+    /// Its stator PDF.
+    pub fn stator(&self) -> &Stator {
+        &self.stator
+    }
+
+    /// Its repulsiveness A⁺.
+    pub fn a_plus(&self) -> f32 {
+        self.stator.a_plus()
+    }
+}
+
+/// Another vehicle as seen by this one (000 §III: a circle; 001 §3.2: a formation neighbour).
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Agent {
+    /// Caller-chosen id (e.g. the sonar track); an upsert with the same id replaces the entry.
+    pub id: u16,
+    /// Position, m.
+    pub position: Vec2,
+    /// Velocity over ground, m/s.
+    pub velocity: Vec2,
+    /// When it was last seen, ms.
+    pub seen_ms: u64,
+}
+
+impl Agent {
+    /// A checked agent.
+    pub fn new(id: u16, position: Vec2, velocity: Vec2, now_ms: u64) -> Result<Self, ObjectError> {
+        if !position.is_finite() {
+            return Err(ObjectError::NonFinite);
+        }
+        Ok(Agent {
+            id,
+            position,
+            velocity: check_velocity(velocity)?,
+            seen_ms: now_ms,
+        })
+    }
+}
+
+/// A table was full: the value is handed back.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Full<T>(pub T);
+
+/// Counters of the tables' boundary decisions, for telemetry.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct WorldCounters {
+    /// Objects refused because their table was full.
+    pub rejected_full: u32,
+    /// Sensed obstacles evicted by a nearer one.
+    pub evicted: u32,
+    /// Entries removed by [`World::expire`].
+    pub expired: u32,
+}
+
+/// The obstacle and agent tables.
+#[derive(Clone, Debug, Default)]
+pub struct World {
+    obstacles: Vec<Obstacle, MAX_OBSTACLES>,
+    agents: Vec<Agent, MAX_AGENTS>,
+    /// Boundary counters.
+    pub counters: WorldCounters,
+}
+
+impl World {
+    /// Empty tables.
+    pub const fn new() -> Self {
+        World {
+            obstacles: Vec::new(),
+            agents: Vec::new(),
+            counters: WorldCounters {
+                rejected_full: 0,
+                evicted: 0,
+                expired: 0,
+            },
+        }
+    }
+
+    /// The obstacles.
+    pub fn obstacles(&self) -> &[Obstacle] {
+        &self.obstacles
+    }
+
+    /// The other vehicles.
+    pub fn agents(&self) -> &[Agent] {
+        &self.agents
+    }
+
+    /// Inserts, or replaces the entry with the same id. Full: the obstacle comes back.
+    pub fn upsert_obstacle(&mut self, o: Obstacle) -> Result<(), Full<Obstacle>> {
+        if let Some(slot) = self.obstacles.iter_mut().find(|x| x.id == o.id) {
+            *slot = o;
+            return Ok(());
+        }
+        self.obstacles.push(o).map_err(|o| {
+            self.counters.rejected_full = self.counters.rejected_full.saturating_add(1);
+            Full(o)
+        })
+    }
+
+    /// As [`World::upsert_obstacle`], but when full a sensed obstacle farther from `vehicle`
+    /// than the newcomer is evicted to make room (returned as `Ok(Some(evicted))`).
+    pub fn upsert_obstacle_or_evict(
+        &mut self,
+        o: Obstacle,
+        vehicle: Vec2,
+    ) -> Result<Option<Obstacle>, Full<Obstacle>> {
+        let o = match self.upsert_obstacle(o) {
+            Ok(()) => return Ok(None),
+            Err(Full(o)) => o,
+        };
+        let dist = |x: &Obstacle| x.shape.signed_distance(vehicle);
+        let new_d = dist(&o);
+        let farthest = self
+            .obstacles
+            .iter_mut()
+            .filter(|x| x.origin == Origin::Sensed)
+            .max_by(|a, b| dist(a).total_cmp(&dist(b)));
+        match farthest {
+            Some(slot) if dist(slot) > new_d => {
+                let old = core::mem::replace(slot, o);
+                // upsert_obstacle counted a rejection that became an eviction.
+                self.counters.rejected_full = self.counters.rejected_full.saturating_sub(1);
+                self.counters.evicted = self.counters.evicted.saturating_add(1);
+                Ok(Some(old))
+            }
+            _ => Err(Full(o)),
+        }
+    }
+
+    /// Removes the obstacle with `id`, returning it.
+    pub fn remove_obstacle(&mut self, id: u16) -> Option<Obstacle> {
+        let i = self.obstacles.iter().position(|x| x.id == id)?;
+        Some(self.obstacles.swap_remove(i))
+    }
+
+    /// Inserts, or replaces the agent with the same id. Full: the agent comes back.
+    pub fn upsert_agent(&mut self, a: Agent) -> Result<(), Full<Agent>> {
+        if let Some(slot) = self.agents.iter_mut().find(|x| x.id == a.id) {
+            *slot = a;
+            return Ok(());
+        }
+        self.agents.push(a).map_err(|a| {
+            self.counters.rejected_full = self.counters.rejected_full.saturating_add(1);
+            Full(a)
+        })
+    }
+
+    /// Removes the agent with `id`.
+    pub fn remove_agent(&mut self, id: u16) -> Option<Agent> {
+        let i = self.agents.iter().position(|x| x.id == id)?;
+        Some(self.agents.swap_remove(i))
+    }
+
+    /// Drops sensed obstacles and agents last seen more than `max_age_ms` before `now_ms`.
+    pub fn expire(&mut self, now_ms: u64, max_age_ms: u64) {
+        let fresh = |seen: u64| now_ms.saturating_sub(seen) <= max_age_ms;
+        let before = self.obstacles.len() + self.agents.len();
+        self.obstacles
+            .retain(|o| o.origin == Origin::Charted || fresh(o.seen_ms));
+        self.agents.retain(|a| fresh(a.seen_ms));
+        let gone = before - (self.obstacles.len() + self.agents.len());
+        self.counters.expired = self.counters.expired.saturating_add(gone as u32);
+    }
+
+    /// Removes everything (counters kept).
+    pub fn clear(&mut self) {
+        self.obstacles.clear();
+        self.agents.clear();
+    }
+
+    /// Signed distance from `p` to the nearest obstacle surface or agent circle of radius
+    /// `agent_radius`, metres (`f32::INFINITY` for an empty world). Negative means inside.
+    pub fn clearance(&self, p: Vec2, agent_radius: f32) -> f32 {
+        let obstacles = self.obstacles.iter().map(|o| o.shape.signed_distance(p));
+        let agents = self
+            .agents
+            .iter()
+            .map(|a| (p - a.position).norm() - agent_radius);
+        obstacles.chain(agents).fold(f32::INFINITY, f32::min)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn circle(id: u16, x: f32, origin: Origin) -> Obstacle {
+        let s = Shape::circle(Vec2::new(x, 0.0), 1.0).unwrap();
+        Obstacle::new(id, s, 2.5, origin, 0).unwrap()
+    }
+
+    #[test]
+    fn full_table_hands_the_obstacle_back_and_counts() {
+        let mut w = World::new();
+        for i in 0..MAX_OBSTACLES as u16 {
+            w.upsert_obstacle(circle(i, i as f32 * 3.0, Origin::Sensed))
+                .unwrap();
+        }
+        let extra = circle(999, 1.0, Origin::Sensed);
+        assert_eq!(w.upsert_obstacle(extra), Err(Full(extra)));
+        assert_eq!(w.counters.rejected_full, 1);
+        // Same id replaces, even when full.
+        w.upsert_obstacle(circle(3, -50.0, Origin::Sensed)).unwrap();
+        assert_eq!(w.obstacles().len(), MAX_OBSTACLES);
+    }
+
+    #[test]
+    fn eviction_replaces_the_farthest_sensed_obstacle_never_a_charted_one() {
+        let mut w = World::new();
+        w.upsert_obstacle(circle(0, 500.0, Origin::Charted)).unwrap();
+        for i in 1..MAX_OBSTACLES as u16 {
+            w.upsert_obstacle(circle(i, i as f32 * 3.0, Origin::Sensed))
+                .unwrap();
+        }
+        let near = circle(100, 1.5, Origin::Sensed);
+        let out = w.upsert_obstacle_or_evict(near, Vec2::ZERO).unwrap();
+        assert_eq!(out.map(|o| o.id), Some(MAX_OBSTACLES as u16 - 1));
+        assert_eq!(w.counters.evicted, 1);
+        assert!(w.obstacles().iter().any(|o| o.id == 0));
+        // A newcomer farther than everything sensed is refused.
+        let far = circle(101, 400.0, Origin::Sensed);
+        assert!(w.upsert_obstacle_or_evict(far, Vec2::ZERO).is_err());
+        assert_eq!(w.counters.rejected_full, 1);
+    }
+
+    #[test]
+    fn expire_drops_stale_sensed_entries_only() {
+        let mut w = World::new();
+        w.upsert_obstacle(circle(1, 0.0, Origin::Charted)).unwrap();
+        w.upsert_obstacle(circle(2, 5.0, Origin::Sensed)).unwrap();
+        w.upsert_agent(Agent::new(7, Vec2::ZERO, Vec2::ZERO, 0).unwrap())
+            .unwrap();
+        w.expire(10_000, 5_000);
+        assert_eq!(w.obstacles().len(), 1);
+        assert!(w.agents().is_empty());
+        assert_eq!(w.counters.expired, 2);
+    }
+
+    #[test]
+    fn bad_objects_are_refused() {
+        let s = Shape::circle(Vec2::ZERO, 1.0).unwrap();
+        assert_eq!(
+            Obstacle::new(1, s, f32::NAN, Origin::Charted, 0),
+            Err(ObjectError::NonFinite)
+        );
+        assert_eq!(
+            Obstacle::new(1, s, 0.0, Origin::Charted, 0),
+            Err(ObjectError::OutOfRange)
+        );
+        assert_eq!(
+            Agent::new(1, Vec2::ZERO, Vec2::new(100.0, 0.0), 0),
+            Err(ObjectError::OutOfRange)
+        );
+    }
+}
