@@ -10,7 +10,8 @@ mod target {
     fn main() -> ! {
         // Raw bytes, not `hprintln!`: core::fmt carries panicking paths the link check refuses.
         if let Ok(mut out) = hio::hstdout() {
-            let _ = out.write_all(concat!("vpf-firmware ", env!("CARGO_PKG_VERSION"), "\n").as_bytes());
+            let _ =
+                out.write_all(concat!("vpf-firmware ", env!("CARGO_PKG_VERSION"), "\n").as_bytes());
         }
         debug::exit(debug::EXIT_SUCCESS);
         loop {

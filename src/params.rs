@@ -77,6 +77,11 @@ pub struct Params {
     /// A ghost goal-point is given up after this many seconds ("for a given period of time",
     /// 000 §III). 1 ..= 3600.
     pub ghost_timeout_s: f32,
+    /// Depth of the ghost goal-point stack in use, 0 ..= [`MAX_GHOSTS`] (0 turns ghost
+    /// goal-points off: the plain method of 000 Fig. 4).
+    ///
+    /// [`MAX_GHOSTS`]: crate::planner::MAX_GHOSTS
+    pub max_ghosts: u8,
     /// Seed of the deterministic generator for the ghost's random side ρ (000 eq. 17).
     pub seed: u32,
 }
@@ -93,7 +98,7 @@ impl Default for Params {
             f_max: 0.5,
             v_max: 1.0,
             a_plus: 2.5,
-            a_rotor: 1.0,
+            a_rotor: 5.0,
             a_minus: 50.0,
             sigma_m: 40.0,
             bounding: Bounding::Split,
@@ -106,6 +111,7 @@ impl Default for Params {
             stall_speed: 0.05,
             stall_time_s: 5.0,
             ghost_timeout_s: 60.0,
+            max_ghosts: 4,
             seed: 1,
         }
     }
@@ -174,6 +180,8 @@ impl Params {
         check("stall_speed", self.stall_speed, 0.0, self.v_max)?;
         check("stall_time_s", self.stall_time_s, 0.1, 600.0)?;
         check("ghost_timeout_s", self.ghost_timeout_s, 1.0, 3600.0)?;
+        let ghosts = crate::planner::MAX_GHOSTS as f32;
+        check("max_ghosts", self.max_ghosts as f32, 0.0, ghosts)?;
         Ok(())
     }
 }
@@ -189,26 +197,31 @@ mod tests {
 
     #[test]
     fn each_bad_value_is_named() {
-        let mut p = Params::default();
-        p.mu = f32::NAN;
+        let bad = |p: Params| p.validate();
+        let d = Params::default();
         assert_eq!(
-            p.validate(),
+            bad(Params { mu: f32::NAN, ..d }),
             Err(ParamError {
                 name: "mu",
                 problem: ParamProblem::NonFinite
             })
         );
-        let mut p = Params::default();
-        p.n_gamma = 64;
-        assert_eq!(p.validate().map_err(|e| e.name), Err("n_gamma"));
-        let mut p = Params::default();
-        p.period_s = 2.0;
         assert_eq!(
-            p.validate().map_err(|e| e.problem),
+            bad(Params { n_gamma: 64, ..d }).map_err(|e| e.name),
+            Err("n_gamma")
+        );
+        assert_eq!(
+            bad(Params { period_s: 2.0, ..d }).map_err(|e| e.problem),
             Err(ParamProblem::OutOfRange)
         );
-        let mut p = Params::default();
-        p.stall_speed = p.v_max * 2.0;
-        assert_eq!(p.validate().map_err(|e| e.name), Err("stall_speed"));
+        let fast_stall = Params {
+            stall_speed: d.v_max * 2.0,
+            ..d
+        };
+        assert_eq!(bad(fast_stall).map_err(|e| e.name), Err("stall_speed"));
+        assert_eq!(
+            bad(Params { max_ghosts: 5, ..d }).map_err(|e| e.name),
+            Err("max_ghosts")
+        );
     }
 }

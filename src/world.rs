@@ -322,7 +322,8 @@ mod tests {
     #[test]
     fn eviction_replaces_the_farthest_sensed_obstacle_never_a_charted_one() {
         let mut w = World::new();
-        w.upsert_obstacle(circle(0, 500.0, Origin::Charted)).unwrap();
+        w.upsert_obstacle(circle(0, 500.0, Origin::Charted))
+            .unwrap();
         for i in 1..MAX_OBSTACLES as u16 {
             w.upsert_obstacle(circle(i, i as f32 * 3.0, Origin::Sensed))
                 .unwrap();

@@ -94,7 +94,7 @@ pub struct Polygon {
 fn check_size(v: f32) -> Result<f32, ShapeError> {
     if !v.is_finite() {
         Err(ShapeError::NonFinite)
-    } else if v < MIN_EXTENT_M || v > MAX_EXTENT_M {
+    } else if !(MIN_EXTENT_M..=MAX_EXTENT_M).contains(&v) {
         Err(ShapeError::SizeOutOfRange)
     } else {
         Ok(v)
@@ -126,7 +126,9 @@ impl Shape {
 
     /// An ellipse of semi-axes `semi.x`, `semi.y`, rotated by `angle` radians.
     pub fn ellipse(center: Vec2, semi: Vec2, angle: f32) -> Result<Shape, ShapeError> {
-        Ok(Shape::Ellipse(Ellipse(Rectangle::new(center, semi, angle)?)))
+        Ok(Shape::Ellipse(Ellipse(Rectangle::new(
+            center, semi, angle,
+        )?)))
     }
 
     /// A convex polygon from 3 to [`MAX_POLYGON_VERTICES`] vertices in either winding order.
@@ -376,8 +378,12 @@ mod tests {
 
     #[test]
     fn rotated_rectangle_matches_paper_distance_outside_and_depth_inside() {
-        let r = Shape::rectangle(Vec2::ZERO, Vec2::new(2.0, 1.0), core::f32::consts::FRAC_PI_2)
-            .unwrap();
+        let r = Shape::rectangle(
+            Vec2::ZERO,
+            Vec2::new(2.0, 1.0),
+            core::f32::consts::FRAC_PI_2,
+        )
+        .unwrap();
         // Rotated by 90°: the long side now runs along y.
         assert!(close(r.signed_distance(Vec2::new(0.0, 3.0)), 1.0));
         assert!(close(r.signed_distance(Vec2::new(2.0, 0.0)), 1.0));
@@ -399,7 +405,11 @@ mod tests {
 
     #[test]
     fn polygon_accepts_either_winding_and_measures_exactly() {
-        let cw = [Vec2::new(0.0, 0.0), Vec2::new(0.0, 2.0), Vec2::new(2.0, 0.0)];
+        let cw = [
+            Vec2::new(0.0, 0.0),
+            Vec2::new(0.0, 2.0),
+            Vec2::new(2.0, 0.0),
+        ];
         let t = Shape::polygon(&cw).unwrap();
         assert!(close(t.signed_distance(Vec2::new(-1.0, 1.0)), 1.0));
         assert!(close(t.signed_distance(Vec2::new(-3.0, -4.0)), 5.0));
@@ -423,7 +433,11 @@ mod tests {
             Vec2::new(0.0, 4.0),
         ];
         assert_eq!(Shape::polygon(&concave), Err(ShapeError::NotConvex));
-        let line = [Vec2::new(0.0, 0.0), Vec2::new(1.0, 0.0), Vec2::new(2.0, 0.0)];
+        let line = [
+            Vec2::new(0.0, 0.0),
+            Vec2::new(1.0, 0.0),
+            Vec2::new(2.0, 0.0),
+        ];
         assert_eq!(Shape::polygon(&line), Err(ShapeError::NotConvex));
         assert_eq!(Shape::polygon(&line[..2]), Err(ShapeError::VertexCount));
     }

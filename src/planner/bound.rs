@@ -61,7 +61,11 @@ mod tests {
     #[test]
     fn never_exceeds_the_bound_and_leaves_small_vectors_alone() {
         let e1 = Vec2::new(0.6, 0.8);
-        for v in [Vec2::new(10.0, -3.0), Vec2::new(-7.0, 2.0), Vec2::new(0.1, 0.2)] {
+        for v in [
+            Vec2::new(10.0, -3.0),
+            Vec2::new(-7.0, 2.0),
+            Vec2::new(0.1, 0.2),
+        ] {
             for m in [Bounding::Plain, Bounding::Split] {
                 let b = bound(v, 1.0, Some(e1), m);
                 assert!(b.norm() <= 1.0 + 1e-5);

@@ -3,7 +3,15 @@
 //! **Detection** (the paper leaves the test open): the vehicle is in a local minimum when its
 //! planned speed has stayed below `stall_speed` for `stall_time_s` while it is farther than
 //! `arrival_radius_m` from the active goal-point. With friction the planner settles in a minimum,
-//! so a settled vehicle away from its goal is exactly the symptom of Fig. 4.
+//! so a settled vehicle away from its goal is exactly the symptom of Fig. 4. When a stall is
+//! confirmed the caller says what holds the vehicle ([`StallCause`]):
+//! - the *static* field (obstacles and the goal-point alone): a ghost goal-point is placed;
+//! - the formation's virtual leader (the field without it has a way down) away from the goal:
+//!   the formation is released for `ghost_timeout_s` — the "partial formation break-up for
+//!   obstacle circumnavigation" of 001 §1 — and re-forms afterwards (near the goal, being held
+//!   by the formation is arrival in formation, and counts as held by other vehicles);
+//! - other vehicles (four sharing one goal, Fig. 7): the vehicle waits. Their minima move with
+//!   them, and perturbing out of them is the endless jitter 001 §1 describes.
 //!
 //! **Placement** (eq. 16–17), from the vehicle at p towards the active goal-point g:
 //! ṽ = (g − p)/d, d = ‖g − p‖, and
@@ -16,8 +24,8 @@
 //! **Stack.** A ghost replaces the goal-point while it is active. Stuck again on the way to a
 //! ghost, the planner stacks another one computed towards that ghost. A ghost is removed when
 //! the vehicle comes within ε_ghost, or after `ghost_timeout_s` ("for a given period of time").
-//! The stack holds [`MAX_GHOSTS`]; when it is full a new ghost replaces the top one (the one that
-//! just failed), counted in `replaced_full`.
+//! The stack holds `max_ghosts` ≤ [`MAX_GHOSTS`] (0: ghosts off); when it is full a new ghost
+//! replaces the top one (the one that just failed), counted in `replaced_full`.
 
 use heapless::Vec;
 
@@ -26,6 +34,18 @@ use crate::params::Params;
 
 /// Depth of the ghost goal-point stack.
 pub const MAX_GHOSTS: usize = 4;
+
+/// What holds a stalled vehicle in place (see the module notes).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum StallCause {
+    /// A minimum of the static field: obstacles and the goal-point.
+    Static,
+    /// The formation's virtual leader.
+    Formation,
+    /// Other vehicles' repulsion.
+    Vehicles,
+}
 
 /// A ghost goal-point and when it was placed.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -49,6 +69,8 @@ pub struct EscapeCounters {
     pub timed_out: u32,
     /// Ghosts that replaced the top of a full stack.
     pub replaced_full: u32,
+    /// Times the formation was released to get out of a stall.
+    pub formation_released: u32,
 }
 
 /// The local-minimum detector and the ghost stack.
@@ -56,6 +78,7 @@ pub struct EscapeCounters {
 pub struct Escape {
     stack: Vec<GhostGoal, MAX_GHOSTS>,
     stall_since_ms: Option<u64>,
+    formation_released_until_ms: Option<u64>,
     rng: XorShift32,
     /// Counters.
     pub counters: EscapeCounters,
@@ -67,6 +90,7 @@ impl Escape {
         Escape {
             stack: Vec::new(),
             stall_since_ms: None,
+            formation_released_until_ms: None,
             rng: XorShift32::new(seed),
             counters: EscapeCounters::default(),
         }
@@ -82,15 +106,31 @@ impl Escape {
         self.stack.last().map_or(goal, |g| g.position)
     }
 
-    /// Forgets all ghosts and the stall timer (new mission, hold).
+    /// Whether the formation is released (ignored) at `now_ms`.
+    pub fn formation_released(&self, now_ms: u64) -> bool {
+        self.formation_released_until_ms
+            .is_some_and(|until| now_ms < until)
+    }
+
+    /// Forgets all ghosts, the stall timer and a formation release (new mission, hold).
     pub fn reset(&mut self) {
         self.stack.clear();
         self.stall_since_ms = None;
+        self.formation_released_until_ms = None;
     }
 
-    /// One period of the detector: removes reached or expired ghosts, and places a ghost when
-    /// the vehicle at `p`, with planned speed `speed`, has been stalled long enough.
-    pub fn update(&mut self, now_ms: u64, p: Vec2, speed: f32, goal: Vec2, params: &Params) {
+    /// One period of the detector: removes reached or expired ghosts; when the vehicle at `p`,
+    /// with planned speed `speed`, has been stalled long enough, asks `cause` what holds it
+    /// (towards the active target) and places a ghost, releases the formation, or waits.
+    pub fn update(
+        &mut self,
+        now_ms: u64,
+        p: Vec2,
+        speed: f32,
+        goal: Vec2,
+        params: &Params,
+        cause: impl FnOnce(Vec2) -> StallCause,
+    ) {
         let timeout_ms = (params.ghost_timeout_s * 1000.0) as u64;
         while let Some(top) = self.stack.last().copied() {
             if (top.position - p).norm() <= params.ghost_eps_m {
@@ -106,7 +146,7 @@ impl Escape {
 
         let target = self.active_target(goal);
         let far = (target - p).norm() > params.arrival_radius_m;
-        if !(far && speed < params.stall_speed) {
+        if params.max_ghosts == 0 || !(far && speed < params.stall_speed) {
             self.stall_since_ms = None;
             return;
         }
@@ -114,15 +154,33 @@ impl Escape {
         if now_ms.saturating_sub(since) < (params.stall_time_s * 1000.0) as u64 {
             return;
         }
+        let timeout_ms = (params.ghost_timeout_s * 1000.0) as u64;
+        match cause(target) {
+            StallCause::Static => {}
+            StallCause::Formation => {
+                self.formation_released_until_ms = Some(now_ms.saturating_add(timeout_ms));
+                self.counters.formation_released =
+                    self.counters.formation_released.saturating_add(1);
+                self.stall_since_ms = None;
+                return;
+            }
+            StallCause::Vehicles => {
+                self.stall_since_ms = None;
+                return;
+            }
+        }
         let ghost = GhostGoal {
             position: self.place(p, target, params),
             placed_ms: now_ms,
         };
         self.counters.placed = self.counters.placed.saturating_add(1);
-        if let Err(g) = self.stack.push(ghost) {
+        if self.stack.len() >= params.max_ghosts as usize {
             if let Some(top) = self.stack.last_mut() {
-                *top = g;
+                *top = ghost;
             }
+            self.counters.replaced_full = self.counters.replaced_full.saturating_add(1);
+        } else if self.stack.push(ghost).is_err() {
+            // Unreachable while max_ghosts <= MAX_GHOSTS (validated); counted if it ever is.
             self.counters.replaced_full = self.counters.replaced_full.saturating_add(1);
         }
         self.stall_since_ms = None;
@@ -161,7 +219,7 @@ mod tests {
         let mut e = Escape::new(3);
         let goal = Vec2::new(20.0, 0.0);
         for k in 0..=20u64 {
-            e.update(k * 100, Vec2::ZERO, 0.0, goal, &p);
+            e.update(k * 100, Vec2::ZERO, 0.0, goal, &p, |_| StallCause::Static);
         }
         let g = e.ghosts().first().copied().unwrap();
         // λ·d = 10 along the line, α·d = 10 across it.
@@ -175,8 +233,12 @@ mod tests {
         let p = params();
         let mut e = Escape::new(3);
         for k in 0..100u64 {
-            e.update(k * 100, Vec2::ZERO, 0.5, Vec2::new(20.0, 0.0), &p);
-            e.update(k * 100, Vec2::ZERO, 0.0, Vec2::new(0.5, 0.0), &p);
+            e.update(k * 100, Vec2::ZERO, 0.5, Vec2::new(20.0, 0.0), &p, |_| {
+                StallCause::Static
+            });
+            e.update(k * 100, Vec2::ZERO, 0.0, Vec2::new(0.5, 0.0), &p, |_| {
+                StallCause::Static
+            });
         }
         assert!(e.ghosts().is_empty());
     }
@@ -188,18 +250,47 @@ mod tests {
         let goal = Vec2::new(40.0, 0.0);
         let mut t = 0u64;
         while e.counters.placed < (MAX_GHOSTS + 1) as u32 {
-            e.update(t, Vec2::ZERO, 0.0, goal, &p);
+            e.update(t, Vec2::ZERO, 0.0, goal, &p, |_| StallCause::Static);
             t += 100;
         }
         assert_eq!(e.ghosts().len(), MAX_GHOSTS);
         assert_eq!(e.counters.replaced_full, 1);
         let top = e.active_target(goal);
-        e.update(t, top, 0.5, goal, &p);
+        e.update(t, top, 0.5, goal, &p, |_| StallCause::Static);
         assert_eq!(e.ghosts().len(), MAX_GHOSTS - 1);
         assert_eq!(e.counters.reached, 1);
-        e.update(t + 31_000, Vec2::new(-100.0, 0.0), 0.5, goal, &p);
+        e.update(t + 31_000, Vec2::new(-100.0, 0.0), 0.5, goal, &p, |_| {
+            StallCause::Static
+        });
         assert!(e.ghosts().is_empty());
         assert_eq!(e.counters.timed_out, MAX_GHOSTS as u32 - 1);
+    }
+
+    #[test]
+    fn no_ghost_when_other_vehicles_hold_the_vehicle() {
+        let p = params();
+        let mut e = Escape::new(3);
+        for k in 0..100u64 {
+            e.update(k * 100, Vec2::ZERO, 0.0, Vec2::new(20.0, 0.0), &p, |_| {
+                StallCause::Vehicles
+            });
+        }
+        assert!(e.ghosts().is_empty());
+    }
+
+    #[test]
+    fn a_formation_stall_releases_the_formation_for_a_while() {
+        let p = params();
+        let mut e = Escape::new(3);
+        for k in 0..=20u64 {
+            e.update(k * 100, Vec2::ZERO, 0.0, Vec2::new(20.0, 0.0), &p, |_| {
+                StallCause::Formation
+            });
+        }
+        assert!(e.ghosts().is_empty());
+        assert!(e.formation_released(2_100));
+        assert!(!e.formation_released(2_000 + 30_000));
+        assert_eq!(e.counters.formation_released, 1);
     }
 
     #[test]
@@ -208,9 +299,14 @@ mod tests {
         let run = |seed| {
             let mut e = Escape::new(seed);
             for k in 0..200u64 {
-                e.update(k * 100, Vec2::ZERO, 0.0, Vec2::new(20.0, 0.0), &p);
+                e.update(k * 100, Vec2::ZERO, 0.0, Vec2::new(20.0, 0.0), &p, |_| {
+                    StallCause::Static
+                });
             }
-            e.ghosts().iter().map(|g| g.position.y > 0.0).fold(0u32, |a, b| a * 2 + b as u32)
+            e.ghosts()
+                .iter()
+                .map(|g| g.position.y > 0.0)
+                .fold(0u32, |a, b| a * 2 + b as u32)
         };
         assert_eq!(run(9), run(9));
     }

@@ -1,17 +1,25 @@
 //! Formation guidance by a virtual leader, seed 001 §3.2, Table 1.
 //!
-//! Every sensed agent i proposes the node of its lattice nearest to this vehicle:
-//! vlᵢ = x_agᵢ + λ·(cos θₖ, sin θₖ), θₖ = θ₀ + 2πk/q with k the bearing quantised by 2π/q
-//! (Table 1 L1.1–L1.3; the paper's "quantise by π/3" is the q = 6 case). The virtual leader is
-//! the mean of the proposals (step 2), and a goal-point PDF with σ = λ/3 (001 eq. 12) is placed on
-//! it (step 3). One attractor per vehicle replaces the q wells per agent of 001 eq. 11, whose
-//! mutual dragging made formations chaotic.
+//! Every sensed agent i proposes a node of *its* formation lattice for this vehicle; the virtual
+//! leader is the mean of the proposals (Table 1, step 2), and a goal-point PDF with σ = λ/3
+//! (001 eq. 12) is placed on it (step 3). One attractor per vehicle replaces the q wells per
+//! agent of 001 eq. 11, whose mutual dragging made formations chaotic.
 //!
-//! **Bearing.** Table 1 writes βᵢ = atan2(x_agᵢ − p), the bearing *from this vehicle to the
-//! agent*; taking the node in that direction would put the virtual leader on the far side of the
-//! agent, behind it, and the vehicle would have to pass through the agent to reach it. We quantise
-//! the bearing *from the agent to this vehicle*, so each agent offers the node on this vehicle's
-//! side, which is what Fig. 2 of 001 draws.
+//! The lattices (q is "the number of vertices of a regular polygon that tiles the plane", with
+//! nodes λ·(cos θₖ, sin θₖ), θₖ = θ₀ + 2πk/q around each agent): q = 4 the square lattice, q = 6
+//! the triangular one, q = 3 the honeycomb.
+//!
+//! **Which node.** Table 1 quantises the bearing βᵢ by 2π/q (its "π/3" is the q = 6 case) and
+//! takes the node in that direction on the agent's first ring. Two readings were needed:
+//! 1. The paper's βᵢ = atan2(x_agᵢ − p) is the bearing *to* the agent; that node lies behind the
+//!    agent and the vehicle would have to pass through it. We use the bearing *from* the agent,
+//!    so the node is on this vehicle's side (what 001 Fig. 2 draws).
+//! 2. Averaging over *all* agents, a finished formation is not an equilibrium: in a square of
+//!    four, the diagonal vehicle (at √2·λ) proposes a side node and drags each vehicle by λ/3;
+//!    and far-apart vehicles that disagree on the lattice settle on compromise points. So only
+//!    *neighbours* propose — agents inside the first shell, halfway between the first ring (λ)
+//!    and the second (√2·λ for q = 4, √3·λ for q = 3 and 6). A vehicle with no neighbour yet
+//!    joins its nearest agent's first ring, which is Table 1 applied to that agent alone.
 
 use crate::math::{wrap_angle, Vec2, TAU};
 use crate::world::Agent;
@@ -62,8 +70,7 @@ impl Formation {
         if nums.iter().any(|v| !v.is_finite()) {
             return Err(FormationError::NonFinite);
         }
-        if !(0.5..=1000.0).contains(&self.lattice_m) || !(0.001..=1e4).contains(&self.attraction)
-        {
+        if !(0.5..=1000.0).contains(&self.lattice_m) || !(0.001..=1e4).contains(&self.attraction) {
             return Err(FormationError::OutOfRange);
         }
         Ok(())
@@ -74,7 +81,8 @@ impl Formation {
         self.lattice_m / 3.0
     }
 
-    /// The lattice node of `agent` nearest to the vehicle at `p` (Table 1, L1.1–L1.3).
+    /// The first-ring node of `agent` in the bearing of the vehicle at `p` (Table 1,
+    /// L1.1–L1.3, bearing taken from the agent).
     pub fn node(&self, agent: Vec2, p: Vec2) -> Vec2 {
         let step = TAU / self.q as f32;
         let beta = wrap_angle((p - agent).angle() - self.orientation);
@@ -82,18 +90,36 @@ impl Formation {
         agent + Vec2::from_angle(self.orientation + k * step) * self.lattice_m
     }
 
-    /// The virtual leader: the mean of the agents' nearest nodes (Table 1, step 2), or `None`
-    /// with no agent in sight.
+    /// Radius of the first shell, m: agents inside it are neighbours.
+    pub fn neighbour_shell(&self) -> f32 {
+        let second_ring = if self.q == 4 { SQRT_2 } else { SQRT_3 };
+        0.5 * (1.0 + second_ring) * self.lattice_m
+    }
+
+    /// The virtual leader (Table 1, step 2): the mean of the neighbours' first-ring nodes, or
+    /// the nearest agent's when none is a neighbour; `None` with no agent in sight.
     pub fn virtual_leader(&self, p: Vec2, agents: &[Agent]) -> Option<Vec2> {
-        if agents.is_empty() {
-            return None;
-        }
-        let sum = agents
+        let shell2 = self.neighbour_shell() * self.neighbour_shell();
+        let (sum, n) = agents
             .iter()
-            .fold(Vec2::ZERO, |s, a| s + self.node(a.position, p));
-        Some(sum * (1.0 / agents.len() as f32))
+            .filter(|a| (a.position - p).norm2() <= shell2)
+            .fold((Vec2::ZERO, 0u32), |(s, n), a| {
+                (s + self.node(a.position, p), n + 1)
+            });
+        if n > 0 {
+            return Some(sum * (1.0 / n as f32));
+        }
+        let nearest = agents.iter().min_by(|a, b| {
+            (a.position - p)
+                .norm2()
+                .total_cmp(&(b.position - p).norm2())
+        })?;
+        Some(self.node(nearest.position, p))
     }
 }
+
+const SQRT_2: f32 = core::f32::consts::SQRT_2;
+const SQRT_3: f32 = 1.732_050_8;
 
 #[cfg(test)]
 mod tests {
@@ -111,12 +137,44 @@ mod tests {
     #[test]
     fn node_is_on_this_vehicles_side_of_the_agent() {
         let f = square();
-        // Vehicle north-north-east of the agent: the north node.
+        // Vehicle north-north-east of the agent: the north node of the first ring (Table 1) ...
         let n = f.node(Vec2::new(5.0, 5.0), Vec2::new(5.5, 9.0));
         assert!((n - Vec2::new(5.0, 7.0)).norm() < 1e-5, "{n:?}");
         let hex = Formation { q: 6, ..f };
         let n = hex.node(Vec2::ZERO, Vec2::new(1.0, 1.9));
         assert!((n - Vec2::from_angle(TAU / 6.0) * 2.0).norm() < 1e-5);
+    }
+
+    #[test]
+    fn a_finished_square_is_an_equilibrium() {
+        let f = square();
+        let corners = [
+            Vec2::new(0.0, 0.0),
+            Vec2::new(2.0, 0.0),
+            Vec2::new(0.0, 2.0),
+            Vec2::new(2.0, 2.0),
+        ];
+        for (i, &me) in corners.iter().enumerate() {
+            let others: heapless::Vec<Agent, 4> = corners
+                .iter()
+                .enumerate()
+                .filter(|&(j, _)| j != i)
+                .map(|(j, &c)| Agent::new(j as u16, c, Vec2::ZERO, 0).unwrap())
+                .collect();
+            let vl = f.virtual_leader(me, &others).unwrap();
+            assert!((vl - me).norm() < 1e-4, "corner {i}: leader at {vl:?}");
+        }
+    }
+
+    #[test]
+    fn a_lone_vehicle_joins_the_nearest_agents_first_ring() {
+        let f = square();
+        let agents = [
+            Agent::new(1, Vec2::new(10.0, 0.0), Vec2::ZERO, 0).unwrap(),
+            Agent::new(2, Vec2::new(30.0, 0.0), Vec2::ZERO, 0).unwrap(),
+        ];
+        let v = f.virtual_leader(Vec2::ZERO, &agents).unwrap();
+        assert!((v - Vec2::new(8.0, 0.0)).norm() < 1e-5, "{v:?}");
     }
 
     #[test]

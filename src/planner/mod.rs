@@ -34,7 +34,7 @@ use crate::math::Vec2;
 use crate::params::{ParamError, Params};
 use crate::world::World;
 
-pub use escape::{EscapeCounters, GhostGoal, MAX_GHOSTS};
+pub use escape::{EscapeCounters, GhostGoal, StallCause, MAX_GHOSTS};
 pub use formation::{Formation, FormationError};
 pub use gradient::SampleCircle;
 pub use setpoints::PidSetpoints;
@@ -342,7 +342,12 @@ impl Planner {
 
     /// One planner period at time `now_ms` (ms since boot, monotonic), for the vehicle in state
     /// `nav` in `world`. On error the state is unchanged.
-    pub fn step(&mut self, now_ms: u64, nav: &NavState, world: &World) -> Result<Command, StepError> {
+    pub fn step(
+        &mut self,
+        now_ms: u64,
+        nav: &NavState,
+        world: &World,
+    ) -> Result<Command, StepError> {
         if let Err(e) = nav.validate() {
             self.counters.bad_nav = self.counters.bad_nav.saturating_add(1);
             return Err(e);
@@ -358,7 +363,10 @@ impl Planner {
         // Attractors: the active goal-point and the virtual leader (001 Table 1).
         let mut attractors: Vec<GoalPdf, MAX_ATTRACTORS> = Vec::new();
         let _ = attractors.push(GoalPdf::new(target, prm.a_minus, prm.sigma_m));
-        if let Some(f) = mission.formation {
+        let formation = mission
+            .formation
+            .filter(|_| !self.escape.formation_released(now_ms));
+        if let Some(f) = formation {
             if let Some(vl) = f.virtual_leader(p, world.agents()) {
                 let _ = attractors.push(GoalPdf::new(vl, f.attraction, f.sigma()));
             }
@@ -371,7 +379,10 @@ impl Planner {
             let r = o.shape.signed_distance(p);
             clearance = clearance.min(r);
             if prm.a_rotor > 0.0 {
-                let _ = normals.push((o.shape.outward_normal(p, NORMAL_STEP_M), o.stator().reach(r)));
+                let _ = normals.push((
+                    o.shape.outward_normal(p, NORMAL_STEP_M),
+                    o.stator().reach(r),
+                ));
             }
         }
         for a in world.agents() {
@@ -408,7 +419,40 @@ impl Planner {
         let mut setpoints = self.setpoints;
         let sp = setpoints.decompose(prm.period_s, f_bar, v_bar, &measured);
         let mut escape = self.escape.clone();
-        escape.update(now_ms, p, v_bar.norm(), mission.goal, &prm);
+        // What holds a stalled vehicle (escape.rs): is there a way down without the virtual
+        // leader, or without the other vehicles too? "A way down" is a descent stronger than
+        // what friction balances at the stall speed.
+        let cause = |target: Vec2| {
+            let goal = [GoalPdf::new(target, prm.a_minus, prm.sigma_m)];
+            let free = |f: &Field| f.sampled_force(&self.circle).norm() > prm.mu * prm.stall_speed;
+            let without_leader = Field {
+                attractors: &goal,
+                ..field
+            };
+            if let (Some(f), true) = (formation, attractors.len() > 1) {
+                if free(&without_leader) {
+                    // Held by the formation near the goal is arrival in formation, not a stall:
+                    // N + 1 lattice cells of side λ fit within λ·√(N + 1) of it.
+                    let n = world.agents().len() as f32 + 1.0;
+                    let footprint = f.lattice_m * crate::math::sqrt(n);
+                    return if (target - p).norm() <= footprint {
+                        StallCause::Vehicles
+                    } else {
+                        StallCause::Formation
+                    };
+                }
+            }
+            let without_vehicles = Field {
+                agents: &[],
+                ..without_leader
+            };
+            if free(&without_vehicles) {
+                StallCause::Vehicles
+            } else {
+                StallCause::Static
+            }
+        };
+        escape.update(now_ms, p, v_bar.norm(), mission.goal, &prm, cause);
 
         let goal_dist = (mission.goal - p).norm();
         let mode = if goal_dist <= prm.arrival_radius_m {

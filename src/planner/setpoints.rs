@@ -186,9 +186,11 @@ mod tests {
             heading: 3.0,
         };
         let sp = s.decompose(0.1, Vec2::ZERO, Vec2::ZERO, &m);
-        assert!([sp.a_c, sp.v_c, sp.i_surge, sp.alpha_c, sp.omega_c, sp.phi_c]
-            .iter()
-            .all(|x| x.is_finite()));
+        assert!(
+            [sp.a_c, sp.v_c, sp.i_surge, sp.alpha_c, sp.omega_c, sp.phi_c]
+                .iter()
+                .all(|x| x.is_finite())
+        );
         assert!((sp.phi_c - 3.0).abs() < 1e-6);
     }
 
@@ -202,7 +204,9 @@ mod tests {
         };
         let mut last = 0.0;
         for _ in 0..1000 {
-            last = s.decompose(0.1, Vec2::ZERO, Vec2::new(1.0, 0.0), &m).i_surge;
+            last = s
+                .decompose(0.1, Vec2::ZERO, Vec2::new(1.0, 0.0), &m)
+                .i_surge;
         }
         assert!((last - I_SURGE_LIMIT_M).abs() < 1e-3);
     }
