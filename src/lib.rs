@@ -10,7 +10,9 @@
 //! - [`field`]: potential distribution functions — obstacle shapes, stator, rotor, goal-point;
 //! - [`world`]: fixed-capacity obstacle and agent tables, ageing, overflow policy;
 //! - [`planner`]: the planner step — sampled gradient, friction, bounding, integration,
-//!   PI-D set-points, ghost goal-points, virtual-leader formation.
+//!   PI-D set-points, ghost goal-points, virtual-leader formation;
+//! - [`sonar`]: mechanically scanned sonar scanlines to obstacle features;
+//! - [`link`]: the serial link's wire format (COBS frames, CRC, messages; `docs/protocol.md`).
 //!
 //! Time is always an argument (milliseconds since boot); nothing here reads a clock.
 

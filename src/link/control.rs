@@ -1,0 +1,700 @@
+//! Control messages, host → firmware: `Mission`, `ChartObstacle`, `ChartClear`, `Params` and
+//! `Tick`. The firmware answers the first four with a [`ReplyRepr`](super::ReplyRepr).
+//!
+//! `Mission` and `Params` parse straight into the library's [`Mission`] and [`Params`].
+
+use super::codec::{angle, finite, magnitude, refuse, within, Reader, Writer};
+use super::frame::MessageType;
+use super::message::Payload;
+use super::shape::{read_shape, shape_len, write_shape};
+use super::{Error, Problem};
+use crate::field::Shape;
+use crate::params::{Bounding, Params};
+use crate::planner::{Formation, Mission, MAX_COORD_M};
+use crate::world::{ObjectError, Obstacle, Origin};
+
+/// `Mission` payload length without a formation.
+pub const MISSION_LEN: usize = 9;
+/// `Mission` payload length with a formation.
+pub const MISSION_LEN_WITH_FORMATION: usize = 22;
+/// `Mission` flag bit: a formation follows.
+pub const MISSION_FLAG_FORMATION: u8 = 0x01;
+
+fn check_mission(m: &Mission) -> Result<(), Error> {
+    magnitude(0, m.goal.x, MAX_COORD_M)?;
+    magnitude(1, m.goal.y, MAX_COORD_M)?;
+    if let Some(f) = m.formation {
+        if !matches!(f.q, 3 | 4 | 6) {
+            return refuse(3, Problem::UnknownCode);
+        }
+        // The ranges of Formation::validate, per field so the reply can name it.
+        within(4, f.lattice_m, 0.5, 1000.0)?;
+        angle(5, f.orientation)?;
+        within(6, f.attraction, 0.001, 1e4)?;
+        f.validate()
+            .map_err(|_| Error::field(2, Problem::Invalid))?;
+    }
+    Ok(())
+}
+
+/// `Mission` (0x04): go to the goal, optionally keeping a formation (seed 001 §3.2).
+///
+/// Layout (9 or 22 bytes): 0 `goal_x` f32 · 1 `goal_y` f32 (|·| ≤ [`MAX_COORD_M`]) ·
+/// 2 `flags` u8 (bit 0: formation follows) · \[3 `q` u8 (3, 4 or 6) · 4 `lattice_m` f32
+/// (0.5 ..= 1000) · 5 `orientation` f32 (rad, ±2π) · 6 `attraction` f32 (0.001 ..= 10⁴)\].
+/// A parsed mission is always accepted by
+/// [`Planner::set_mission`](crate::planner::Planner::set_mission).
+impl<'a> Payload<'a> for Mission {
+    const TYPE: MessageType = MessageType::Mission;
+
+    fn parse(payload: &'a [u8]) -> Result<Self, Error> {
+        let mut r = Reader::new(payload);
+        let goal = r.vec2()?;
+        let flags = r.u8()?;
+        if flags & !MISSION_FLAG_FORMATION != 0 {
+            return refuse(2, Problem::UnknownCode);
+        }
+        let formation = if flags & MISSION_FLAG_FORMATION != 0 {
+            Some(Formation {
+                q: r.u8()?,
+                lattice_m: r.f32()?,
+                orientation: r.f32()?,
+                attraction: r.f32()?,
+            })
+        } else {
+            None
+        };
+        r.finish()?;
+        let m = Mission { goal, formation };
+        check_mission(&m)?;
+        Ok(m)
+    }
+
+    fn payload_len(&self) -> usize {
+        if self.formation.is_some() {
+            MISSION_LEN_WITH_FORMATION
+        } else {
+            MISSION_LEN
+        }
+    }
+
+    fn emit(&self, out: &mut [u8]) -> Result<usize, Error> {
+        check_mission(self)?;
+        let mut w = Writer::new(out);
+        w.vec2(self.goal)?;
+        match self.formation {
+            Some(f) => {
+                w.u8(MISSION_FLAG_FORMATION)?;
+                w.u8(f.q)?;
+                w.f32(f.lattice_m)?;
+                w.f32(f.orientation)?;
+                w.f32(f.attraction)?;
+            }
+            None => w.u8(0)?,
+        }
+        Ok(w.len())
+    }
+}
+
+/// `ChartObstacle` (0x05): an obstacle from the chart or the mission plan. Charted obstacles
+/// never age out and are never evicted; the same id replaces the entry.
+///
+/// Layout (6 + shape bytes): 0 `id` u16 · 1 `a_plus` f32 (A⁺, 0.001 ..= 100) · 2 `shape`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct ChartObstacleRepr {
+    /// Obstacle id.
+    pub id: u16,
+    /// Repulsiveness A⁺ (seed 000 eq. 9).
+    pub a_plus: f32,
+    /// Geometry, world frame.
+    pub shape: Shape,
+}
+
+impl ChartObstacleRepr {
+    /// The obstacle for the world table, charted at `now_ms`.
+    pub fn to_obstacle(&self, now_ms: u64) -> Result<Obstacle, ObjectError> {
+        Obstacle::new(self.id, self.shape, self.a_plus, Origin::Charted, now_ms)
+    }
+
+    fn check(&self) -> Result<(), Error> {
+        within(1, self.a_plus, 0.001, 100.0)?;
+        super::shape::check_shape(2, &self.shape)
+    }
+}
+
+impl<'a> Payload<'a> for ChartObstacleRepr {
+    const TYPE: MessageType = MessageType::ChartObstacle;
+
+    fn parse(payload: &'a [u8]) -> Result<Self, Error> {
+        let mut r = Reader::new(payload);
+        let id = r.u16()?;
+        let a_plus = r.f32()?;
+        let shape = read_shape(&mut r, 2)?;
+        r.finish()?;
+        let c = ChartObstacleRepr { id, a_plus, shape };
+        c.check()?;
+        Ok(c)
+    }
+
+    fn payload_len(&self) -> usize {
+        6 + shape_len(&self.shape)
+    }
+
+    fn emit(&self, out: &mut [u8]) -> Result<usize, Error> {
+        self.check()?;
+        let mut w = Writer::new(out);
+        w.u16(self.id)?;
+        w.f32(self.a_plus)?;
+        write_shape(&mut w, 2, &self.shape)?;
+        Ok(w.len())
+    }
+}
+
+/// `ChartClear` (0x06): remove charted obstacles (sensed ones are left to age out).
+///
+/// Layout (3 bytes): 0 `scope` u8 (0: every charted obstacle, 1: the one with `id`) ·
+/// 1 `id` u16 (0 when scope is 0).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum ChartClearRepr {
+    /// Every charted obstacle.
+    All,
+    /// The charted obstacle with this id.
+    One(u16),
+}
+
+impl<'a> Payload<'a> for ChartClearRepr {
+    const TYPE: MessageType = MessageType::ChartClear;
+
+    fn parse(payload: &'a [u8]) -> Result<Self, Error> {
+        let mut r = Reader::new(payload);
+        let scope = r.u8()?;
+        let id = r.u16()?;
+        r.finish()?;
+        match (scope, id) {
+            (0, 0) => Ok(ChartClearRepr::All),
+            (0, _) => refuse(1, Problem::Invalid),
+            (1, id) => Ok(ChartClearRepr::One(id)),
+            _ => refuse(0, Problem::UnknownCode),
+        }
+    }
+
+    fn payload_len(&self) -> usize {
+        3
+    }
+
+    fn emit(&self, out: &mut [u8]) -> Result<usize, Error> {
+        let (scope, id) = match *self {
+            ChartClearRepr::All => (0, 0),
+            ChartClearRepr::One(id) => (1, id),
+        };
+        let mut w = Writer::new(out);
+        w.u8(scope)?;
+        w.u16(id)?;
+        Ok(w.len())
+    }
+}
+
+/// The names of [`Params`]' fields in wire order: the parameter index of a `Params` field and
+/// of a [`ReplyRepr`](super::ReplyRepr) rejecting it.
+pub const PARAM_NAMES: [&str; 22] = [
+    "period_s",
+    "epsilon_m",
+    "n_gamma",
+    "mu",
+    "f_max",
+    "v_max",
+    "a_plus",
+    "a_rotor",
+    "a_minus",
+    "sigma_m",
+    "bounding",
+    "agent_radius_m",
+    "agent_a_plus",
+    "arrival_radius_m",
+    "ghost_lambda",
+    "ghost_alpha",
+    "ghost_eps_m",
+    "stall_speed",
+    "stall_time_s",
+    "ghost_timeout_s",
+    "max_ghosts",
+    "seed",
+];
+
+/// The wire index of the parameter called `name` (as in
+/// [`ParamError::name`](crate::params::ParamError)).
+pub fn param_index(name: &str) -> Option<u8> {
+    PARAM_NAMES
+        .iter()
+        .position(|n| *n == name)
+        .and_then(|i| u8::try_from(i).ok())
+}
+
+/// `Params` payload length.
+pub const PARAMS_LEN: usize = 79;
+
+/// The 18 `f32` parameters with their indices, for the finiteness check.
+fn param_floats(p: &Params) -> [(u8, f32); 18] {
+    [
+        (0, p.period_s),
+        (1, p.epsilon_m),
+        (3, p.mu),
+        (4, p.f_max),
+        (5, p.v_max),
+        (6, p.a_plus),
+        (7, p.a_rotor),
+        (8, p.a_minus),
+        (9, p.sigma_m),
+        (11, p.agent_radius_m),
+        (12, p.agent_a_plus),
+        (13, p.arrival_radius_m),
+        (14, p.ghost_lambda),
+        (15, p.ghost_alpha),
+        (16, p.ghost_eps_m),
+        (17, p.stall_speed),
+        (18, p.stall_time_s),
+        (19, p.ghost_timeout_s),
+    ]
+}
+
+fn check_params(p: &Params) -> Result<(), Error> {
+    param_floats(p).iter().try_for_each(|&(i, v)| finite(i, v))
+}
+
+/// `Params` (0x07): the whole parameter set, every field of [`Params`] in declaration order
+/// (the index is the row; see [`PARAM_NAMES`]); `n_gamma` and `max_ghosts` are u8,
+/// `bounding` a u8 code (0 plain, 1 split), `seed` a u32, the other 18 are f32.
+///
+/// Only non-finite numbers and unknown codes are refused here. Ranges are checked by
+/// [`Planner::set_params`](crate::planner::Planner::set_params), whose
+/// [`ParamError`](crate::params::ParamError) the firmware turns into a [`ReplyRepr`](super::ReplyRepr) with
+/// [`ReplyRepr::from_step_error`](super::ReplyRepr::from_step_error). So a host can also send
+/// out-of-range values on purpose, to test that they are refused.
+impl<'a> Payload<'a> for Params {
+    const TYPE: MessageType = MessageType::Params;
+
+    fn parse(payload: &'a [u8]) -> Result<Self, Error> {
+        let mut r = Reader::new(payload);
+        let period_s = r.f32()?;
+        let epsilon_m = r.f32()?;
+        let n_gamma = r.u8()?;
+        let mu = r.f32()?;
+        let f_max = r.f32()?;
+        let v_max = r.f32()?;
+        let a_plus = r.f32()?;
+        let a_rotor = r.f32()?;
+        let a_minus = r.f32()?;
+        let sigma_m = r.f32()?;
+        let bounding = match r.u8()? {
+            0 => Bounding::Plain,
+            1 => Bounding::Split,
+            _ => return refuse(10, Problem::UnknownCode),
+        };
+        let p = Params {
+            period_s,
+            epsilon_m,
+            n_gamma,
+            mu,
+            f_max,
+            v_max,
+            a_plus,
+            a_rotor,
+            a_minus,
+            sigma_m,
+            bounding,
+            agent_radius_m: r.f32()?,
+            agent_a_plus: r.f32()?,
+            arrival_radius_m: r.f32()?,
+            ghost_lambda: r.f32()?,
+            ghost_alpha: r.f32()?,
+            ghost_eps_m: r.f32()?,
+            stall_speed: r.f32()?,
+            stall_time_s: r.f32()?,
+            ghost_timeout_s: r.f32()?,
+            max_ghosts: r.u8()?,
+            seed: r.u32()?,
+        };
+        r.finish()?;
+        check_params(&p)?;
+        Ok(p)
+    }
+
+    fn payload_len(&self) -> usize {
+        PARAMS_LEN
+    }
+
+    fn emit(&self, out: &mut [u8]) -> Result<usize, Error> {
+        check_params(self)?;
+        let mut w = Writer::new(out);
+        w.f32(self.period_s)?;
+        w.f32(self.epsilon_m)?;
+        w.u8(self.n_gamma)?;
+        for v in [
+            self.mu,
+            self.f_max,
+            self.v_max,
+            self.a_plus,
+            self.a_rotor,
+            self.a_minus,
+            self.sigma_m,
+        ] {
+            w.f32(v)?;
+        }
+        w.u8(match self.bounding {
+            Bounding::Plain => 0,
+            Bounding::Split => 1,
+        })?;
+        for v in [
+            self.agent_radius_m,
+            self.agent_a_plus,
+            self.arrival_radius_m,
+            self.ghost_lambda,
+            self.ghost_alpha,
+            self.ghost_eps_m,
+            self.stall_speed,
+            self.stall_time_s,
+            self.ghost_timeout_s,
+        ] {
+            w.f32(v)?;
+        }
+        w.u8(self.max_ghosts)?;
+        w.u32(self.seed)?;
+        Ok(w.len())
+    }
+}
+
+/// `Tick` (0x08): lockstep mode. The host owns the clock: each Tick sets the firmware's time
+/// and runs the planner periods due up to it, so a simulation runs deterministically and
+/// faster than real time.
+///
+/// Layout (8 bytes): 0 `time_ms` u64.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct TickRepr {
+    /// The new firmware time, ms.
+    pub time_ms: u64,
+}
+
+impl<'a> Payload<'a> for TickRepr {
+    const TYPE: MessageType = MessageType::Tick;
+
+    fn parse(payload: &'a [u8]) -> Result<Self, Error> {
+        let mut r = Reader::new(payload);
+        let time_ms = r.u64()?;
+        r.finish()?;
+        Ok(TickRepr { time_ms })
+    }
+
+    fn payload_len(&self) -> usize {
+        8
+    }
+
+    fn emit(&self, out: &mut [u8]) -> Result<usize, Error> {
+        let mut w = Writer::new(out);
+        w.u64(self.time_ms)?;
+        Ok(w.len())
+    }
+}
+
+#[cfg(test)]
+pub(crate) mod tests {
+    extern crate std;
+    use super::*;
+    use crate::link::shape::tests::arb_shape;
+    use crate::math::Vec2;
+    use proptest::prelude::*;
+    use std::vec::Vec;
+
+    fn le(vals: &[f32]) -> Vec<u8> {
+        vals.iter().flat_map(|v| v.to_le_bytes()).collect()
+    }
+
+    #[test]
+    fn mission_bytes() {
+        let b = [
+            0x00, 0x00, 0x20, 0x41, // goal_x = 10
+            0x00, 0x00, 0xa0, 0xc0, // goal_y = -5
+            0x00, // no formation
+        ];
+        let m = Mission::parse(&b).unwrap();
+        let want = Mission {
+            goal: Vec2::new(10.0, -5.0),
+            formation: None,
+        };
+        assert_eq!(m, want);
+        let mut out = [0u8; 32];
+        assert_eq!(m.emit(&mut out), Ok(9));
+        assert_eq!(&out[..9], &b);
+
+        let mut f = b.to_vec();
+        f[8] = 1;
+        f.push(6); // hexagonal
+        f.extend(le(&[2.0, 0.0, 10.0]));
+        let m = Mission::parse(&f).unwrap();
+        let want = Formation {
+            q: 6,
+            lattice_m: 2.0,
+            orientation: 0.0,
+            attraction: 10.0,
+        };
+        assert_eq!(m.formation, Some(want));
+        assert_eq!(m.emit(&mut out), Ok(22));
+        assert_eq!(&out[..22], &f[..]);
+    }
+
+    #[test]
+    fn mission_refusals() {
+        let mut f = std::vec![0u8; 8];
+        f.push(1);
+        f.push(5);
+        f.extend(le(&[2.0, 0.0, 10.0]));
+        assert_eq!(
+            Mission::parse(&f),
+            Err(Error::field(3, Problem::UnknownCode))
+        );
+        f[9] = 4;
+        assert!(Mission::parse(&f).is_ok());
+        f[10..14].copy_from_slice(&0.1f32.to_le_bytes());
+        assert_eq!(
+            Mission::parse(&f),
+            Err(Error::field(4, Problem::OutOfRange))
+        );
+        f[10..14].copy_from_slice(&2.0f32.to_le_bytes());
+        f[18..22].copy_from_slice(&f32::NAN.to_le_bytes());
+        assert_eq!(Mission::parse(&f), Err(Error::field(6, Problem::NonFinite)));
+        f[8] = 3;
+        assert_eq!(
+            Mission::parse(&f),
+            Err(Error::field(2, Problem::UnknownCode))
+        );
+        f[8] = 0;
+        assert_eq!(Mission::parse(&f), Err(Error::Length));
+        let mut g = std::vec![0u8; 9];
+        g[0..4].copy_from_slice(&1e6f32.to_le_bytes());
+        assert_eq!(
+            Mission::parse(&g),
+            Err(Error::field(0, Problem::OutOfRange))
+        );
+    }
+
+    #[test]
+    fn chart_bytes() {
+        // id 0x1234, A⁺ 2.5, circle at (100, 0) radius 4.
+        let mut b = std::vec![0x34, 0x12, 0x00, 0x00, 0x20, 0x40, 0x00];
+        b.extend(le(&[100.0, 0.0, 4.0]));
+        let c = ChartObstacleRepr::parse(&b).unwrap();
+        let want = ChartObstacleRepr {
+            id: 0x1234,
+            a_plus: 2.5,
+            shape: Shape::circle(Vec2::new(100.0, 0.0), 4.0).unwrap(),
+        };
+        assert_eq!(c, want);
+        let mut out = [0u8; 80];
+        assert_eq!(want.emit(&mut out), Ok(b.len()));
+        assert_eq!(&out[..b.len()], &b[..]);
+        let o = want.to_obstacle(9).unwrap();
+        assert_eq!((o.id, o.origin, o.a_plus()), (0x1234, Origin::Charted, 2.5));
+        b[2..6].copy_from_slice(&200.0f32.to_le_bytes());
+        assert_eq!(
+            ChartObstacleRepr::parse(&b),
+            Err(Error::field(1, Problem::OutOfRange))
+        );
+
+        assert_eq!(ChartClearRepr::parse(&[0, 0, 0]), Ok(ChartClearRepr::All));
+        assert_eq!(
+            ChartClearRepr::parse(&[1, 0x34, 0x12]),
+            Ok(ChartClearRepr::One(0x1234))
+        );
+        assert_eq!(
+            ChartClearRepr::parse(&[0, 1, 0]),
+            Err(Error::field(1, Problem::Invalid))
+        );
+        assert_eq!(
+            ChartClearRepr::parse(&[2, 0, 0]),
+            Err(Error::field(0, Problem::UnknownCode))
+        );
+        assert_eq!(ChartClearRepr::parse(&[1, 0]), Err(Error::Length));
+        let mut out = [0u8; 3];
+        assert_eq!(ChartClearRepr::One(0x1234).emit(&mut out), Ok(3));
+        assert_eq!(out, [1, 0x34, 0x12]);
+    }
+
+    #[test]
+    fn params_bytes_in_declaration_order() {
+        let p = Params::default();
+        let mut out = [0u8; PARAMS_LEN];
+        assert_eq!(p.emit(&mut out), Ok(PARAMS_LEN));
+        // Hand-checked fields of the default set.
+        assert_eq!(&out[0..4], &[0xcd, 0xcc, 0xcc, 0x3d]); // period_s 0.1
+        assert_eq!(&out[4..8], &[0x00, 0x00, 0x80, 0x3e]); // epsilon_m 0.25
+        assert_eq!(out[8], 16); // n_gamma
+        assert_eq!(&out[9..13], &[0xcd, 0xcc, 0xcc, 0x3e]); // mu 0.4
+        assert_eq!(&out[29..33], &[0x00, 0x00, 0x48, 0x42]); // a_minus 50
+        assert_eq!(out[37], 1); // bounding: split
+        assert_eq!(&out[38..42], &[0x00, 0x00, 0x00, 0x3f]); // agent_radius_m 0.5
+        assert_eq!(&out[70..74], &[0x00, 0x00, 0x70, 0x42]); // ghost_timeout_s 60
+        assert_eq!(out[74], 4); // max_ghosts
+        assert_eq!(&out[75..79], &[1, 0, 0, 0]); // seed
+        assert_eq!(Params::parse(&out), Ok(p));
+
+        // Non-finite and unknown codes are refused at the wire, naming the parameter.
+        let mut bad = out;
+        bad[9..13].copy_from_slice(&f32::NAN.to_le_bytes());
+        assert_eq!(
+            Params::parse(&bad),
+            Err(Error::field(3, Problem::NonFinite))
+        );
+        assert_eq!(PARAM_NAMES[3], "mu");
+        let mut bad = out;
+        bad[37] = 2;
+        assert_eq!(
+            Params::parse(&bad),
+            Err(Error::field(10, Problem::UnknownCode))
+        );
+        // Ranges are not checked here, but by Params::validate (reply path).
+        let mut far = out;
+        far[0..4].copy_from_slice(&5.0f32.to_le_bytes());
+        let parsed = Params::parse(&far).unwrap();
+        let e = parsed.validate().unwrap_err();
+        assert_eq!(param_index(e.name), Some(0));
+        assert_eq!(Params::parse(&out[..78]), Err(Error::Length));
+    }
+
+    #[test]
+    fn param_names_match_the_validator() {
+        // Every name Params::validate can report has an index.
+        let p = Params {
+            period_s: f32::NAN,
+            ..Params::default()
+        };
+        assert_eq!(param_index(p.validate().unwrap_err().name), Some(0));
+        let p = Params {
+            stall_speed: 100.0,
+            ..Params::default()
+        };
+        assert_eq!(param_index(p.validate().unwrap_err().name), Some(17));
+        let p = Params {
+            n_gamma: 1,
+            ..Params::default()
+        };
+        assert_eq!(param_index(p.validate().unwrap_err().name), Some(2));
+        assert_eq!(param_index("nope"), None);
+    }
+
+    #[test]
+    fn tick_bytes() {
+        let b = [0xe8, 0x03, 0, 0, 0, 0, 0, 0];
+        assert_eq!(TickRepr::parse(&b), Ok(TickRepr { time_ms: 1000 }));
+        assert_eq!(TickRepr::parse(&b[..7]), Err(Error::Length));
+        let mut out = [0u8; 8];
+        assert_eq!(TickRepr { time_ms: 1000 }.emit(&mut out), Ok(8));
+        assert_eq!(out, b);
+    }
+
+    pub(crate) fn arb_mission() -> impl Strategy<Value = Mission> {
+        (
+            (-1e5f32..1e5, -1e5f32..1e5),
+            proptest::option::of((
+                prop_oneof![Just(3u8), Just(4), Just(6)],
+                0.5f32..1000.0,
+                -6.2f32..6.2,
+                0.001f32..1e4,
+            )),
+        )
+            .prop_map(|((x, y), f)| Mission {
+                goal: Vec2::new(x, y),
+                formation: f.map(|(q, lattice_m, orientation, attraction)| Formation {
+                    q,
+                    lattice_m,
+                    orientation,
+                    attraction,
+                }),
+            })
+    }
+
+    pub(crate) fn arb_params() -> impl Strategy<Value = Params> {
+        (
+            proptest::array::uniform18(-1e6f32..1e6),
+            (any::<u8>(), any::<u8>()),
+            any::<bool>(),
+            any::<u32>(),
+        )
+            .prop_map(|(f, (n_gamma, max_ghosts), split, seed)| Params {
+                period_s: f[0],
+                epsilon_m: f[1],
+                n_gamma,
+                mu: f[2],
+                f_max: f[3],
+                v_max: f[4],
+                a_plus: f[5],
+                a_rotor: f[6],
+                a_minus: f[7],
+                sigma_m: f[8],
+                bounding: if split {
+                    Bounding::Split
+                } else {
+                    Bounding::Plain
+                },
+                agent_radius_m: f[9],
+                agent_a_plus: f[10],
+                arrival_radius_m: f[11],
+                ghost_lambda: f[12],
+                ghost_alpha: f[13],
+                ghost_eps_m: f[14],
+                stall_speed: f[15],
+                stall_time_s: f[16],
+                ghost_timeout_s: f[17],
+                max_ghosts,
+                seed,
+            })
+    }
+
+    pub(crate) fn arb_chart() -> impl Strategy<Value = ChartObstacleRepr> {
+        (any::<u16>(), 0.001f32..100.0, arb_shape())
+            .prop_map(|(id, a_plus, shape)| ChartObstacleRepr { id, a_plus, shape })
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig { failure_persistence: None, ..ProptestConfig::default() })]
+
+        #[test]
+        fn mission_round_trips(m in arb_mission()) {
+            let mut out = [0u8; MISSION_LEN_WITH_FORMATION];
+            let n = m.emit(&mut out).unwrap();
+            prop_assert_eq!(n, m.payload_len());
+            prop_assert_eq!(Mission::parse(&out[..n]), Ok(m));
+            // What the wire accepts, the planner accepts.
+            let mut planner = crate::planner::Planner::new(Params::default()).unwrap();
+            prop_assert_eq!(planner.set_mission(m), Ok(()));
+        }
+
+        #[test]
+        fn params_round_trip(p in arb_params()) {
+            let mut out = [0u8; PARAMS_LEN];
+            prop_assert_eq!(p.emit(&mut out), Ok(PARAMS_LEN));
+            prop_assert_eq!(Params::parse(&out), Ok(p));
+        }
+
+        #[test]
+        fn chart_round_trips(c in arb_chart(), id in any::<u16>(), all in any::<bool>()) {
+            let mut out = [0u8; 80];
+            let n = c.emit(&mut out).unwrap();
+            prop_assert_eq!(n, c.payload_len());
+            prop_assert_eq!(ChartObstacleRepr::parse(&out[..n]), Ok(c));
+            let cc = if all { ChartClearRepr::All } else { ChartClearRepr::One(id) };
+            prop_assert_eq!(cc.emit(&mut out), Ok(3));
+            prop_assert_eq!(ChartClearRepr::parse(&out[..3]), Ok(cc));
+        }
+
+        #[test]
+        fn control_parsers_never_panic(bytes in proptest::collection::vec(any::<u8>(), 0..100)) {
+            let _ = Mission::parse(&bytes);
+            let _ = ChartObstacleRepr::parse(&bytes);
+            let _ = ChartClearRepr::parse(&bytes);
+            let _ = Params::parse(&bytes);
+            let _ = TickRepr::parse(&bytes);
+        }
+    }
+}

@@ -1,0 +1,912 @@
+//! The extractor: sweep bookkeeping around detection, clustering and fit.
+//!
+//! Per accepted scanline:
+//! 1. compare with the previous ping: the bearing advance `d = wrap(bearing − last)` must be
+//!    between ½ and `max_missed_beams + 1.5` steps, in the same direction as before, with time
+//!    moving forward by at most `max_gap_ms` and the sensor by at most `max_pose_jump_m`;
+//!    otherwise the sweep is broken and every open cluster is closed first. A continuous 360°
+//!    scan is not a break: bearings compare modulo 2π, so an obstacle across the bow or the stern
+//!    stays one cluster (`max_span_rad` bounds how far a cluster can reach);
+//! 2. advance the beam number by `round(|d| / step)` (missing pings count as missed beams) and
+//!    close clusters that have now missed more than `max_missed_beams` beams;
+//! 3. detect runs, put each leading edge in the world frame with this ping's pose, and assign
+//!    it to the cluster table;
+//! 4. close clusters that missed this beam one too many times, or that span `max_span_rad`.
+//!
+//! A closed cluster leaves as a [`Feature`] if it has `min_beams` hits and `min_confidence`.
+
+use crate::math::{cos, sin, wrap_angle, Vec2};
+
+use super::cluster::{Assign, Cluster, Table};
+use super::detect::detect;
+use super::fit::Hit;
+use super::{
+    ConfigError, Counters, ExtractorConfig, Feature, Pose, ScanError, Scanline, MAX_RUNS_PER_BEAM,
+};
+
+/// What the extractor remembers of the previous ping.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct LastPing {
+    /// Wrapped head bearing, rad.
+    bearing: f32,
+    time_ms: u64,
+    /// Sensor position, world frame, m.
+    sensor: Vec2,
+    /// Sweep direction: +1 counter-clockwise, −1 clockwise, 0 not yet known.
+    dir: i8,
+}
+
+/// Sonar scanlines → obstacle features. Owns a fixed-capacity cluster table; no heap, O(bins)
+/// per scanline, never blocks (features go to a caller-supplied sink).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Extractor {
+    cfg: ExtractorConfig,
+    table: Table,
+    last: Option<LastPing>,
+    /// Beam number of the last accepted ping (wraps after 2³² pings, years of pinging).
+    beam: u32,
+    counters: Counters,
+}
+
+impl Extractor {
+    /// An extractor with a checked configuration.
+    pub fn new(cfg: ExtractorConfig) -> Result<Self, ConfigError> {
+        cfg.validate()?;
+        Ok(Extractor {
+            cfg,
+            table: Table::new(),
+            last: None,
+            beam: 0,
+            counters: Counters::default(),
+        })
+    }
+
+    /// Its configuration.
+    pub fn config(&self) -> &ExtractorConfig {
+        &self.cfg
+    }
+
+    /// What it has done so far.
+    pub fn counters(&self) -> Counters {
+        self.counters
+    }
+
+    /// Clusters currently open (waiting for more beams).
+    pub fn open_clusters(&self) -> usize {
+        self.table.len()
+    }
+
+    /// Processes one scanline taken at `pose`. Features completed by it are handed to `out`,
+    /// which returns `false` when it cannot take one (the feature is then counted in
+    /// [`Counters::sink_full`] and lost). Returns how many features `out` accepted.
+    ///
+    /// A refused scanline (see [`ScanError`]) changes nothing but [`Counters::rejected`].
+    pub fn push_scanline(
+        &mut self,
+        scan: &Scanline<'_>,
+        pose: Pose,
+        out: &mut impl FnMut(Feature) -> bool,
+    ) -> Result<usize, ScanError> {
+        if let Err(e) = scan.validate().and_then(|()| pose.validate()) {
+            self.counters.rejected = self.counters.rejected.saturating_add(1);
+            return Err(e);
+        }
+        self.counters.scanlines = self.counters.scanlines.saturating_add(1);
+        let step = scan.step_rad.abs();
+        let bearing = wrap_angle(scan.bearing_rad);
+        let (ch, sh) = (cos(pose.heading), sin(pose.heading));
+        let sensor = pose.position + self.cfg.head_offset.rotate_cs(ch, sh);
+        let mut emitted = 0;
+
+        // 1. Continuity with the previous ping.
+        let mut dir = 0i8;
+        let mut advance = 1u32;
+        if let Some(last) = self.last {
+            let d = wrap_angle(bearing - last.bearing);
+            let ad = d.abs();
+            dir = if d >= 0.0 { 1 } else { -1 };
+            let max_adj = (f32::from(self.cfg.max_missed_beams) + 1.5) * step;
+            let same = ad < 0.5 * step;
+            let broken = same
+                || ad > max_adj
+                || (last.dir != 0 && dir != last.dir)
+                || scan.time_ms < last.time_ms
+                || scan.time_ms.saturating_sub(last.time_ms) > u64::from(self.cfg.max_gap_ms)
+                || (sensor - last.sensor).norm() > self.cfg.max_pose_jump_m;
+            if broken {
+                self.counters.sweep_breaks = self.counters.sweep_breaks.saturating_add(1);
+                emitted += self.close_where(|_| true, out);
+                // After a stall or a jump the direction is unknown; after a reversal it is `d`'s.
+                if same || ad > max_adj {
+                    dir = 0;
+                }
+            } else {
+                // ½ ≤ |d|/step ≤ max_missed + 1.5, so this is 1 ..= max_missed + 2.
+                advance = libm::roundf(ad / step).max(1.0) as u32;
+                self.table.advance(ad);
+            }
+        }
+        let beam = self.beam.wrapping_add(advance);
+        self.beam = beam;
+        self.last = Some(LastPing {
+            bearing,
+            time_ms: scan.time_ms,
+            sensor,
+            dir,
+        });
+
+        // 2. Clusters that missed too many beams while pings were missing cannot continue.
+        let missed = u32::from(self.cfg.max_missed_beams);
+        emitted += self.close_where(|c| c.since(beam) > missed.saturating_add(1), out);
+
+        // 3. Runs → world-frame hits → clusters.
+        let echoes = detect(scan, &self.cfg);
+        let look = Vec2::from_angle(pose.heading + bearing);
+        let hits: heapless::Vec<Hit, MAX_RUNS_PER_BEAM> = echoes
+            .iter()
+            .map(|e| Hit {
+                point: sensor + look * e.range_m,
+                look,
+                range: e.range_m,
+                step,
+                intensity: e.mean,
+            })
+            .collect();
+        self.counters.echoes = self.counters.echoes.saturating_add(hits.len() as u32);
+        let fates = self
+            .table
+            .assign_beam(&hits, beam, scan.time_ms, self.cfg.cluster_gap_m);
+        let dropped = fates.iter().filter(|a| **a == Assign::Full).count() as u32;
+        self.counters.clusters_dropped = self.counters.clusters_dropped.saturating_add(dropped);
+
+        // 4. Clusters that ended on this beam, or grew too wide.
+        let max_span = self.cfg.max_span_rad;
+        emitted += self.close_where(|c| c.since(beam) > missed || c.span_rad >= max_span, out);
+        Ok(emitted)
+    }
+
+    /// Closes every open cluster now (e.g. when the sonar stops), emitting those that qualify;
+    /// the next scanline starts a new sweep. Returns how many features `out` accepted.
+    pub fn flush(&mut self, out: &mut impl FnMut(Feature) -> bool) -> usize {
+        self.last = None;
+        self.close_where(|_| true, out)
+    }
+
+    /// Forgets every open cluster and the previous ping, emitting nothing; counters are kept.
+    pub fn reset(&mut self) {
+        self.table.clear();
+        self.last = None;
+    }
+
+    /// Closes the clusters for which `close` holds; fits and emits those that qualify.
+    fn close_where(
+        &mut self,
+        close: impl Fn(&Cluster) -> bool,
+        out: &mut impl FnMut(Feature) -> bool,
+    ) -> usize {
+        let Extractor {
+            cfg,
+            table,
+            counters,
+            ..
+        } = self;
+        let mut accepted = 0;
+        table.close_where(close, |c| {
+            let feature = (c.moments.hits() >= u32::from(cfg.min_beams))
+                .then(|| c.moments.fit(c.spanned(), c.time_ms, cfg))
+                .flatten()
+                .filter(|f| f.confidence >= cfg.min_confidence);
+            match feature {
+                Some(f) if out(f) => {
+                    counters.features = counters.features.saturating_add(1);
+                    accepted += 1;
+                }
+                Some(_) => counters.sink_full = counters.sink_full.saturating_add(1),
+                None => counters.clusters_discarded = counters.clusters_discarded.saturating_add(1),
+            }
+        });
+        accepted
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::math::{sqrt, XorShift32, PI};
+    use crate::sonar::{FeatureKind, MAX_BINS};
+    use heapless::Vec as HVec;
+    use proptest::prelude::*;
+
+    /// Features collected in a test.
+    type Found = HVec<Feature, 64>;
+
+    /// What the sonar sees: circles and wall segments.
+    #[derive(Clone, Copy)]
+    enum Obj {
+        Circle(Vec2, f32),
+        Wall(Vec2, Vec2),
+    }
+
+    /// Range along the ray `s + t·u` to the nearest object, if any.
+    fn cast(scene: &[Obj], s: Vec2, u: Vec2) -> Option<f32> {
+        let mut best: Option<f32> = None;
+        for o in scene {
+            let t = match *o {
+                Obj::Circle(c, r) => {
+                    let to_c = c - s;
+                    let uc = u.dot(to_c);
+                    let disc = uc * uc - to_c.norm2() + r * r;
+                    (disc >= 0.0 && uc - sqrt(disc) > 0.0).then(|| uc - sqrt(disc))
+                }
+                Obj::Wall(a, b) => {
+                    // s + t·u = a + w·(b − a), 0 ≤ w ≤ 1, t > 0.
+                    let e = b - a;
+                    let den = u.cross(e);
+                    if den.abs() < 1e-9 {
+                        None
+                    } else {
+                        let t = (a - s).cross(e) / den;
+                        let w = (a - s).cross(u) / den;
+                        (t > 0.0 && (0.0..=1.0).contains(&w)).then_some(t)
+                    }
+                }
+            };
+            if let Some(t) = t {
+                best = Some(best.map_or(t, |b: f32| b.min(t)));
+            }
+        }
+        best
+    }
+
+    /// Synthetic sonar: background noise, speckle, an echo 0.3 m deep at the nearest surface
+    /// whose raw level falls as 1/(1 + 0.04 r) (the default gain restores ~200), then shadow.
+    struct Sonar {
+        rng: XorShift32,
+        noise: u8,
+        speckle_per_mille: u32,
+    }
+
+    impl Sonar {
+        fn new(seed: u32, noise: u8, speckle_per_mille: u32) -> Self {
+            Sonar {
+                rng: XorShift32::new(seed),
+                noise,
+                speckle_per_mille,
+            }
+        }
+
+        fn ping(&mut self, scene: &[Obj], s: Vec2, u: Vec2, range: f32, bins: &mut [u8]) {
+            let n = bins.len();
+            let dr = range / n as f32;
+            let hit = cast(scene, s, u);
+            for (i, b) in bins.iter_mut().enumerate() {
+                let (r0, r1) = (i as f32 * dr, (i + 1) as f32 * dr);
+                let mut v = u32::from(self.noise) * (self.rng.next_u32() % 256) / 256;
+                if self.rng.next_u32() % 1000 < self.speckle_per_mille {
+                    v = 100 + self.rng.next_u32() % 156;
+                }
+                if let Some(t) = hit {
+                    if r1 > t && r0 < t + 0.3 {
+                        v = (200.0 / (1.0 + 0.04 * r0)) as u32;
+                    } else if r0 >= t + 0.3 {
+                        v /= 4; // acoustic shadow
+                    }
+                }
+                *b = v.min(255) as u8;
+            }
+        }
+    }
+
+    /// The vehicle's track: constant speed along a slowly turning heading.
+    #[derive(Clone, Copy)]
+    struct Track {
+        start: Vec2,
+        heading: f32,
+        speed: f32,
+        yaw_rate: f32,
+    }
+
+    impl Track {
+        fn pose(&self, t_s: f32) -> Pose {
+            // Integrate the turning path in small steps (the test's ground truth).
+            let mut p = self.start;
+            let mut h = self.heading;
+            let n = (t_s / 0.01) as usize;
+            for _ in 0..n {
+                p += Vec2::from_angle(h) * (self.speed * 0.01);
+                h += self.yaw_rate * 0.01;
+            }
+            Pose {
+                position: p,
+                heading: h,
+            }
+        }
+    }
+
+    const STILL: Track = Track {
+        start: Vec2::ZERO,
+        heading: 0.0,
+        speed: 0.0,
+        yaw_rate: 0.0,
+    };
+
+    /// How the head scans in a test: a continuous scan from `bearing0`, `step` rad per ping
+    /// (the sign is the direction), `dt_ms` apart, `bins` bins over `range` metres.
+    #[derive(Clone, Copy)]
+    struct Head {
+        bearing0: f32,
+        step: f32,
+        pings: usize,
+        dt_ms: u64,
+        range: f32,
+        bins: usize,
+    }
+
+    /// One revolution at 1.8° per ping, 60 ms apart (12 s), 300 bins over 30 m, from the stern
+    /// round (so obstacles ahead and abeam are mid-sweep).
+    const SCAN: Head = Head {
+        bearing0: -PI,
+        step: PI / 100.0,
+        pings: 200,
+        dt_ms: 60,
+        range: 30.0,
+        bins: 300,
+    };
+
+    /// Runs the scan over the scene from the track, then flushes; returns the features.
+    fn sweep(
+        ex: &mut Extractor,
+        sonar: &mut Sonar,
+        scene: &[Obj],
+        track: Track,
+        head: Head,
+    ) -> Found {
+        let mut found = Found::new();
+        let mut bins = [0u8; MAX_BINS];
+        let nbins = head.bins.min(MAX_BINS);
+        for k in 0..head.pings {
+            let t_ms = k as u64 * head.dt_ms;
+            let pose = track.pose(t_ms as f32 / 1000.0);
+            let bearing = wrap_angle(head.bearing0 + k as f32 * head.step);
+            let (c, s) = (cos(pose.heading), sin(pose.heading));
+            let sensor = pose.position + ex.config().head_offset.rotate_cs(c, s);
+            let u = Vec2::from_angle(pose.heading + bearing);
+            sonar.ping(scene, sensor, u, head.range, &mut bins[..nbins]);
+            let scan = Scanline {
+                time_ms: t_ms,
+                bearing_rad: bearing,
+                step_rad: head.step,
+                range_m: head.range,
+                bins: &bins[..nbins],
+            };
+            ex.push_scanline(&scan, pose, &mut |f| found.push(f).is_ok())
+                .unwrap();
+        }
+        ex.flush(&mut |f| found.push(f).is_ok());
+        found
+    }
+
+    fn circle_of(f: &Feature) -> f32 {
+        match f.kind {
+            FeatureKind::Circle { radius } => radius,
+            FeatureKind::Rectangle { .. } => panic!("expected a circle, got {f:?}"),
+        }
+    }
+
+    const STEP: f32 = SCAN.step;
+    const FULL: usize = SCAN.pings;
+
+    #[test]
+    fn one_circle_from_a_moving_turning_vehicle() {
+        // 1 m/s, turning 1°/s, 60 ms per ping: the vehicle moves 12 m and turns 12° in the sweep.
+        let track = Track {
+            start: Vec2::new(0.0, 0.0),
+            heading: 0.3,
+            speed: 1.0,
+            yaw_rate: 0.0175,
+        };
+        let truth = Vec2::new(14.0, 9.0);
+        let scene = [Obj::Circle(truth, 1.5)];
+        let mut ex = Extractor::new(ExtractorConfig::default()).unwrap();
+        let mut sonar = Sonar::new(1, 30, 2);
+        let found = sweep(&mut ex, &mut sonar, &scene, track, SCAN);
+        let strong: HVec<&Feature, 64> = found.iter().filter(|f| f.confidence > 0.5).collect();
+        assert_eq!(strong.len(), 1, "{found:?}");
+        let f = strong[0];
+        let err = (f.center - truth).norm();
+        let r = circle_of(f);
+        // Measured: 0.03 m and 1.52 m from 10 beams.
+        assert!(err < 0.15, "centre error {err} m: {f:?}");
+        assert!((r - 1.5).abs() < 0.15, "radius {r}: {f:?}");
+        assert!(f.beams >= 8, "{f:?}");
+        assert!(f.to_shape().is_ok());
+        let c = ex.counters();
+        assert_eq!(c.scanlines, FULL as u32);
+        assert_eq!((c.rejected, c.clusters_dropped, c.sink_full), (0, 0, 0));
+    }
+
+    #[test]
+    fn ignoring_the_motion_would_misplace_it() {
+        // The same obstacle, with the pose frozen at the sweep's start: the fit lands elsewhere,
+        // which shows the per-ping pose is what keeps the centre right.
+        let track = Track {
+            start: Vec2::ZERO,
+            heading: 0.3,
+            speed: 1.0,
+            yaw_rate: 0.0175,
+        };
+        let truth = Vec2::new(14.0, 9.0);
+        let scene = [Obj::Circle(truth, 1.5)];
+        let mut ex = Extractor::new(ExtractorConfig::default()).unwrap();
+        let mut sonar = Sonar::new(1, 30, 0);
+        let mut bins = [0u8; 300];
+        let mut found = Found::new();
+        let frozen = track.pose(0.0);
+        for k in 0..FULL {
+            let t_ms = k as u64 * 60;
+            let pose = track.pose(t_ms as f32 / 1000.0);
+            let bearing = wrap_angle(-PI + k as f32 * STEP);
+            sonar.ping(
+                &scene,
+                pose.position,
+                Vec2::from_angle(pose.heading + bearing),
+                30.0,
+                &mut bins,
+            );
+            let scan = Scanline {
+                time_ms: t_ms,
+                bearing_rad: bearing,
+                step_rad: STEP,
+                range_m: 30.0,
+                bins: &bins,
+            };
+            ex.push_scanline(&scan, frozen, &mut |f| found.push(f).is_ok())
+                .unwrap();
+        }
+        ex.flush(&mut |f| found.push(f).is_ok());
+        let best = found
+            .iter()
+            .map(|f| (f.center - truth).norm())
+            .fold(f32::INFINITY, f32::min);
+        assert!(best > 1.0, "frozen pose still fits within {best} m");
+    }
+
+    #[test]
+    fn two_obstacles_give_two_features() {
+        let scene = [
+            Obj::Circle(Vec2::new(10.0, 0.0), 1.0),
+            Obj::Circle(Vec2::new(-6.0, 12.0), 2.0),
+        ];
+        let mut ex = Extractor::new(ExtractorConfig::default()).unwrap();
+        let mut sonar = Sonar::new(7, 30, 2);
+        let track = Track {
+            heading: 1.0,
+            speed: 0.5,
+            ..STILL
+        };
+        let found = sweep(
+            &mut ex,
+            &mut sonar,
+            &scene,
+            track,
+            Head { bins: 400, ..SCAN },
+        );
+        let strong: HVec<&Feature, 64> = found.iter().filter(|f| f.confidence > 0.5).collect();
+        assert_eq!(strong.len(), 2, "{found:?}");
+        for (c, r) in [(Vec2::new(10.0, 0.0), 1.0), (Vec2::new(-6.0, 12.0), 2.0)] {
+            let f = strong
+                .iter()
+                .min_by(|a, b| (a.center - c).norm().total_cmp(&(b.center - c).norm()))
+                .unwrap();
+            let err = (f.center - c).norm();
+            // Measured: 0.21 m / 1.19 m for the small one (6 beams), 0.02 m / 1.98 m.
+            assert!(err < 0.3, "centre error {err} for {c:?}: {f:?}");
+            assert!((circle_of(f) - r).abs() < 0.25, "radius for {r}: {f:?}");
+        }
+    }
+
+    #[test]
+    fn an_obstacle_across_the_stern_stays_one_feature_in_either_direction() {
+        // Dead astern of a vehicle at rest: bearings about ±π, where the head angle wraps.
+        let truth = Vec2::new(-12.0, 0.3);
+        let scene = [Obj::Circle(truth, 1.5)];
+        for step in [SCAN.step, -SCAN.step] {
+            let mut ex = Extractor::new(ExtractorConfig::default()).unwrap();
+            let head = Head {
+                bearing0: 0.0,
+                step,
+                ..SCAN
+            };
+            let found = sweep(&mut ex, &mut Sonar::new(4, 30, 2), &scene, STILL, head);
+            assert_eq!(found.len(), 1, "{found:?}");
+            assert!((found[0].center - truth).norm() < 0.15, "{found:?}");
+            assert_eq!(ex.counters().sweep_breaks, 0);
+        }
+    }
+
+    #[test]
+    fn a_wall_is_fitted_as_rectangles_on_its_face() {
+        // A wall along y = 8 from x = −12 to 12; the vehicle drives along it at 1 m/s.
+        let scene = [Obj::Wall(Vec2::new(-12.0, 8.0), Vec2::new(12.0, 8.0))];
+        let mut ex = Extractor::new(ExtractorConfig::default()).unwrap();
+        let mut sonar = Sonar::new(3, 30, 2);
+        let track = Track {
+            start: Vec2::new(-3.0, 0.0),
+            speed: 1.0,
+            ..STILL
+        };
+        let found = sweep(&mut ex, &mut sonar, &scene, track, SCAN);
+        let strong: HVec<&Feature, 64> = found.iter().filter(|f| f.confidence > 0.5).collect();
+        assert!(!strong.is_empty(), "{found:?}");
+        let mut covered = 0.0;
+        for f in &strong {
+            let FeatureKind::Rectangle { half, angle } = f.kind else {
+                panic!("wall piece not a rectangle: {f:?}")
+            };
+            assert!(
+                angle.abs() < 0.05 || (angle.abs() - PI).abs() < 0.05,
+                "{f:?}"
+            );
+            let face = f.center.y - half.y;
+            assert!((face - 8.0).abs() < 0.15, "face at {face}: {f:?}");
+            assert!(
+                f.center.x - half.x > -12.5 && f.center.x + half.x < 12.5,
+                "{f:?}"
+            );
+            covered += 2.0 * half.x;
+        }
+        // The wall is 24 m long; within 90° of its normal and 30 m most of it is seen.
+        assert!(covered > 15.0, "covered {covered} m of 24: {strong:?}");
+    }
+
+    #[test]
+    fn speckle_alone_gives_no_confident_feature() {
+        // Heavy speckle (3 % of bins at 100–255, and bright background) over three sweeps, with
+        // every closed cluster let out: chance chains of three runs do occur, but none of four.
+        let cfg = ExtractorConfig {
+            min_confidence: 0.0,
+            ..ExtractorConfig::default()
+        };
+        let mut ex = Extractor::new(cfg).unwrap();
+        let mut sonar = Sonar::new(42, 35, 30);
+        let found = sweep(
+            &mut ex,
+            &mut sonar,
+            &[],
+            STILL,
+            Head {
+                pings: 3 * FULL,
+                ..SCAN
+            },
+        );
+        let worst = found.iter().map(|f| f.confidence).fold(0.0, f32::max);
+        assert!(
+            worst < 0.45,
+            "speckle feature of confidence {worst}: {found:?}"
+        );
+        assert!(found.iter().all(|f| f.beams <= 3), "{found:?}");
+        assert!(ex.counters().echoes > 300, "the speckle should make runs");
+        // Realistic speckle (0.5 %) with the default configuration: nothing leaves at all.
+        let mut ex = Extractor::new(ExtractorConfig::default()).unwrap();
+        let mut sonar = Sonar::new(43, 30, 5);
+        let found = sweep(
+            &mut ex,
+            &mut sonar,
+            &[],
+            STILL,
+            Head {
+                pings: 3 * FULL,
+                ..SCAN
+            },
+        );
+        assert!(found.is_empty(), "{found:?}");
+        assert!(ex.counters().clusters_discarded > 0 || ex.counters().echoes == 0);
+    }
+
+    #[test]
+    fn sector_scan_reversal_closes_clusters() {
+        // Sweep 0 → 0.6 rad and back over a circle at bearing 0.3: two passes, two features,
+        // none spanning the turn.
+        let truth = Vec2::from_angle(0.3) * 12.0;
+        let scene = [Obj::Circle(truth, 1.5)];
+        let mut ex = Extractor::new(ExtractorConfig::default()).unwrap();
+        let mut sonar = Sonar::new(9, 30, 0);
+        let mut bins = [0u8; 300];
+        let mut found = Found::new();
+        let n = 20;
+        for k in 0..(4 * n) {
+            let phase = k % (2 * n);
+            let bearing = if phase < n { phase } else { 2 * n - phase } as f32 * 0.03;
+            sonar.ping(
+                &scene,
+                Vec2::ZERO,
+                Vec2::from_angle(bearing),
+                30.0,
+                &mut bins,
+            );
+            let scan = Scanline {
+                time_ms: k as u64 * 60,
+                bearing_rad: bearing,
+                step_rad: 0.03,
+                range_m: 30.0,
+                bins: &bins,
+            };
+            ex.push_scanline(&scan, Pose::default(), &mut |f| found.push(f).is_ok())
+                .unwrap();
+        }
+        ex.flush(&mut |f| found.push(f).is_ok());
+        assert_eq!(found.len(), 4, "{found:?}");
+        assert!(ex.counters().sweep_breaks >= 3);
+        for f in &found {
+            assert!((f.center - truth).norm() < 0.15, "{f:?}");
+        }
+    }
+
+    #[test]
+    fn a_break_in_time_or_pose_splits_and_a_full_sink_counts() {
+        let truth = Vec2::new(12.0, 0.0);
+        let scene = [Obj::Circle(truth, 2.0)];
+        let mut ex = Extractor::new(ExtractorConfig::default()).unwrap();
+        let mut sonar = Sonar::new(5, 20, 0);
+        let mut bins = [0u8; 300];
+        let mut found = Found::new();
+        let mut refused = 0;
+        for k in -12i32..=12 {
+            let bearing = k as f32 * 0.03;
+            sonar.ping(
+                &scene,
+                Vec2::ZERO,
+                Vec2::from_angle(bearing),
+                30.0,
+                &mut bins,
+            );
+            // A 5 s stall mid-obstacle.
+            let t = (k + 12) as u64 * 60 + if k > 0 { 5_000 } else { 0 };
+            let scan = Scanline {
+                time_ms: t,
+                bearing_rad: bearing,
+                step_rad: 0.03,
+                range_m: 30.0,
+                bins: &bins,
+            };
+            // The sink accepts the first feature only.
+            ex.push_scanline(&scan, Pose::default(), &mut |f| {
+                if found.is_empty() {
+                    found.push(f).is_ok()
+                } else {
+                    refused += 1;
+                    false
+                }
+            })
+            .unwrap();
+        }
+        ex.flush(&mut |_| false);
+        assert_eq!(ex.counters().sweep_breaks, 1);
+        assert_eq!(found.len(), 1);
+        assert!(found[0].time_ms < 13 * 60, "{found:?}");
+        // The second half closed on the first beam past the obstacle, into the full sink.
+        assert_eq!(refused, 1);
+        assert_eq!(ex.counters().sink_full, refused);
+        assert_eq!(ex.counters().features, 1);
+        assert_eq!(ex.open_clusters(), 0);
+    }
+
+    #[test]
+    fn missing_pings_are_bridged_up_to_max_missed() {
+        let truth = Vec2::new(12.0, 0.0);
+        let scene = [Obj::Circle(truth, 2.0)];
+        let run = |skip: &[i32]| {
+            let mut ex = Extractor::new(ExtractorConfig::default()).unwrap();
+            let mut sonar = Sonar::new(5, 20, 0);
+            let mut bins = [0u8; 300];
+            let mut found = Found::new();
+            for k in -12i32..=12 {
+                if skip.contains(&k) {
+                    continue;
+                }
+                let bearing = k as f32 * 0.03;
+                sonar.ping(
+                    &scene,
+                    Vec2::ZERO,
+                    Vec2::from_angle(bearing),
+                    30.0,
+                    &mut bins,
+                );
+                let scan = Scanline {
+                    time_ms: (k + 12) as u64 * 60,
+                    bearing_rad: bearing,
+                    step_rad: 0.03,
+                    range_m: 30.0,
+                    bins: &bins,
+                };
+                ex.push_scanline(&scan, Pose::default(), &mut |f| found.push(f).is_ok())
+                    .unwrap();
+            }
+            ex.flush(&mut |f| found.push(f).is_ok());
+            found
+        };
+        assert_eq!(run(&[]).len(), 1);
+        let one_missing = run(&[0]);
+        assert_eq!(one_missing.len(), 1, "{one_missing:?}");
+        assert!(one_missing[0].confidence < run(&[])[0].confidence);
+        // Two missing pings in a row exceed max_missed_beams = 1: two halves.
+        assert_eq!(run(&[0, 1]).len(), 2);
+    }
+
+    #[test]
+    fn head_offset_is_applied() {
+        // Head 1.5 m forward of the reference point; vehicle heading 90°, at rest.
+        let cfg = ExtractorConfig {
+            head_offset: Vec2::new(1.5, 0.0),
+            ..ExtractorConfig::default()
+        };
+        let truth = Vec2::new(-5.0, 10.0);
+        let scene = [Obj::Circle(truth, 1.0)];
+        let track = Track {
+            heading: PI / 2.0,
+            ..STILL
+        };
+        let mut ex = Extractor::new(cfg).unwrap();
+        let found = sweep(&mut ex, &mut Sonar::new(2, 20, 0), &scene, track, SCAN);
+        assert_eq!(found.len(), 1, "{found:?}");
+        assert!((found[0].center - truth).norm() < 0.15, "{found:?}");
+        // The same pings, taken from the offset head but processed as if the head were at the
+        // reference point, land the obstacle about 1.5 m off.
+        let mut bins = [0u8; 300];
+        let mut ex = Extractor::new(ExtractorConfig::default()).unwrap();
+        let mut sonar = Sonar::new(2, 20, 0);
+        let mut found = Found::new();
+        for k in 0..FULL {
+            let bearing = wrap_angle(-PI + k as f32 * STEP);
+            let u = Vec2::from_angle(PI / 2.0 + bearing);
+            sonar.ping(&scene, Vec2::new(0.0, 1.5), u, 30.0, &mut bins);
+            let scan = Scanline {
+                time_ms: k as u64 * 60,
+                bearing_rad: bearing,
+                step_rad: STEP,
+                range_m: 30.0,
+                bins: &bins,
+            };
+            let pose = track.pose(0.0);
+            ex.push_scanline(&scan, pose, &mut |f| found.push(f).is_ok())
+                .unwrap();
+        }
+        ex.flush(&mut |f| found.push(f).is_ok());
+        assert_eq!(found.len(), 1, "{found:?}");
+        let off = (found[0].center - truth).norm();
+        assert!((off - 1.5).abs() < 0.2, "{off}");
+    }
+
+    #[test]
+    fn state_is_small() {
+        // The extractor lives in a static or on a task stack of a few kB.
+        let size = core::mem::size_of::<Extractor>();
+        assert!(size <= 1024, "Extractor is {size} bytes");
+        assert!(core::mem::size_of::<Feature>() <= 48);
+    }
+
+    #[test]
+    fn rejected_scanlines_change_nothing_but_the_count() {
+        let mut ex = Extractor::new(ExtractorConfig::default()).unwrap();
+        let bins = [200u8; 513];
+        let good = Scanline {
+            time_ms: 0,
+            bearing_rad: 0.0,
+            step_rad: 0.03,
+            range_m: 30.0,
+            bins: &bins[..300],
+        };
+        let mut sink = |_f: Feature| true;
+        assert_eq!(ex.push_scanline(&good, Pose::default(), &mut sink), Ok(0));
+        let before = ex.clone();
+        let cases = [
+            (
+                Scanline {
+                    range_m: f32::NAN,
+                    ..good
+                },
+                Pose::default(),
+                ScanError::NonFinite,
+            ),
+            (
+                Scanline { bins: &[], ..good },
+                Pose::default(),
+                ScanError::NoBins,
+            ),
+            (
+                Scanline {
+                    bins: &bins,
+                    ..good
+                },
+                Pose::default(),
+                ScanError::TooManyBins,
+            ),
+            (
+                Scanline {
+                    range_m: 500.0,
+                    ..good
+                },
+                Pose::default(),
+                ScanError::RangeOutOfRange,
+            ),
+            (
+                good,
+                Pose {
+                    position: Vec2::new(f32::NAN, 0.0),
+                    heading: 0.0,
+                },
+                ScanError::BadPose,
+            ),
+        ];
+        for (s, p, want) in cases {
+            assert_eq!(ex.push_scanline(&s, p, &mut sink), Err(want));
+        }
+        let after = ex.counters();
+        assert_eq!(after.rejected, 5);
+        assert_eq!(
+            Counters {
+                rejected: 0,
+                ..after
+            },
+            before.counters()
+        );
+        assert_eq!(ex.open_clusters(), before.open_clusters());
+        assert!(Extractor::new(ExtractorConfig {
+            threshold: f32::NAN,
+            ..ExtractorConfig::default()
+        })
+        .is_err());
+        ex.reset();
+        assert_eq!(ex.open_clusters(), 0);
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(64))]
+
+        #[test]
+        fn arbitrary_scanlines_never_panic_or_emit_non_finite(
+            seeds in proptest::collection::vec(any::<u32>(), 1..60),
+            nbins in 0usize..600,
+            range in prop_oneof![Just(f32::NAN), Just(f32::INFINITY), -10.0f32..250.0, 0.5f32..200.0],
+            step in prop_oneof![Just(0.0f32), -0.3f32..0.3, 0.001f32..0.2],
+            bearing0 in prop_oneof![Just(f32::NAN), -1.0e6f32..1.0e6, -7.0f32..7.0],
+            x in prop_oneof![Just(f32::INFINITY), -2.0e5f32..2.0e5],
+            heading in -100.0f32..100.0,
+            dense in any::<bool>(),
+            min_beams in 1u16..4,
+        ) {
+            let cfg = ExtractorConfig { min_beams, min_confidence: 0.0, ..ExtractorConfig::default() };
+            let mut ex = Extractor::new(cfg).unwrap();
+            let mut bins = [0u8; 600];
+            let mut check = |f: Feature| {
+                assert!(f.center.is_finite() && f.radius.is_finite() && f.radius > 0.0, "{f:?}");
+                assert!((0.0..=1.0).contains(&f.confidence), "{f:?}");
+                assert!(f.to_shape().is_ok(), "{f:?}");
+                true
+            };
+            for (k, s) in seeds.iter().enumerate() {
+                let mut rng = XorShift32::new(*s);
+                for b in bins.iter_mut().take(nbins) {
+                    let v = rng.next_u32();
+                    *b = if dense { (v % 256) as u8 } else if v.is_multiple_of(7) { 255 } else { 0 };
+                }
+                let scan = Scanline {
+                    time_ms: u64::from(*s % 3) * 1_000 + k as u64 * 50,
+                    bearing_rad: bearing0 + step * k as f32 * if s.is_multiple_of(11) { -1.0 } else { 1.0 },
+                    step_rad: step,
+                    range_m: range,
+                    bins: &bins[..nbins],
+                };
+                let pose = Pose {
+                    position: Vec2::new(x + (s % 5) as f32, k as f32 * 0.1),
+                    heading: heading + (s % 13) as f32 * 0.01,
+                };
+                let _ = ex.push_scanline(&scan, pose, &mut check);
+            }
+            ex.flush(&mut check);
+            let c = ex.counters();
+            prop_assert_eq!(c.scanlines + c.rejected, seeds.len() as u32);
+            prop_assert_eq!(c.clusters_dropped, 0);
+        }
+    }
+}
