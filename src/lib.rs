@@ -12,7 +12,9 @@
 //! - [`planner`]: the planner step — sampled gradient, friction, bounding, integration,
 //!   PI-D set-points, ghost goal-points, virtual-leader formation;
 //! - [`sonar`]: mechanically scanned sonar scanlines to obstacle features;
-//! - [`link`]: the serial link's wire format (COBS frames, CRC, messages; `docs/protocol.md`).
+//! - [`link`]: the serial link's wire format (COBS frames, CRC, messages; `docs/protocol.md`);
+//! - [`guidance`]: the hardware-independent runtime — periodic task, background decoding and
+//!   extraction, fail-safes, telemetry — that the firmware and the host process run.
 //!
 //! Time is always an argument (milliseconds since boot); nothing here reads a clock.
 
@@ -36,6 +38,7 @@
 )]
 
 pub mod field;
+pub mod guidance;
 pub mod link;
 pub mod math;
 pub mod params;

@@ -1,0 +1,208 @@
+//! The slow, preemptible half of the runtime: bytes in, navigation, sightings and requests out.
+//!
+//! Received bytes go through the stream decoder (`crate::link`); each accepted frame is
+//! dispatched: navigation to the newest-navigation slot, scanlines through sonar feature
+//! extraction, contacts as sightings, missions, parameters and charts as requests, ticks to the
+//! lockstep clock. Requests refused at the wire get a reply, queued like a request. Everything
+//! leaves through a [`Sink`], which the board implements with lock-free queues.
+
+use crate::link::{Decoder, Direction, Message, Outcome, ReplyRepr, RxCounters};
+use crate::sonar::{Extractor, ExtractorConfig, Pose};
+
+use super::{Control, NavSample, Sighting};
+
+/// Where the background's results go. Each `false` means "full": the item is dropped and
+/// counted.
+pub trait Sink {
+    /// Publishes the newest navigation (overwrites the previous one).
+    fn nav(&mut self, sample: NavSample);
+    /// Queues a sighting for the world tables.
+    fn sighting(&mut self, s: Sighting) -> bool;
+    /// Queues a request for the periodic task.
+    fn control(&mut self, c: Control) -> bool;
+    /// Lockstep: the host says the firmware's time is now `time_ms`; run a period.
+    fn tick(&mut self, time_ms: u64);
+}
+
+/// What the background dropped, for telemetry.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct BackgroundCounters {
+    /// Sightings dropped because their queue was full.
+    pub sightings_dropped: u32,
+    /// Requests (and replies) dropped because their queue was full.
+    pub controls_dropped: u32,
+    /// Scanlines the extractor refused.
+    pub scanlines_rejected: u32,
+    /// Features extracted from scanlines.
+    pub features_extracted: u32,
+    /// Contacts refused when converted to table entries.
+    pub contacts_rejected: u32,
+}
+
+/// The decoder, the sonar extractor and the newest pose they need.
+pub struct Background {
+    decoder: Decoder,
+    extractor: Extractor,
+    pose: Option<Pose>,
+    /// Set by the first `Tick`: firmware time is then the host's, and navigation is stamped
+    /// with its own time of validity instead of its arrival.
+    lockstep: bool,
+    /// Counters.
+    pub counters: BackgroundCounters,
+    contact_a_plus: f32,
+}
+
+impl Background {
+    /// A background with the sonar extractor configured by `sonar` (validated; the default on
+    /// a refusal, which cannot happen for `ExtractorConfig::default()`), and host contacts given
+    /// repulsiveness `contact_a_plus`.
+    pub fn new(sonar: ExtractorConfig, contact_a_plus: f32) -> Option<Self> {
+        Some(Background {
+            decoder: Decoder::accepting(Direction::ToFirmware),
+            extractor: Extractor::new(sonar).ok()?,
+            pose: None,
+            lockstep: false,
+            counters: BackgroundCounters::default(),
+            contact_a_plus,
+        })
+    }
+
+    /// The decoder's counters.
+    pub fn rx_counters(&self) -> &RxCounters {
+        self.decoder.counters()
+    }
+
+    /// Feeds received bytes at firmware time `now_ms`. Stops right after a `Tick` frame (so
+    /// the caller runs that period before later bytes land) and returns the bytes not yet fed.
+    pub fn on_bytes<'b>(&mut self, bytes: &'b [u8], now_ms: u64, sink: &mut impl Sink) -> &'b [u8] {
+        let mut rest = bytes;
+        while !rest.is_empty() {
+            let (outcome, tail) = self.decoder.feed(rest);
+            rest = tail;
+            match outcome {
+                Outcome::Frame(header, msg) => {
+                    let tick = matches!(msg, Message::Tick(_));
+                    self.lockstep |= tick;
+                    dispatch(
+                        header,
+                        msg,
+                        now_ms,
+                        self.lockstep,
+                        &mut self.extractor,
+                        &mut self.pose,
+                        &mut self.counters,
+                        self.contact_a_plus,
+                        sink,
+                    );
+                    if tick {
+                        return rest;
+                    }
+                }
+                Outcome::Error {
+                    header: Some(h),
+                    error,
+                } if h.msg_type.direction() == Direction::ToFirmware => {
+                    // A refused request still gets its typed reply.
+                    if is_request(h.msg_type) {
+                        let ok = sink.control(Control::Reply(ReplyRepr::from_error(h, error)));
+                        count_if(!ok, &mut self.counters.controls_dropped);
+                    }
+                }
+                Outcome::Consumed | Outcome::OverFull | Outcome::Error { .. } => {}
+            }
+        }
+        rest
+    }
+}
+
+fn is_request(t: crate::link::MessageType) -> bool {
+    use crate::link::MessageType as T;
+    matches!(t, T::Mission | T::Params | T::ChartObstacle | T::ChartClear)
+}
+
+fn count_if(cond: bool, counter: &mut u32) {
+    if cond {
+        *counter = counter.saturating_add(1);
+    }
+}
+
+#[allow(clippy::too_many_arguments)]
+fn dispatch(
+    header: crate::link::Header,
+    msg: Message<'_>,
+    now_ms: u64,
+    lockstep: bool,
+    extractor: &mut Extractor,
+    pose: &mut Option<Pose>,
+    counters: &mut BackgroundCounters,
+    contact_a_plus: f32,
+    sink: &mut impl Sink,
+) {
+    let mut queue_control = |c: Control, counters: &mut BackgroundCounters| {
+        let ok = sink.control(c);
+        count_if(!ok, &mut counters.controls_dropped);
+    };
+    match msg {
+        Message::Nav(n) => {
+            *pose = Some(Pose {
+                position: n.nav.position,
+                heading: n.nav.heading,
+            });
+            sink.nav(NavSample {
+                nav: n.nav,
+                time_ms: if lockstep { n.time_ms } else { now_ms },
+            });
+        }
+        Message::Scanline(scan) => {
+            let Some(p) = *pose else {
+                // No pose yet: the scanline cannot be placed in the world.
+                count_if(true, &mut counters.scanlines_rejected);
+                return;
+            };
+            let mut emitted = 0u32;
+            let mut dropped = 0u32;
+            let result = extractor.push_scanline(&scan, p, &mut |f| {
+                emitted = emitted.saturating_add(1);
+                let ok = sink.sighting(Sighting::Feature(f));
+                count_if(!ok, &mut dropped);
+                ok
+            });
+            count_if(result.is_err(), &mut counters.scanlines_rejected);
+            counters.features_extracted = counters.features_extracted.saturating_add(emitted);
+            counters.sightings_dropped = counters.sightings_dropped.saturating_add(dropped);
+        }
+        Message::Contacts(c) => {
+            for contact in c.contacts.iter() {
+                let s = match contact.kind {
+                    crate::link::ContactKind::Obstacle => contact
+                        .to_obstacle(contact_a_plus, now_ms)
+                        .map(Sighting::Obstacle),
+                    crate::link::ContactKind::Vehicle => {
+                        contact.to_agent(now_ms).map(Sighting::Agent)
+                    }
+                };
+                match s {
+                    Ok(s) => {
+                        let ok = sink.sighting(s);
+                        count_if(!ok, &mut counters.sightings_dropped);
+                    }
+                    Err(_) => count_if(true, &mut counters.contacts_rejected),
+                }
+            }
+        }
+        Message::Mission(m) => queue_control(Control::Mission(header, m), counters),
+        Message::Params(p) => queue_control(Control::Params(header, p), counters),
+        Message::ChartObstacle(c) => match c.to_obstacle(now_ms) {
+            Ok(o) => queue_control(Control::Chart(header, o), counters),
+            Err(e) => queue_control(
+                Control::Reply(ReplyRepr::from_object_error(header, e)),
+                counters,
+            ),
+        },
+        Message::ChartClear(c) => queue_control(Control::ChartClear(header, c), counters),
+        Message::Tick(t) => sink.tick(t.time_ms),
+        // Firmware → host messages are refused by the decoder (Direction::ToFirmware).
+        Message::Command(_) | Message::Telemetry(_) | Message::Reply(_) | Message::Log(_) => {}
+    }
+}

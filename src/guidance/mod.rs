@@ -1,0 +1,90 @@
+//! The hardware-independent guidance runtime: what the firmware runs, minus the board.
+//!
+//! Two halves, meant for two priorities:
+//! - [`Periodic`] — the hard-real-time task, once per period: take the newest navigation, apply
+//!   queued requests, drain queued sightings into the obstacle table, check the fail-safes, run
+//!   one planner step, send the command, telemetry and replies. It never waits on anything.
+//! - [`Background`] — the slow side, preemptible: decode received bytes, publish navigation,
+//!   run sonar feature extraction on scanlines, and queue sightings and requests for the periodic
+//!   task.
+//!
+//! They meet only through three things the board provides (lock-free SPSC queues and one
+//! critical-section cell on the firmware; plain values on a host): the newest [`NavSample`], a
+//! queue of [`Sighting`]s and a queue of [`Control`] requests. The board also carries the
+//! outgoing frames. Capacities, and what happens when each is full:
+//!
+//! | queue | capacity | when full |
+//! | --- | --- | --- |
+//! | received bytes (board) | [`RX_QUEUE`] | byte dropped, counted (`rx_bytes_dropped`); the decoder resyncs on the next 0x00 |
+//! | sightings | [`SIGHTING_QUEUE`] | sighting dropped, counted (`features_dropped`) |
+//! | requests | [`CONTROL_QUEUE`] | request refused, counted (`bad_mission`/`bad_params`), no reply |
+//! | transmitted bytes (board) | [`TX_QUEUE`] | whole frame dropped, counted (`tx_frames_dropped`) |
+//!
+//! Time is passed in (milliseconds); nothing here reads a clock.
+
+pub mod background;
+pub mod failsafe;
+pub mod periodic;
+pub mod single;
+pub mod tracks;
+
+pub use background::{Background, BackgroundCounters, Sink};
+pub use failsafe::FailsafeConfig;
+pub use periodic::{Inputs, Periodic, RuntimeConfig};
+pub use single::SingleContext;
+pub use tracks::TrackConfig;
+
+use crate::link::{ChartClearRepr, Header, ReplyRepr};
+use crate::params::Params;
+use crate::planner::{Mission, NavState};
+use crate::sonar::Feature;
+use crate::world::{Agent, Obstacle};
+
+/// Capacity of the board's received-byte queue (about 90 ms of 115 200 baud).
+pub const RX_QUEUE: usize = 1024;
+/// Capacity of the sighting queue (one sonar sweep rarely yields more).
+pub const SIGHTING_QUEUE: usize = 16;
+/// Capacity of the request queue.
+pub const CONTROL_QUEUE: usize = 4;
+/// Capacity of the board's transmit-byte queue (a period's command, telemetry and replies).
+pub const TX_QUEUE: usize = 2048;
+/// Most sightings the periodic task takes per period (bounds its cost).
+pub const SIGHTINGS_PER_PERIOD: usize = SIGHTING_QUEUE;
+
+/// The newest navigation and when it arrived, firmware time.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct NavSample {
+    /// The navigation state.
+    pub nav: NavState,
+    /// Arrival, ms (firmware time).
+    pub time_ms: u64,
+}
+
+/// Something seen in the water, on its way to the world tables.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Sighting {
+    /// A feature the firmware extracted from sonar scanlines (no identity yet).
+    Feature(Feature),
+    /// An obstacle contact from the host's own feature extraction (host's id).
+    Obstacle(Obstacle),
+    /// Another vehicle (host's id).
+    Agent(Agent),
+}
+
+/// A request for the periodic task, answered with a [`ReplyRepr`] to `header`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Control {
+    /// Set the mission.
+    Mission(Header, Mission),
+    /// Set the parameters.
+    Params(Header, Params),
+    /// Add or replace a charted obstacle.
+    Chart(Header, Obstacle),
+    /// Remove charted obstacles.
+    ChartClear(Header, ChartClearRepr),
+    /// Only a reply: the request was refused before it reached the periodic task.
+    Reply(ReplyRepr),
+}

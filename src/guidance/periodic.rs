@@ -1,0 +1,288 @@
+//! The hard-real-time half of the runtime: one [`Periodic::on_tick`] per period.
+//!
+//! In order: apply queued requests (missions, parameters, charts; each answered with a reply),
+//! take at most [`SIGHTINGS_PER_PERIOD`] sightings into the world tables, age out stale sensed
+//! entries, check the fail-safes, run one planner step (its cost measured by the board's counter),
+//! and send the command and the telemetry. The work per period is bounded by the table and queue
+//! capacities, and nothing waits: a full transmit queue drops the frame and counts it.
+
+use crate::link::{
+    CommandRepr, CostUnit, Header, Message, ReplyRepr, TelemetryCounters, TelemetryRepr, MAX_FRAME,
+};
+use crate::math::Vec2;
+use crate::params::Params;
+use crate::planner::{Command, Mode, Planner};
+use crate::world::{Origin, World};
+
+use super::failsafe::{self, FailsafeConfig, Situation};
+use super::tracks::{TrackConfig, Tracks};
+use super::{BackgroundCounters, Control, NavSample, Sighting, SIGHTINGS_PER_PERIOD};
+use crate::link::RxCounters;
+
+/// The runtime's own settings (the planner's are [`Params`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct RuntimeConfig {
+    /// Fail-safes.
+    pub failsafe: FailsafeConfig,
+    /// Sonar feature association.
+    pub tracks: TrackConfig,
+    /// Sensed obstacles and agents not seen for this long are dropped, ms.
+    pub max_age_ms: u64,
+}
+
+impl Default for RuntimeConfig {
+    fn default() -> Self {
+        RuntimeConfig {
+            failsafe: FailsafeConfig::default(),
+            tracks: TrackConfig::default(),
+            max_age_ms: 30_000,
+        }
+    }
+}
+
+/// What the periodic task reads from the slow side each period (the board's queues).
+pub trait Inputs {
+    /// The newest navigation, if any has come.
+    fn nav(&mut self) -> Option<NavSample>;
+    /// The next queued sighting.
+    fn sighting(&mut self) -> Option<Sighting>;
+    /// The next queued request.
+    fn control(&mut self) -> Option<Control>;
+    /// The slow side's counters, for telemetry.
+    fn link_counters(&mut self) -> (RxCounters, BackgroundCounters);
+}
+
+/// The periodic task's state.
+pub struct Periodic {
+    planner: Planner,
+    world: World,
+    tracks: Tracks,
+    /// Runtime settings.
+    pub config: RuntimeConfig,
+    seq: u16,
+    last_cost: u32,
+    cost_unit: CostUnit,
+    last_mode: Mode,
+    last_heading: f32,
+    counters: TelemetryCounters,
+}
+
+impl Periodic {
+    /// A runtime around a planner with `params`, costs reported in `cost_unit`.
+    pub fn new(
+        params: Params,
+        config: RuntimeConfig,
+        cost_unit: CostUnit,
+    ) -> Result<Self, crate::params::ParamError> {
+        Ok(Periodic {
+            planner: Planner::new(params)?,
+            world: World::new(),
+            tracks: Tracks::default(),
+            config,
+            seq: 0,
+            last_cost: 0,
+            cost_unit,
+            last_mode: Mode::Hold(crate::planner::HoldReason::NoMission),
+            last_heading: 0.0,
+            counters: TelemetryCounters::default(),
+        })
+    }
+
+    /// The planner (read-only: requests go through [`Control`]).
+    pub fn planner(&self) -> &Planner {
+        &self.planner
+    }
+
+    /// The world tables.
+    pub fn world(&self) -> &World {
+        &self.world
+    }
+
+    /// The planner period in ms, for the board's timer.
+    pub fn period_ms(&self) -> u32 {
+        (self.planner.params().period_s * 1000.0) as u32
+    }
+
+    /// Cost of the last planner step, in the board's unit.
+    pub fn last_cost(&self) -> u32 {
+        self.last_cost
+    }
+
+    /// The telemetry counters as last sent.
+    pub fn counters(&self) -> &TelemetryCounters {
+        &self.counters
+    }
+
+    /// Counts a missed deadline (the board detects it).
+    pub fn count_overrun(&mut self) {
+        self.counters.deadline_overruns = self.counters.deadline_overruns.saturating_add(1);
+    }
+
+    /// One period at firmware time `now_ms`. `cost` reads the board's monotonic counter (for
+    /// the step cost); `tx` queues one whole frame and returns `false` when it does not fit.
+    /// Returns the command sent.
+    pub fn on_tick(
+        &mut self,
+        now_ms: u64,
+        inputs: &mut impl Inputs,
+        cost: &mut impl FnMut() -> u32,
+        tx: &mut impl FnMut(&[u8]) -> bool,
+    ) -> Command {
+        while let Some(c) = inputs.control() {
+            let reply = self.apply(c);
+            self.send(&Message::Reply(reply), tx);
+        }
+        let nav = inputs.nav();
+        let position = nav.map_or(Vec2::ZERO, |n| n.nav.position);
+        for _ in 0..SIGHTINGS_PER_PERIOD {
+            let Some(s) = inputs.sighting() else { break };
+            self.admit(s, position);
+        }
+        self.world.expire(now_ms, self.config.max_age_ms);
+
+        let cmd = self.plan(now_ms, nav, cost);
+        self.last_mode = cmd.mode;
+        self.last_heading = cmd.psi_set;
+        let command = CommandRepr {
+            time_ms: now_ms,
+            command: cmd,
+        };
+        self.send(&Message::Command(command), tx);
+
+        let (rx, bg) = inputs.link_counters();
+        self.refresh_counters(&rx, &bg);
+        let telemetry = TelemetryRepr {
+            time_ms: now_ms,
+            mode: cmd.mode,
+            obstacles: self.world.obstacles().len() as u8,
+            agents: self.world.agents().len() as u8,
+            ghost_depth: cmd.ghost_depth,
+            step_cost: self.last_cost,
+            cost_unit: self.cost_unit,
+            counters: self.counters,
+        };
+        self.send(&Message::Telemetry(telemetry), tx);
+        cmd
+    }
+
+    /// Fail-safes, then the planner.
+    fn plan(
+        &mut self,
+        now_ms: u64,
+        nav: Option<NavSample>,
+        cost: &mut impl FnMut() -> u32,
+    ) -> Command {
+        let params = *self.planner.params();
+        let situation = Situation {
+            has_mission: self.planner.mission().is_some(),
+            nav_age_ms: nav.map(|n| now_ms.saturating_sub(n.time_ms)),
+            clearance_m: nav.map_or(f32::INFINITY, |n| {
+                self.world.clearance(n.nav.position, params.agent_radius_m)
+            }),
+            speed: nav.map_or(0.0, |n| n.nav.velocity.norm()),
+            f_max: params.f_max,
+        };
+        let hold = failsafe::check(&self.config.failsafe, &situation);
+        let (Some(n), None) = (nav, hold) else {
+            self.planner.reset_motion();
+            let heading = nav.map_or(self.last_heading, |n| n.nav.heading);
+            let reason = hold.unwrap_or(crate::planner::HoldReason::StaleNav);
+            let mut c = Command::hold(reason, heading);
+            c.clearance_m = situation.clearance_m;
+            return c;
+        };
+        let start = cost();
+        let result = self.planner.step(now_ms, &n.nav, &self.world);
+        self.last_cost = cost().wrapping_sub(start);
+        match result {
+            Ok(c) => c,
+            // Refused input (counted by the planner): hold, with the last heading.
+            Err(_) => Command::hold(crate::planner::HoldReason::StaleNav, self.last_heading),
+        }
+    }
+
+    /// Applies one request and says how it went.
+    fn apply(&mut self, c: Control) -> ReplyRepr {
+        let reply = |h: Header, r: Result<(), crate::planner::StepError>| match r {
+            Ok(()) => ReplyRepr::accepted(h),
+            Err(e) => ReplyRepr::from_step_error(h, e),
+        };
+        match c {
+            Control::Mission(h, m) => reply(h, self.planner.set_mission(m)),
+            Control::Params(h, p) => reply(h, self.planner.set_params(p)),
+            Control::Chart(h, o) => match self.world.upsert_obstacle(o) {
+                Ok(()) => ReplyRepr::accepted(h),
+                Err(_) => ReplyRepr::table_full(h),
+            },
+            Control::ChartClear(h, which) => {
+                match which {
+                    crate::link::ChartClearRepr::All => {
+                        let charted: heapless::Vec<u16, { crate::world::MAX_OBSTACLES }> = self
+                            .world
+                            .obstacles()
+                            .iter()
+                            .filter(|o| o.origin == Origin::Charted)
+                            .map(|o| o.id)
+                            .collect();
+                        for id in charted {
+                            self.world.remove_obstacle(id);
+                        }
+                    }
+                    crate::link::ChartClearRepr::One(id) => {
+                        self.world.remove_obstacle(id);
+                    }
+                }
+                ReplyRepr::accepted(h)
+            }
+            Control::Reply(r) => r,
+        }
+    }
+
+    /// Puts a sighting into the tables.
+    fn admit(&mut self, s: Sighting, vehicle: Vec2) {
+        match s {
+            // Refusals and evictions are counted by the world table.
+            Sighting::Feature(f) => {
+                let cfg = self.config.tracks;
+                let _ = self.tracks.admit(&cfg, &mut self.world, &f, vehicle);
+            }
+            Sighting::Obstacle(o) => {
+                let _ = self.world.upsert_obstacle_or_evict(o, vehicle);
+            }
+            Sighting::Agent(a) => {
+                let _ = self.world.upsert_agent(a);
+            }
+        }
+    }
+
+    fn refresh_counters(&mut self, rx: &RxCounters, bg: &BackgroundCounters) {
+        let c = &mut self.counters;
+        c.set_rx(rx);
+        let p = self.planner.counters;
+        c.bad_nav = p.bad_nav;
+        c.bad_params = p.bad_params;
+        c.bad_mission = p.bad_mission;
+        c.features_dropped = bg.sightings_dropped;
+        c.features_extracted = bg.features_extracted;
+        c.table_full = self.world.counters.rejected_full;
+        c.table_evicted = self.world.counters.evicted;
+    }
+
+    /// Counts bytes the board's receive queue dropped.
+    pub fn count_rx_dropped(&mut self, n: u32) {
+        self.counters.rx_bytes_dropped = self.counters.rx_bytes_dropped.saturating_add(n);
+    }
+
+    fn send(&mut self, msg: &Message<'_>, tx: &mut impl FnMut(&[u8]) -> bool) {
+        let mut buf = [0u8; MAX_FRAME];
+        self.seq = self.seq.wrapping_add(1);
+        let sent = match msg.emit_frame(self.seq, &mut buf) {
+            Ok(n) => buf.get(..n).is_some_and(tx),
+            Err(_) => false,
+        };
+        if !sent {
+            self.counters.tx_frames_dropped = self.counters.tx_frames_dropped.saturating_add(1);
+        }
+    }
+}

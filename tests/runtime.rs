@@ -1,0 +1,302 @@
+//! The guidance runtime end to end on the host, over the real wire protocol: frames in (with
+//! garbage), commands, telemetry and replies out, decoded as a host would decode them.
+
+use vpf::field::Shape;
+use vpf::guidance::{RuntimeConfig, SingleContext};
+use vpf::link::{
+    ChartObstacleRepr, Contact, ContactKind, ContactList, ContactsRepr, CostUnit, Decoder,
+    Direction, Message, MessageType, NavRepr, Outcome, ReplyStatus, TickRepr, MAX_FRAME,
+};
+use vpf::planner::HoldReason;
+use vpf::sonar::Scanline;
+use vpf::{Mission, Mode, NavState, Params, Vec2};
+
+/// A host talking to a [`SingleContext`]: frames out, everything the firmware sent decoded.
+struct Host {
+    fw: SingleContext,
+    seq: u16,
+    decoder: Decoder,
+    commands: Vec<vpf::link::CommandRepr>,
+    telemetry: Vec<vpf::link::TelemetryRepr>,
+    replies: Vec<vpf::link::ReplyRepr>,
+}
+
+impl Host {
+    fn new(params: Params) -> Self {
+        Host {
+            fw: SingleContext::new(params, RuntimeConfig::default(), CostUnit::Unknown).unwrap(),
+            seq: 0,
+            decoder: Decoder::accepting(Direction::ToHost),
+            commands: vec![],
+            telemetry: vec![],
+            replies: vec![],
+        }
+    }
+
+    fn frame(&mut self, m: Message<'_>) -> Vec<u8> {
+        let mut buf = [0u8; MAX_FRAME];
+        self.seq = self.seq.wrapping_add(1);
+        let n = m.emit_frame(self.seq, &mut buf).unwrap();
+        buf[..n].to_vec()
+    }
+
+    fn send_bytes(&mut self, bytes: &[u8]) {
+        let mut out = Vec::new();
+        self.fw.on_bytes(bytes, &mut || 0, &mut |f: &[u8]| {
+            out.extend_from_slice(f);
+            true
+        });
+        self.receive(&out);
+    }
+
+    fn send(&mut self, m: Message<'_>) {
+        let f = self.frame(m);
+        self.send_bytes(&f);
+    }
+
+    fn receive(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            if let Outcome::Frame(_, m) = self.decoder.push(b) {
+                match m {
+                    Message::Command(c) => self.commands.push(c),
+                    Message::Telemetry(t) => self.telemetry.push(t),
+                    Message::Reply(r) => self.replies.push(r),
+                    _ => {}
+                }
+            }
+        }
+    }
+
+    fn nav(&mut self, t: u64, p: Vec2, v: Vec2) {
+        let nav = NavState {
+            position: p,
+            heading: if v.norm() > 0.01 { v.angle() } else { 0.0 },
+            velocity: v,
+        };
+        self.send(Message::Nav(NavRepr {
+            time_ms: t,
+            nav,
+            body: None,
+        }));
+    }
+
+    fn tick(&mut self, t: u64) -> vpf::Command {
+        let before = self.commands.len();
+        self.send(Message::Tick(TickRepr { time_ms: t }));
+        assert_eq!(self.commands.len(), before + 1, "one command per tick");
+        self.commands.last().unwrap().command
+    }
+}
+
+fn mission(goal: Vec2) -> Message<'static> {
+    Message::Mission(Mission {
+        goal,
+        formation: None,
+    })
+}
+
+/// Lockstep: a kinematic vehicle driven only by the commands it receives over the link reaches
+/// its goal past a charted obstacle, with garbage on the line between frames.
+#[test]
+fn lockstep_vehicle_reaches_goal_through_garbage() {
+    // σ sized to the 30 m mission, so the final approach is not the Gaussian's slow tail.
+    let mut host = Host::new(Params {
+        sigma_m: 20.0,
+        ..Params::default()
+    });
+    host.send(mission(Vec2::new(30.0, 0.0)));
+    let rock = Shape::circle(Vec2::new(15.0, 0.5), 2.0).unwrap();
+    host.send(Message::ChartObstacle(ChartObstacleRepr {
+        id: 1,
+        shape: rock,
+        a_plus: 2.5,
+    }));
+    // Requests are applied, and answered, by the next period.
+    assert!(host.replies.is_empty());
+    host.tick(0);
+    assert_eq!(host.replies.len(), 2);
+    assert!(host
+        .replies
+        .iter()
+        .all(|r| r.status == ReplyStatus::Accepted));
+
+    let (mut p, mut v) = (Vec2::ZERO, Vec2::ZERO);
+    let mut min_clearance = f32::INFINITY;
+    let mut garbage_sent = 0;
+    for k in 1..1500u64 {
+        let t = k * 100;
+        host.nav(t, p, v);
+        if k % 7 == 3 {
+            // Line noise, including a stray delimiter and a frame cut short.
+            host.send_bytes(&[0x55, 0x13, 0x00, 0xFF, 0x02, 0x41, 0x00]);
+            garbage_sent += 1;
+        }
+        let cmd = host.tick(t);
+        v = cmd.velocity;
+        p += v * 0.1;
+        min_clearance = min_clearance.min((p - Vec2::new(15.0, 0.5)).norm() - 2.0);
+    }
+    let last = host.commands.last().unwrap().command;
+    let tel = host.telemetry.last().unwrap();
+    println!(
+        "final {p:?}, mode {:?}, min clearance {min_clearance:.2} m, counters {:?}",
+        last.mode, tel.counters
+    );
+    assert!(
+        (p - Vec2::new(30.0, 0.0)).norm() < 1.0,
+        "did not reach the goal: {p:?}"
+    );
+    assert_eq!(last.mode, Mode::Arrived);
+    assert!(min_clearance > 0.0);
+    assert_eq!(tel.obstacles, 1);
+    assert!(tel.counters.rx_framing_errors + tel.counters.rx_crc_errors >= garbage_sent);
+    assert_eq!(tel.counters.tx_frames_dropped, 0);
+    assert_eq!(host.commands.len(), 1500);
+}
+
+/// Navigation stops: the fail-safe holds the vehicle within two periods, and planning resumes
+/// when navigation returns.
+#[test]
+fn stale_navigation_holds_within_two_periods() {
+    let mut host = Host::new(Params::default());
+    host.send(mission(Vec2::new(30.0, 0.0)));
+    let mut p = Vec2::ZERO;
+    let mut v = Vec2::ZERO;
+    for k in 0..50u64 {
+        host.nav(k * 100, p, v);
+        let c = host.tick(k * 100);
+        v = c.velocity;
+        p += v * 0.1;
+    }
+    assert!(v.norm() > 0.1);
+    // Last navigation at t = 4900 ms; ticks go on without it.
+    let after: Vec<_> = (50..53u64).map(|k| host.tick(k * 100)).collect();
+    assert_eq!(after[0].mode, Mode::Transit, "one period of grace");
+    assert_eq!(after[1].mode, Mode::Hold(HoldReason::StaleNav));
+    assert_eq!(after[1].v_set, 0.0);
+    host.nav(5300, p, Vec2::ZERO);
+    assert_eq!(host.tick(5300).mode, Mode::Transit);
+}
+
+/// A parameter set with a bad value gets a typed rejection naming the parameter, and the old
+/// parameters stay in force; a mission before navigation is held, not planned.
+#[test]
+fn bad_parameters_get_a_typed_rejection() {
+    let mut host = Host::new(Params::default());
+    let bad = Params {
+        v_max: 50.0,
+        ..Params::default()
+    };
+    host.send(Message::Params(bad));
+    host.send(mission(Vec2::new(5.0, 5.0)));
+    let c = host.tick(0);
+    assert_eq!(c.mode, Mode::Hold(HoldReason::StaleNav));
+    let r = host.replies[0];
+    assert_eq!(r.to_type, MessageType::Params);
+    let v_max = vpf::link::param_index("v_max").unwrap();
+    assert_eq!(
+        r.status,
+        ReplyStatus::Rejected {
+            field: v_max,
+            problem: vpf::link::Problem::OutOfRange
+        }
+    );
+    assert_eq!(host.replies[1].status, ReplyStatus::Accepted);
+    assert_eq!(host.fw.periodic().planner().params().v_max, 1.0);
+    assert_eq!(host.telemetry.last().unwrap().counters.bad_params, 1);
+}
+
+/// Sonar scanlines from a sweep past a rock become an obstacle in the firmware's table.
+#[test]
+fn scanlines_become_obstacles() {
+    let mut host = Host::new(Params::default());
+    host.send(mission(Vec2::new(30.0, 0.0)));
+    let rock = Vec2::new(12.0, 3.0);
+    let radius = 1.5f32;
+    host.nav(0, Vec2::ZERO, Vec2::ZERO);
+    // One sweep from −90° to +90°, 1.8° a step, 30 m range, 300 bins; vehicle at rest at the origin.
+    let bins_n = 300usize;
+    let range = 30.0f32;
+    let step = 1.8f32.to_radians();
+    for i in 0..=100 {
+        let bearing = -std::f32::consts::FRAC_PI_2 + i as f32 * step;
+        let dir = Vec2::from_angle(bearing);
+        let mut bins = vec![0u8; bins_n];
+        // Ray–circle intersection: first hit distance along `dir`.
+        let b = dir.dot(rock);
+        let c = rock.norm2() - radius * radius;
+        let disc = b * b - c;
+        if disc > 0.0 {
+            let hit = b - disc.sqrt();
+            let bin = (hit / range * bins_n as f32) as usize;
+            for k in bin..(bin + 4).min(bins_n) {
+                bins[k] = 200;
+            }
+        }
+        let scan = Scanline {
+            time_ms: i as u64 * 50,
+            bearing_rad: bearing,
+            step_rad: step,
+            range_m: range,
+            bins: &bins,
+        };
+        host.send(Message::Scanline(scan));
+    }
+    // Finish the sweep (reverse direction closes the open clusters), then tick.
+    let bins = vec![0u8; bins_n];
+    for i in 0..3 {
+        let scan = Scanline {
+            time_ms: 5100 + i * 50,
+            bearing_rad: std::f32::consts::FRAC_PI_2 - (i as f32 + 1.0) * step,
+            step_rad: step,
+            range_m: range,
+            bins: &bins,
+        };
+        host.send(Message::Scanline(scan));
+    }
+    host.nav(5300, Vec2::ZERO, Vec2::ZERO);
+    host.tick(5300);
+    let tel = host.telemetry.last().unwrap();
+    let world = host.fw.periodic().world();
+    println!(
+        "features {}, obstacles {:?}",
+        tel.counters.features_extracted,
+        world.obstacles()
+    );
+    assert!(tel.counters.features_extracted >= 1);
+    assert_eq!(tel.obstacles, 1);
+    let o = world.obstacles()[0];
+    assert!((o.shape.center() - rock).norm() < 0.5, "{:?}", o.shape);
+}
+
+/// More contacts in one period than the sighting queue holds: the excess is dropped and
+/// counted, the rest land in the table.
+#[test]
+fn a_flood_of_contacts_is_counted_not_fatal() {
+    let mut host = Host::new(Params::default());
+    host.send(mission(Vec2::new(30.0, 0.0)));
+    host.nav(0, Vec2::ZERO, Vec2::ZERO);
+    for batch in 0..5u16 {
+        let contacts: Vec<Contact> = (0..8u16)
+            .map(|i| Contact {
+                id: batch * 8 + i,
+                kind: ContactKind::Obstacle,
+                shape: Shape::circle(
+                    Vec2::new(10.0 + i as f32 * 3.0, 5.0 + batch as f32 * 4.0),
+                    1.0,
+                )
+                .unwrap(),
+                velocity: Vec2::ZERO,
+                confidence: 0.9,
+            })
+            .collect();
+        host.send(Message::Contacts(ContactsRepr {
+            time_ms: 0,
+            contacts: ContactList::new(&contacts),
+        }));
+    }
+    host.tick(0);
+    let tel = host.telemetry.last().unwrap();
+    assert_eq!(tel.counters.features_dropped, 40 - 16);
+    assert_eq!(tel.obstacles, 16);
+}
