@@ -229,9 +229,7 @@ fn scanlines_become_obstacles() {
         if disc > 0.0 {
             let hit = b - disc.sqrt();
             let bin = (hit / range * bins_n as f32) as usize;
-            for k in bin..(bin + 4).min(bins_n) {
-                bins[k] = 200;
-            }
+            bins.iter_mut().skip(bin).take(4).for_each(|b| *b = 200);
         }
         let scan = Scanline {
             time_ms: i as u64 * 50,
