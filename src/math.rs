@@ -133,9 +133,55 @@ impl Neg for Vec2 {
     }
 }
 
-/// Square root (libm: correctly rounded; the M4F has a hardware instruction for it).
+/// Square root, correctly rounded. On the Cortex-M4F it is the FPU's `vsqrt.f32` (14 cycles);
+/// libm's portable `sqrtf` is a software routine of a hundred-odd instructions there, and the
+/// hot path takes one or two square roots per object and gradient sample.
+#[cfg(all(target_arch = "arm", target_abi = "eabihf"))]
+pub fn sqrt(x: f32) -> f32 {
+    let r: u32;
+    // Rust's `sreg` operand class needs a `vfp2` feature this target does not declare, so the
+    // operands travel in core registers and s0 is saved and restored around the instruction.
+    // SAFETY: register-only FPU instructions; s0 is left as found; no memory, no stack.
+    #[allow(unsafe_code)]
+    unsafe {
+        core::arch::asm!(
+            "vmov {saved}, s0",
+            "vmov s0, {x}",
+            "vsqrt.f32 s0, s0",
+            "vmov {r}, s0",
+            "vmov s0, {saved}",
+            x = in(reg) x.to_bits(),
+            r = lateout(reg) r,
+            saved = out(reg) _,
+            options(pure, nomem, nostack),
+        );
+    }
+    f32::from_bits(r)
+}
+
+/// Square root, correctly rounded (libm, elsewhere than on the Cortex-M4F).
+#[cfg(not(all(target_arch = "arm", target_abi = "eabihf")))]
 pub fn sqrt(x: f32) -> f32 {
     libm::sqrtf(x)
+}
+
+/// The larger of two numbers, by one comparison (`f32::max` is a libm call on the Cortex-M4F,
+/// which has no min/max instruction). For NaN in either, returns `b`.
+pub fn max(a: f32, b: f32) -> f32 {
+    if a > b {
+        a
+    } else {
+        b
+    }
+}
+
+/// The smaller of two numbers, by one comparison (see [`max`]). For NaN in either, returns `b`.
+pub fn min(a: f32, b: f32) -> f32 {
+    if a < b {
+        a
+    } else {
+        b
+    }
 }
 
 /// Four-quadrant arc tangent (libm; micromath's returns NaN at the origin).
@@ -143,14 +189,44 @@ pub fn atan2(y: f32, x: f32) -> f32 {
     libm::atan2f(y, x)
 }
 
-/// Sine (off the hot path: sample directions are precomputed).
+/// Sine (see [`sin_cos`]).
 pub fn sin(a: f32) -> f32 {
-    libm::sinf(a)
+    sin_cos(a).0
 }
 
-/// Cosine (off the hot path).
+/// Cosine (see [`sin_cos`]).
 pub fn cos(a: f32) -> f32 {
-    libm::cosf(a)
+    sin_cos(a).1
+}
+
+/// Sine and cosine in single precision: Cody–Waite reduction by π/2 to |r| ≤ π/4, then the
+/// Taylor polynomials of sin and cos to degree 9 and 8 (error below 4·10⁻⁷ absolute for
+/// |a| ≤ 10⁴ rad, checked against libm in the tests). libm's `sinf`/`cosf` evaluate their
+/// kernels in `f64`, which is software floating point on the Cortex-M4F. Non-finite input
+/// gives (0, 1).
+pub fn sin_cos(a: f32) -> (f32, f32) {
+    if !a.is_finite() {
+        return (0.0, 1.0);
+    }
+    const FRAC_2_PI: f32 = core::f32::consts::FRAC_2_PI;
+    // π/2 split in an 8-bit high part (k·PIO2_HI is exact for |k| < 2¹⁶) and the rest.
+    const PIO2_HI: f32 = 1.570_312_5;
+    const PIO2_LO: f32 = 4.838_268e-4;
+    let k = libm::roundf(a * FRAC_2_PI);
+    let r = (a - k * PIO2_HI) - k * PIO2_LO;
+    let r2 = r * r;
+    let s = r
+        * (1.0
+            + r2 * (-1.0 / 6.0
+                + r2 * (1.0 / 120.0 + r2 * (-1.0 / 5040.0 + r2 * (1.0 / 362_880.0)))));
+    let c = 1.0 + r2 * (-0.5 + r2 * (1.0 / 24.0 + r2 * (-1.0 / 720.0 + r2 * (1.0 / 40_320.0))));
+    // Quadrant: k mod 4, from the (exactly representable) integer k.
+    match (k as i32) & 3 {
+        0 => (s, c),
+        1 => (c, -s),
+        2 => (-s, -c),
+        _ => (-c, s),
+    }
 }
 
 /// Wraps an angle to (−π, π].
@@ -177,6 +253,7 @@ pub const EXP_ARG_MIN: f32 = -87.0;
 /// division: the shape that ports to fixed point. Arguments are clamped to
 /// [`EXP_ARG_MIN`, `EXP_ARG_MAX`], so the result is always finite and never NaN for finite input;
 /// NaN input gives 0.
+#[inline(always)]
 pub fn exp(x: f32) -> f32 {
     // NaN fails both comparisons and falls to the `else` branch: treated as −∞.
     let x = if x >= EXP_ARG_MIN {
@@ -192,7 +269,9 @@ pub fn exp(x: f32) -> f32 {
     // ln2 split in a short high part (exact products with n) and a low correction.
     const LN2_HI: f32 = 0.693_145_75;
     const LN2_LO: f32 = 1.428_606_8e-6;
-    let n = libm::roundf(x * LOG2E);
+    // Round half away from zero with one conversion instruction (x is clamped, so it fits).
+    let y = x * LOG2E;
+    let n = (y + if y >= 0.0 { 0.5 } else { -0.5 }) as i32 as f32;
     let r = (x - n * LN2_HI) - n * LN2_LO;
     let p = 1.0
         + r * (1.0
@@ -255,6 +334,28 @@ mod tests {
         for x in [f32::NEG_INFINITY, -1e30, -88.0, f32::NAN] {
             assert_eq!(exp(x), 0.0);
         }
+    }
+
+    #[test]
+    fn sin_cos_match_libm() {
+        let mut worst = 0.0f32;
+        let mut a = -10_000.0f32;
+        while a < 10_000.0 {
+            let (s, c) = sin_cos(a);
+            worst = worst
+                .max((s - libm::sinf(a)).abs())
+                .max((c - libm::cosf(a)).abs());
+            a += 0.731;
+        }
+        assert!(worst < 4e-7 * 8.0, "worst error {worst}");
+        let mut a = -7.0f32;
+        while a < 7.0 {
+            let (s, c) = sin_cos(a);
+            assert!((s - libm::sinf(a)).abs() < 4e-7, "{a}");
+            assert!((c - libm::cosf(a)).abs() < 4e-7, "{a}");
+            a += 0.001;
+        }
+        assert_eq!(sin_cos(f32::NAN), (0.0, 1.0));
     }
 
     #[test]

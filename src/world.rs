@@ -248,6 +248,11 @@ impl World {
         Some(self.obstacles.swap_remove(i))
     }
 
+    /// Removes every charted obstacle (sensed ones stay).
+    pub fn remove_charted(&mut self) {
+        self.obstacles.retain(|o| o.origin != Origin::Charted);
+    }
+
     /// Inserts, or replaces the agent with the same id. Full: the agent comes back.
     pub fn upsert_agent(&mut self, a: Agent) -> Result<(), Full<Agent>> {
         if let Some(slot) = self.agents.iter_mut().find(|x| x.id == a.id) {

@@ -29,6 +29,7 @@ impl GoalPdf {
     }
 
     /// f_GP(p).
+    #[inline(always)]
     pub fn potential(&self, p: Vec2) -> f32 {
         -self.a_minus * exp(-(p - self.center).norm2() * self.inv_two_sigma2)
     }

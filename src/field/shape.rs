@@ -5,7 +5,7 @@
 //! surface), zero on it, negative inside. The papers only need r ≥ 0; the sign is ours, so that
 //! the repulsion keeps rising inside an obstacle and its field still points out.
 
-use crate::math::{cos, sin, sqrt, Vec2};
+use crate::math::{max, min, sin_cos, sqrt, Vec2};
 
 /// Most vertices a convex polygon may have (a triangle needs 3; sonar fits and charts rarely
 /// need more than 8).
@@ -147,13 +147,17 @@ impl Shape {
     }
 
     /// Unit outward direction of the distance field at `p` (the direction in which the signed
-    /// distance grows fastest), by central differences over ±`h` metres. Called once per obstacle
-    /// per step (rotor potentials, clearance), never per gradient sample.
-    pub fn outward_normal(&self, p: Vec2, h: f32) -> Vec2 {
-        let dx = self.signed_distance(p + Vec2::new(h, 0.0))
-            - self.signed_distance(p - Vec2::new(h, 0.0));
-        let dy = self.signed_distance(p + Vec2::new(0.0, h))
-            - self.signed_distance(p - Vec2::new(0.0, h));
+    /// distance grows fastest), by forward differences over `h` metres from `d`, the signed
+    /// distance at `p` the caller already has. Called once per obstacle per step (rotor
+    /// potentials), never per gradient sample.
+    pub fn outward_normal(&self, p: Vec2, d: f32, h: f32) -> Vec2 {
+        if let Shape::Circle(c) = self {
+            if let Some(n) = (p - c.center).normalized(1e-9) {
+                return n;
+            }
+        }
+        let dx = self.signed_distance(p + Vec2::new(h, 0.0)) - d;
+        let dy = self.signed_distance(p + Vec2::new(0.0, h)) - d;
         Vec2::new(dx, dy)
             .normalized(1e-9)
             .or_else(|| (p - self.center()).normalized(1e-9))
@@ -210,12 +214,13 @@ impl Rectangle {
         if !angle.is_finite() {
             return Err(ShapeError::NonFinite);
         }
+        let (sin, cos) = sin_cos(angle);
         Ok(Rectangle {
             center: check_point(center)?,
             half: Vec2::new(check_size(half.x)?, check_size(half.y)?),
             angle,
-            cos: cos(angle),
-            sin: sin(angle),
+            cos,
+            sin,
         })
     }
 
@@ -230,8 +235,8 @@ impl Rectangle {
     fn signed_distance(&self, p: Vec2) -> f32 {
         let q = self.local(p);
         let d = Vec2::new(q.x.abs() - self.half.x, q.y.abs() - self.half.y);
-        let outside = Vec2::new(d.x.max(0.0), d.y.max(0.0)).norm();
-        let inside = d.x.max(d.y).min(0.0);
+        let outside = Vec2::new(max(d.x, 0.0), max(d.y, 0.0)).norm();
+        let inside = min(max(d.x, d.y), 0.0);
         outside + inside
     }
 
@@ -340,8 +345,8 @@ impl Polygon {
             let (a, b) = edge(v, i);
             let e = b - a;
             let w = p - a;
-            let t = (w.dot(e) * inv).clamp(0.0, 1.0);
-            best2 = best2.min((w - e * t).norm2());
+            let t = min(max(w.dot(e) * inv, 0.0), 1.0);
+            best2 = min((w - e * t).norm2(), best2);
             inside &= e.cross(w) >= 0.0;
         }
         let d = sqrt(best2);
@@ -445,9 +450,10 @@ mod tests {
     #[test]
     fn outward_normal_points_away_inside_and_outside() {
         let r = Shape::rectangle(Vec2::ZERO, Vec2::new(2.0, 1.0), 0.0).unwrap();
-        let n = r.outward_normal(Vec2::new(0.0, 3.0), 0.01);
+        let at = |p: Vec2| r.outward_normal(p, r.signed_distance(p), 0.01);
+        let n = at(Vec2::new(0.0, 3.0));
         assert!(close(n.y, 1.0));
-        let n = r.outward_normal(Vec2::new(1.9, 0.1), 0.01);
+        let n = at(Vec2::new(1.9, 0.1));
         assert!(close(n.x, 1.0));
     }
 }

@@ -54,6 +54,7 @@ impl Stator {
     }
 
     /// f(r) for a signed distance r (metres; negative inside the obstacle).
+    #[inline(always)]
     pub fn potential(&self, r: f32) -> f32 {
         if r > self.r_c {
             exp(self.a_plus / (r * r)) - 1.0

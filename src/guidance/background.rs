@@ -68,6 +68,11 @@ impl Background {
         })
     }
 
+    /// Whether a `Tick` has come: firmware time is then the host's.
+    pub fn lockstep(&self) -> bool {
+        self.lockstep
+    }
+
     /// The decoder's counters.
     pub fn rx_counters(&self) -> &RxCounters {
         self.decoder.counters()

@@ -12,7 +12,7 @@ use crate::link::{
 use crate::math::Vec2;
 use crate::params::Params;
 use crate::planner::{Command, Mode, Planner};
-use crate::world::{Origin, World};
+use crate::world::World;
 
 use super::failsafe::{self, FailsafeConfig, Situation};
 use super::tracks::{TrackConfig, Tracks};
@@ -217,18 +217,7 @@ impl Periodic {
             },
             Control::ChartClear(h, which) => {
                 match which {
-                    crate::link::ChartClearRepr::All => {
-                        let charted: heapless::Vec<u16, { crate::world::MAX_OBSTACLES }> = self
-                            .world
-                            .obstacles()
-                            .iter()
-                            .filter(|o| o.origin == Origin::Charted)
-                            .map(|o| o.id)
-                            .collect();
-                        for id in charted {
-                            self.world.remove_obstacle(id);
-                        }
-                    }
+                    crate::link::ChartClearRepr::All => self.world.remove_charted(),
                     crate::link::ChartClearRepr::One(id) => {
                         self.world.remove_obstacle(id);
                     }

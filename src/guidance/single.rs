@@ -100,6 +100,11 @@ impl SingleContext {
         &self.periodic
     }
 
+    /// Whether the host drives time with `Tick` messages (lockstep).
+    pub fn lockstep(&self) -> bool {
+        self.background.lockstep()
+    }
+
     /// Firmware time of the last period, ms.
     pub fn now_ms(&self) -> u64 {
         self.now_ms

@@ -10,6 +10,11 @@
 //! offsets ε·γ̂ᵢ are precomputed in a [`SampleCircle`] when the parameters change, so one step
 //! costs (n_γ + 1) potential evaluations of multiply–adds, one `exp` and one square root per
 //! object, and no trigonometry.
+//!
+//! The same pass also yields the force of two partial fields — without the formation's virtual
+//! leader, and without the other vehicles too — which the local-minimum test needs to tell what
+//! holds a stalled vehicle (`escape.rs`). Keeping the potential's terms apart costs three
+//! additions per sample instead of two more passes.
 
 use crate::field::{GoalPdf, Stator};
 use crate::math::{Vec2, TAU};
@@ -51,8 +56,16 @@ impl SampleCircle {
     }
 }
 
-/// Attractors one step can hold: the active goal-point (or ghost) and the virtual leader.
-pub const MAX_ATTRACTORS: usize = 2;
+/// The sampled force of the whole field and of two partial fields (see the module notes).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Forces {
+    /// F_nf of the whole field.
+    pub full: Vec2,
+    /// F_nf without the virtual leader.
+    pub without_leader: Vec2,
+    /// F_nf of the static field: obstacles (stator and rotor) and the goal-point only.
+    pub static_field: Vec2,
+}
 
 /// Everything that shapes E during one step, borrowed from the world and the planner.
 pub struct Field<'a> {
@@ -64,46 +77,73 @@ pub struct Field<'a> {
     pub agent_radius: f32,
     /// Stator of an agent's circle (A⁺ of 000 §III).
     pub agent_stator: Stator,
-    /// Goal-point, ghost and virtual-leader attractors.
-    pub attractors: &'a [GoalPdf],
+    /// The active goal-point (the mission goal or a ghost).
+    pub goal: GoalPdf,
+    /// The formation's virtual leader, if any.
+    pub leader: Option<GoalPdf>,
     /// Sum of the obstacles' rotor gradients this step (see [`crate::field::rotor`]).
     pub rotor_gradient: Vec2,
     /// The vehicle's position, where the rotor potential is zero.
     pub origin: Vec2,
 }
 
+/// The terms of E at one point, kept apart: (obstacles and goal-point, other vehicles, leader).
+#[derive(Clone, Copy)]
+struct Terms {
+    fixed: f32,
+    vehicles: f32,
+    leader: f32,
+}
+
 impl Field<'_> {
     /// E(x) (000 eq. 1; 001 eq. 2).
     pub fn potential(&self, x: Vec2) -> f32 {
-        let mut e = (x - self.origin).dot(self.rotor_gradient);
+        let t = self.terms(x);
+        t.fixed + t.vehicles + t.leader
+    }
+
+    fn terms(&self, x: Vec2) -> Terms {
+        let mut fixed = (x - self.origin).dot(self.rotor_gradient) + self.goal.potential(x);
         for o in self.obstacles {
-            e += o.stator().potential(o.shape.signed_distance(x));
+            fixed += o.stator().potential(o.shape.signed_distance(x));
         }
+        let mut vehicles = 0.0;
         for a in self.agents {
             let r = (x - a.position).norm() - self.agent_radius;
-            e += self.agent_stator.potential(r);
+            vehicles += self.agent_stator.potential(r);
         }
-        for g in self.attractors {
-            e += g.potential(x);
+        let leader = self.leader.map_or(0.0, |l| l.potential(x));
+        Terms {
+            fixed,
+            vehicles,
+            leader,
         }
-        e
     }
 
     /// F_nf, the no-friction controlling force (000 eq. 2; 001 eq. 4), sampled around
-    /// [`Field::origin`].
-    pub fn sampled_force(&self, circle: &SampleCircle) -> Vec2 {
-        let e0 = self.potential(self.origin);
-        let mut best = 0.0f32;
-        let mut best_dir = Vec2::ZERO;
+    /// [`Field::origin`], for the whole field and the two partial fields.
+    pub fn sampled_forces(&self, circle: &SampleCircle) -> Forces {
+        let t0 = self.terms(self.origin);
+        let mut best = [(0.0f32, Vec2::ZERO); 3];
         for off in circle.offsets() {
-            let drop = e0 - self.potential(self.origin + *off);
-            if drop > best {
-                best = drop;
-                best_dir = *off;
+            let t = self.terms(self.origin + *off);
+            let fixed = t0.fixed - t.fixed;
+            let without_leader = fixed + (t0.vehicles - t.vehicles);
+            let full = without_leader + (t0.leader - t.leader);
+            for (slot, drop) in best.iter_mut().zip([full, without_leader, fixed]) {
+                if drop > slot.0 {
+                    *slot = (drop, *off);
+                }
             }
         }
-        // best_dir has length ε; F_nf has the drop as modulus.
-        best_dir * (best / circle.epsilon())
+        // Each direction has length ε; F_nf has the drop as modulus.
+        let force = |(drop, dir): (f32, Vec2)| dir * (drop / circle.epsilon());
+        let [full, without_leader, static_field] = best;
+        Forces {
+            full: force(full),
+            without_leader: force(without_leader),
+            static_field: force(static_field),
+        }
     }
 }
 
@@ -115,18 +155,18 @@ mod tests {
 
     #[test]
     fn force_points_at_the_goal_with_the_potential_drop_as_modulus() {
-        let goal = [GoalPdf::new(Vec2::new(10.0, 0.0), 5.0, 8.0)];
         let f = Field {
             obstacles: &[],
             agents: &[],
             agent_radius: 0.5,
             agent_stator: Stator::new(2.5),
-            attractors: &goal,
+            goal: GoalPdf::new(Vec2::new(10.0, 0.0), 5.0, 8.0),
+            leader: None,
             rotor_gradient: Vec2::ZERO,
             origin: Vec2::ZERO,
         };
         let c = SampleCircle::new(0.25, 16);
-        let force = f.sampled_force(&c);
+        let force = f.sampled_forces(&c).full;
         assert!(force.y.abs() < 1e-6 && force.x > 0.0);
         let drop = f.potential(Vec2::ZERO) - f.potential(Vec2::new(0.25, 0.0));
         assert!((force.norm() - drop).abs() < 1e-6);
@@ -142,27 +182,51 @@ mod tests {
                 agents: &[],
                 agent_radius: 0.5,
                 agent_stator: Stator::new(2.5),
-                attractors: &[],
+                goal: GoalPdf::new(origin, 0.001, 100.0),
+                leader: None,
                 rotor_gradient: Vec2::ZERO,
                 origin,
             };
-            let force = f.sampled_force(&SampleCircle::new(0.25, 16));
+            let force = f.sampled_forces(&SampleCircle::new(0.25, 16)).full;
             assert!(force.x > 0.0 && force.y.abs() < 1e-3 * force.x, "{force:?}");
         }
     }
 
     #[test]
     fn local_minimum_gives_zero_force() {
-        let goal = [GoalPdf::new(Vec2::ZERO, 5.0, 8.0)];
         let f = Field {
             obstacles: &[],
             agents: &[],
             agent_radius: 0.5,
             agent_stator: Stator::new(2.5),
-            attractors: &goal,
+            goal: GoalPdf::new(Vec2::ZERO, 5.0, 8.0),
+            leader: None,
             rotor_gradient: Vec2::ZERO,
             origin: Vec2::new(0.01, 0.0),
         };
-        assert_eq!(f.sampled_force(&SampleCircle::new(0.25, 16)), Vec2::ZERO);
+        assert_eq!(
+            f.sampled_forces(&SampleCircle::new(0.25, 16)).full,
+            Vec2::ZERO
+        );
+    }
+
+    #[test]
+    fn partial_fields_separate_what_holds_the_vehicle() {
+        // Another vehicle sits between this one and the goal.
+        let agents = [Agent::new(1, Vec2::new(1.5, 0.0), Vec2::ZERO, 0).unwrap()];
+        let f = Field {
+            obstacles: &[],
+            agents: &agents,
+            agent_radius: 0.5,
+            agent_stator: Stator::new(2.5),
+            goal: GoalPdf::new(Vec2::new(10.0, 0.0), 5.0, 8.0),
+            leader: Some(GoalPdf::new(Vec2::new(-3.0, 0.0), 50.0, 1.0)),
+            rotor_gradient: Vec2::ZERO,
+            origin: Vec2::ZERO,
+        };
+        let forces = f.sampled_forces(&SampleCircle::new(0.25, 16));
+        assert!(forces.full.x < 0.0, "the leader pulls back: {forces:?}");
+        assert!(forces.without_leader.x < 0.0, "the vehicle ahead repels");
+        assert!(forces.static_field.x > 0.0, "alone, the goal pulls");
     }
 }

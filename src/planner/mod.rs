@@ -40,7 +40,7 @@ pub use gradient::SampleCircle;
 pub use setpoints::PidSetpoints;
 
 use escape::Escape;
-use gradient::{Field, MAX_ATTRACTORS};
+use gradient::Field;
 use setpoints::{Measured, SetpointState};
 
 /// Largest coordinate accepted for the vehicle or a goal, m (100 km: beyond any AUV mission in a
@@ -361,16 +361,14 @@ impl Planner {
         let target = self.escape.active_target(mission.goal);
 
         // Attractors: the active goal-point and the virtual leader (001 Table 1).
-        let mut attractors: Vec<GoalPdf, MAX_ATTRACTORS> = Vec::new();
-        let _ = attractors.push(GoalPdf::new(target, prm.a_minus, prm.sigma_m));
+        let goal = GoalPdf::new(target, prm.a_minus, prm.sigma_m);
         let formation = mission
             .formation
             .filter(|_| !self.escape.formation_released(now_ms));
-        if let Some(f) = formation {
-            if let Some(vl) = f.virtual_leader(p, world.agents()) {
-                let _ = attractors.push(GoalPdf::new(vl, f.attraction, f.sigma()));
-            }
-        }
+        let leader = formation.and_then(|f| {
+            let vl = f.virtual_leader(p, world.agents())?;
+            Some((f, GoalPdf::new(vl, f.attraction, f.sigma())))
+        });
 
         // Clearance, and the rotor terms: one normal per obstacle, one sense per encounter.
         let mut normals: Vec<(Vec2, f32), { crate::world::MAX_OBSTACLES }> = Vec::new();
@@ -380,7 +378,7 @@ impl Planner {
             clearance = clearance.min(r);
             if prm.a_rotor > 0.0 {
                 let _ = normals.push((
-                    o.shape.outward_normal(p, NORMAL_STEP_M),
+                    o.shape.outward_normal(p, r, NORMAL_STEP_M),
                     o.stator().reach(r),
                 ));
             }
@@ -399,7 +397,8 @@ impl Planner {
             agents: world.agents(),
             agent_radius: prm.agent_radius_m,
             agent_stator: self.agent_stator,
-            attractors: &attractors,
+            goal,
+            leader: leader.map(|(_, pdf)| pdf),
             rotor_gradient,
             origin: p,
         };
@@ -410,7 +409,8 @@ impl Planner {
         };
         let e1 = Some(measured.e1());
 
-        let f_nf = field.sampled_force(&self.circle);
+        let forces = field.sampled_forces(&self.circle);
+        let f_nf = forces.full;
         let f = f_nf - self.integrator.velocity * prm.mu;
         let f_bar = bound::bound(f, prm.f_max, e1, prm.bounding);
         let v_c = (f_bar + self.integrator.force) * (0.5 * prm.period_s) + self.integrator.velocity;
@@ -423,14 +423,9 @@ impl Planner {
         // leader, or without the other vehicles too? "A way down" is a descent stronger than
         // what friction balances at the stall speed.
         let cause = |target: Vec2| {
-            let goal = [GoalPdf::new(target, prm.a_minus, prm.sigma_m)];
-            let free = |f: &Field| f.sampled_force(&self.circle).norm() > prm.mu * prm.stall_speed;
-            let without_leader = Field {
-                attractors: &goal,
-                ..field
-            };
-            if let (Some(f), true) = (formation, attractors.len() > 1) {
-                if free(&without_leader) {
+            let free = |f: Vec2| f.norm() > prm.mu * prm.stall_speed;
+            if let Some((f, _)) = leader {
+                if free(forces.without_leader) {
                     // Held by the formation near the goal is arrival in formation, not a stall:
                     // N + 1 lattice cells of side λ fit within λ·√(N + 1) of it.
                     let n = world.agents().len() as f32 + 1.0;
@@ -442,11 +437,7 @@ impl Planner {
                     };
                 }
             }
-            let without_vehicles = Field {
-                agents: &[],
-                ..without_leader
-            };
-            if free(&without_vehicles) {
+            if free(forces.static_field) {
                 StallCause::Vehicles
             } else {
                 StallCause::Static

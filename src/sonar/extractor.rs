@@ -142,16 +142,17 @@ impl Extractor {
         // 3. Runs → world-frame hits → clusters.
         let echoes = detect(scan, &self.cfg);
         let look = Vec2::from_angle(pose.heading + bearing);
-        let hits: heapless::Vec<Hit, MAX_RUNS_PER_BEAM> = echoes
-            .iter()
-            .map(|e| Hit {
+        // Pushed, not collected: heapless' `collect` panics on overflow.
+        let mut hits: heapless::Vec<Hit, MAX_RUNS_PER_BEAM> = heapless::Vec::new();
+        for e in echoes.iter() {
+            let _ = hits.push(Hit {
                 point: sensor + look * e.range_m,
                 look,
                 range: e.range_m,
                 step,
                 intensity: e.mean,
-            })
-            .collect();
+            });
+        }
         self.counters.echoes = self.counters.echoes.saturating_add(hits.len() as u32);
         let fates = self
             .table

@@ -1,0 +1,222 @@
+//! The on-target self-test (`--features selftest`): measures what the budgets are about and
+//! exits with the verdict. Run on QEMU with `-icount shift=0` so costs are instructions.
+//!
+//! 1. Loads the world to full capacity (32 obstacles of every shape, 8 agents, a formation) and
+//!    gives the planner a mission and navigation through the same queues the UART feeds.
+//! 2. Floods the background: the idle loop extracts synthetic sonar scanlines without pause,
+//!    so the periodic task always preempts a busy extractor.
+//! 3. After [`PERIODS`] periods, reports planner step cost (max and mean), deadline overruns,
+//!    scanlines processed and the stack high-water mark, and exits successfully only if there
+//!    was no overrun and the worst step was within [`STEP_BUDGET`].
+
+use vpf::field::Shape;
+use vpf::guidance::Sighting;
+use vpf::link::{Message, NavRepr, Payload};
+use vpf::sonar::Scanline;
+use vpf::world::{Agent, Obstacle, Origin, MAX_AGENTS, MAX_OBSTACLES};
+use vpf::{Mission, NavState, Vec2};
+
+use super::{stats, Idle};
+use crate::board::active as board;
+
+/// Periods to run.
+pub const PERIODS: u32 = 50;
+/// The planner step budget, instructions (shared/DESIGN.md).
+pub const STEP_BUDGET: u32 = 100_000;
+
+/// Runs the self-test; never returns.
+pub fn run(idle: &mut Idle) -> ! {
+    board::log(b"selftest: full tables, sonar flood, 50 periods\n");
+    load_world(idle);
+    let mut bins = [0u8; 400];
+    let mut ping = 0u32;
+    let mut scanlines = 0u32;
+    while stats().periods < PERIODS {
+        // Keep navigation fresh (the periodic task holds on stale navigation).
+        if ping % 8 == 0 {
+            send_nav(idle);
+        }
+        // One synthetic ping: a wall of echoes at a bearing-dependent range, with speckle.
+        for (i, b) in bins.iter_mut().enumerate() {
+            let r = (i as u32).wrapping_mul(2_654_435_761).wrapping_add(ping) >> 28;
+            *b = if i == 120 + (ping % 40) as usize {
+                220
+            } else {
+                (r * 4) as u8
+            };
+        }
+        let scan = Scanline {
+            time_ms: super::now_ms(),
+            bearing_rad: ((ping % 200) as f32) * 0.0314 - 3.14,
+            step_rad: 0.0314,
+            range_m: 40.0,
+            bins: &bins,
+        };
+        let mut frame = [0u8; vpf::link::MAX_FRAME];
+        if let Ok(n) = scan.emit_frame(ping as u16, &mut frame) {
+            if let Some(f) = frame.get(..n) {
+                idle.feed(f);
+                scanlines += 1;
+            }
+        }
+        ping = ping.wrapping_add(1);
+    }
+    report(scanlines)
+}
+
+fn send_nav(idle: &mut Idle) {
+    let nav = NavRepr {
+        time_ms: super::now_ms(),
+        nav: NavState {
+            position: Vec2::new(0.0, 0.0),
+            heading: 0.0,
+            velocity: Vec2::new(0.8, 0.1),
+        },
+        body: None,
+    };
+    let mut frame = [0u8; 64];
+    if let Ok(n) = Message::Nav(nav).emit_frame(0, &mut frame) {
+        if let Some(f) = frame.get(..n) {
+            idle.feed(f);
+        }
+    }
+}
+
+/// Full tables, through the same request and sighting queues as the UART path.
+fn load_world(idle: &mut Idle) {
+    let mission = Mission {
+        goal: Vec2::new(80.0, 0.0),
+        formation: Some(vpf::planner::Formation {
+            q: 4,
+            lattice_m: 3.0,
+            orientation: 0.0,
+            attraction: 5.0,
+        }),
+    };
+    let mut frame = [0u8; 128];
+    if let Ok(n) = Message::Mission(mission).emit_frame(0, &mut frame) {
+        if let Some(f) = frame.get(..n) {
+            idle.feed(f);
+        }
+    }
+    for i in 0..MAX_OBSTACLES {
+        let c = Vec2::new(10.0 + 7.0 * (i % 8) as f32, -20.0 + 9.0 * (i / 8) as f32);
+        let shape = match i % 4 {
+            0 => Shape::circle(c, 1.5),
+            1 => Shape::rectangle(c, Vec2::new(2.0, 1.0), 0.3),
+            2 => Shape::ellipse(c, Vec2::new(2.0, 1.0), -0.4),
+            _ => {
+                let mut hex = [Vec2::ZERO; 6];
+                for (k, v) in hex.iter_mut().enumerate() {
+                    *v = c + Vec2::from_angle(k as f32 * 1.047) * 1.5;
+                }
+                Shape::polygon(&hex)
+            }
+        };
+        if let Ok(o) = shape.and_then(|s| {
+            Obstacle::new(i as u16, s, 2.5, Origin::Sensed, 0)
+                .map_err(|_| vpf::field::ShapeError::NonFinite)
+        }) {
+            idle.push_sighting(Sighting::Obstacle(o));
+        }
+    }
+    for i in 0..MAX_AGENTS {
+        let p = Vec2::new(-5.0 - 3.0 * i as f32, 4.0);
+        if let Ok(a) = Agent::new(i as u16, p, Vec2::ZERO, 0) {
+            idle.push_sighting(Sighting::Agent(a));
+        }
+    }
+}
+
+fn report(scanlines: u32) -> ! {
+    let s = stats();
+    let mean = s.sum_cost / u64::from(s.periods.max(1));
+    let stack = stack_high_water();
+    let mut line = Line::new();
+    line.push(b"selftest: periods ");
+    line.num(u64::from(s.periods));
+    line.push(b", step cost max ");
+    line.num(u64::from(s.max_cost));
+    line.push(b" mean ");
+    line.num(mean);
+    line.push(b" instructions, overruns ");
+    line.num(u64::from(s.overruns));
+    line.push(b", scanlines extracted ");
+    line.num(u64::from(scanlines));
+    line.push(b", stack high-water ");
+    line.num(stack as u64);
+    line.push(b" bytes\n");
+    board::log(line.bytes());
+    let ok = s.overruns == 0 && s.max_cost <= STEP_BUDGET && s.periods >= PERIODS;
+    board::log(if ok {
+        b"selftest: PASS\n"
+    } else {
+        b"selftest: FAIL\n"
+    });
+    board::exit(ok)
+}
+
+/// Bytes of stack ever used: cortex-m-rt paints the stack with 0xCCCC_CCCC at boot
+/// (`paint-stack`); the high-water mark is where the paint ends.
+fn stack_high_water() -> usize {
+    extern "C" {
+        static _stack_end: u32;
+        static _stack_start: u32;
+    }
+    // SAFETY: the linker's stack bounds; the region between them is RAM reserved for the stack
+    // and is only read here, word by word.
+    unsafe {
+        let lo = core::ptr::addr_of!(_stack_end) as usize;
+        let hi = core::ptr::addr_of!(_stack_start) as usize;
+        let mut p = lo;
+        while p < hi && core::ptr::read_volatile(p as *const u32) == 0xCCCC_CCCC {
+            p += 4;
+        }
+        hi - p
+    }
+}
+
+/// A tiny line buffer with decimal numbers (no `core::fmt`, which carries panicking paths).
+struct Line {
+    buf: [u8; 200],
+    len: usize,
+}
+
+impl Line {
+    fn new() -> Self {
+        Line {
+            buf: [0; 200],
+            len: 0,
+        }
+    }
+    fn push(&mut self, s: &[u8]) {
+        for &b in s {
+            if let Some(slot) = self.buf.get_mut(self.len) {
+                *slot = b;
+                self.len += 1;
+            }
+        }
+    }
+    fn num(&mut self, mut n: u64) {
+        let mut digits = [0u8; 20];
+        let mut k = 0;
+        loop {
+            if let Some(d) = digits.get_mut(k) {
+                *d = b'0' + (n % 10) as u8;
+            }
+            k += 1;
+            n /= 10;
+            if n == 0 || k >= digits.len() {
+                break;
+            }
+        }
+        while k > 0 {
+            k -= 1;
+            let d = digits.get(k).copied().unwrap_or(b'?');
+            self.push(&[d]);
+        }
+    }
+    fn bytes(&self) -> &[u8] {
+        self.buf.get(..self.len).unwrap_or(&[])
+    }
+}
