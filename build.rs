@@ -1,19 +1,49 @@
-//! Puts `memory.x` where cortex-m-rt's `link.x` finds it, and links with it, for the embedded
-//! target only: host builds (tests, benches, the host-process firmware) are untouched.
+//! Puts the board's memory layout where the linker finds it, and links with cortex-m-rt's
+//! `link.x`, for the embedded target only: host builds (tests, benches, the host-process
+//! firmware) are untouched.
+//!
+//! `link.x` includes `memory.x`, and the linker resolves that in the package root first: the
+//! top-level `memory.x` is therefore only `INCLUDE board-memory.x`, and this script copies the
+//! chosen board's layout into OUT_DIR (on the search path) as `board-memory.x` (and as
+//! `memory.x`, used when the linker runs elsewhere than the package root).
+//! - `mps2-an386` (default): `boards/mps2-an386/memory.x`, and a `device.x` naming the handlers
+//!   of the interrupt vector that `src/board/mps2_an386.rs` defines.
+//! - `stm32f4`: `boards/stm32f446re/memory.x`; the PAC (`stm32f4`, feature `rt`) supplies the
+//!   interrupt vector and its own `device.x`, and defmt's `defmt.x` is linked.
 use std::{env, fs, path::PathBuf};
 
+const MEMORY: &str = "memory.x";
+const MPS2_MEMORY: &str = "boards/mps2-an386/memory.x";
+const STM32F446RE_MEMORY: &str = "boards/stm32f446re/memory.x";
+
 fn main() {
-    println!("cargo:rerun-if-changed=memory.x");
+    println!("cargo:rerun-if-changed={MEMORY}");
+    println!("cargo:rerun-if-changed={MPS2_MEMORY}");
+    println!("cargo:rerun-if-changed={STM32F446RE_MEMORY}");
     println!("cargo:rerun-if-changed=build.rs");
     let target = env::var("TARGET").unwrap_or_default();
     if !target.starts_with("thumbv") {
         return;
     }
+    let stm32f4 = env::var_os("CARGO_FEATURE_STM32F4").is_some();
+    let mps2 = env::var_os("CARGO_FEATURE_MPS2_AN386").is_some();
+    // Both boards at once is a compile_error! in src/board/mod.rs; link nothing board-specific.
+    if stm32f4 && mps2 {
+        return;
+    }
     let out = PathBuf::from(env::var_os("OUT_DIR").expect("cargo sets OUT_DIR"));
-    fs::copy("memory.x", out.join("memory.x")).expect("memory.x is at the package root");
+    let memory = if stm32f4 {
+        STM32F446RE_MEMORY
+    } else {
+        MPS2_MEMORY
+    };
+    // Also as OUT_DIR/memory.x, for a link whose working directory is not this package's root.
+    for name in ["board-memory.x", "memory.x"] {
+        fs::copy(memory, out.join(name)).expect("the board's memory.x is in the package");
+    }
     // cortex-m-rt's `device` feature includes device.x; the MPS2 board's interrupt vector is
-    // defined in Rust (src/firmware/mps2), so its device.x only names the handlers.
-    if env::var_os("CARGO_FEATURE_MPS2_AN386").is_some() {
+    // defined in Rust (src/board/mps2_an386.rs), so its device.x only names the handlers.
+    if mps2 {
         fs::write(
             out.join("device.x"),
             "PROVIDE(UART0RX = DefaultHandler);\nPROVIDE(UART0TX = DefaultHandler);\n",
@@ -22,4 +52,8 @@ fn main() {
     }
     println!("cargo:rustc-link-search={}", out.display());
     println!("cargo:rustc-link-arg-bins=-Tlink.x");
+    if stm32f4 {
+        // defmt's log-string table (the linker script ships with the defmt crate).
+        println!("cargo:rustc-link-arg-bins=-Tdefmt.x");
+    }
 }

@@ -1,11 +1,235 @@
-//! `hil`: the host-side hardware-in-the-loop harness.
+//! `hil`: run a scenario against the VPF firmware.
 //!
-//! This crate is a placeholder until the HIL issue lands: it links the planner library and says
-//! what it will do, so the workspace layout is fixed from the start.
+//! ```text
+//! hil run SCENARIO.toml [--out DIR] [--firmware qemu|host] [--port /dev/ttyXXX] [--quiet]
+//!         [--bit-error-rate X] [--drop-rate X] [--nav-delay-ms X]
+//!         [--nav-freeze FROM:TO] [--nav-loss FROM:TO] [--sonar-dropout FROM:TO]
+//! hil check SCENARIO.toml...
+//! ```
 
-fn main() {
-    println!(
-        "hil {}: the HIL harness is not built yet; run `cargo test` for the planner's experiments",
-        env!("CARGO_PKG_VERSION")
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use hil::firmware::Target;
+use hil::runner::{run, RunConfig};
+use hil::scenario::{self, Scenario, Window};
+
+const USAGE: &str = "usage:
+  hil run SCENARIO.toml [options]   run a scenario, write outputs to --out (default runs/NAME-TIME)
+  hil check SCENARIO.toml...        validate scenario files
+
+options for run:
+  --out DIR                 output directory
+  --firmware qemu|host      the emulated Cortex-M4 in QEMU (default), or the firmware as a host process
+  --port /dev/ttyXXX        a real board on a serial adapter (flashed beforehand)
+  --quiet                   no progress bar
+  --bit-error-rate X        corrupt bytes sent to the firmware at this bit-error rate
+  --drop-rate X             drop this fraction of the frames sent to the firmware
+  --nav-delay-ms X          delay navigation by X ms
+  --nav-freeze FROM:TO      repeat the same navigation fix between FROM and TO seconds
+  --nav-loss FROM:TO        send no navigation between FROM and TO seconds
+  --sonar-dropout FROM:TO   send no sonar between FROM and TO seconds
+
+Scenario files: hil/scenarios/README.md. Outputs: trajectory_*.csv, metrics.json, plot.svg,
+commands.svg, frames_*.log.";
+
+fn window(s: &str) -> Result<Window, String> {
+    let (a, b) = s
+        .split_once(':')
+        .ok_or_else(|| format!("`{s}`: expected FROM:TO in seconds"))?;
+    let from_s: f64 = a.parse().map_err(|_| format!("`{a}` is not a number"))?;
+    let to_s: f64 = b.parse().map_err(|_| format!("`{b}` is not a number"))?;
+    if !(from_s.is_finite() && to_s.is_finite() && to_s > from_s && from_s >= 0.0) {
+        return Err(format!("`{s}`: need 0 <= FROM < TO"));
+    }
+    Ok(Window { from_s, to_s })
+}
+
+fn rate(s: &str, max: f64) -> Result<f64, String> {
+    let v: f64 = s.parse().map_err(|_| format!("`{s}` is not a number"))?;
+    if v.is_finite() && (0.0..=max).contains(&v) {
+        Ok(v)
+    } else {
+        Err(format!("`{s}`: must be within 0..={max}"))
+    }
+}
+
+struct Args {
+    scenario: PathBuf,
+    out: Option<PathBuf>,
+    target: Target,
+    quiet: bool,
+    faults: Vec<(String, String)>,
+}
+
+fn parse_run(mut it: impl Iterator<Item = String>) -> Result<Args, String> {
+    let mut args = Args {
+        scenario: PathBuf::new(),
+        out: None,
+        target: Target::Qemu,
+        quiet: false,
+        faults: Vec::new(),
+    };
+    let mut scenario = None;
+    while let Some(a) = it.next() {
+        let mut value = || it.next().ok_or_else(|| format!("{a} needs a value"));
+        match a.as_str() {
+            "--out" => args.out = Some(PathBuf::from(value()?)),
+            "--firmware" => {
+                args.target = match value()?.as_str() {
+                    "qemu" => Target::Qemu,
+                    "host" => Target::Host,
+                    other => return Err(format!("--firmware {other}: expected qemu or host")),
+                }
+            }
+            "--port" => args.target = Target::Port(PathBuf::from(value()?)),
+            "--quiet" => args.quiet = true,
+            "--bit-error-rate" | "--drop-rate" | "--nav-delay-ms" | "--nav-freeze"
+            | "--nav-loss" | "--sonar-dropout" => {
+                let v = value()?;
+                args.faults.push((a.clone(), v));
+            }
+            s if s.starts_with("--") => return Err(format!("unknown option {s}")),
+            s => {
+                if scenario.replace(PathBuf::from(s)).is_some() {
+                    return Err("one scenario per run".into());
+                }
+            }
+        }
+    }
+    args.scenario = scenario.ok_or("which scenario? (hil run SCENARIO.toml)")?;
+    Ok(args)
+}
+
+fn apply_faults(sc: &mut Scenario, faults: &[(String, String)]) -> Result<(), String> {
+    for (k, v) in faults {
+        match k.as_str() {
+            "--bit-error-rate" => sc.faults.bit_error_rate = rate(v, 0.01)?,
+            "--drop-rate" => sc.faults.drop_rate = rate(v, 1.0)?,
+            "--nav-delay-ms" => sc.faults.nav_delay_ms = rate(v, 10_000.0)?,
+            "--nav-freeze" => sc.faults.nav_freeze = Some(window(v)?),
+            "--nav-loss" => sc.faults.nav_loss = Some(window(v)?),
+            "--sonar-dropout" => sc.faults.sonar_dropout = Some(window(v)?),
+            _ => {}
+        }
+    }
+    Ok(())
+}
+
+fn default_out(name: &str) -> PathBuf {
+    let secs = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| d.as_secs());
+    PathBuf::from("runs").join(format!("{}-{secs}", hil::output::file_stem(name)))
+}
+
+fn cmd_run(it: impl Iterator<Item = String>) -> ExitCode {
+    let args = match parse_run(it) {
+        Ok(a) => a,
+        Err(e) => {
+            eprintln!("hil run: {e}\n\n{USAGE}");
+            return ExitCode::from(2);
+        }
+    };
+    let mut sc = match scenario::load(&args.scenario) {
+        Ok(s) => s,
+        Err(e) => {
+            eprintln!("{e}");
+            return ExitCode::from(2);
+        }
+    };
+    if let Err(e) = apply_faults(&mut sc, &args.faults) {
+        eprintln!("hil run: {e}");
+        return ExitCode::from(2);
+    }
+    let mut target = args.target;
+    if target == Target::Qemu && !hil::firmware::qemu_available() {
+        eprintln!("hil: qemu-system-arm not found; running the host-process firmware instead");
+        target = Target::Host;
+    }
+    let out_dir = args.out.unwrap_or_else(|| default_out(&sc.name));
+    eprintln!(
+        "hil: {} ({} vehicle{}, {} s at {} Hz) on the {target} firmware → {}",
+        sc.name,
+        sc.vehicles.len(),
+        if sc.vehicles.len() == 1 { "" } else { "s" },
+        sc.duration_s,
+        (1.0 / sc.dt_s).round(),
+        out_dir.display()
     );
+    let cfg = RunConfig {
+        target,
+        out_dir: out_dir.clone(),
+        progress: !args.quiet,
+    };
+    match run(&sc, &cfg) {
+        Ok(result) => {
+            println!("{}", result.summary);
+            for ((v, f), retries) in sc
+                .vehicles
+                .iter()
+                .zip(&result.faults)
+                .zip(&result.tick_retries)
+            {
+                if *retries > 0 {
+                    println!(
+                        "{}: {retries} Tick(s) sent again (lost on the link)",
+                        v.name
+                    );
+                }
+                if f.dropped + f.corrupted > 0 {
+                    println!(
+                        "{}: link faults injected: {} of {} frames dropped, {} corrupted ({} bits)",
+                        v.name, f.dropped, f.frames, f.corrupted, f.bits_flipped
+                    );
+                }
+            }
+            println!("outputs in {}", out_dir.display());
+            ExitCode::SUCCESS
+        }
+        Err(e) => {
+            eprintln!("hil: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn cmd_check(files: impl Iterator<Item = String>) -> ExitCode {
+    let mut ok = true;
+    let mut any = false;
+    for f in files {
+        any = true;
+        match scenario::load(std::path::Path::new(&f)) {
+            Ok(s) => println!("{f}: ok ({}, {} vehicles)", s.name, s.vehicles.len()),
+            Err(e) => {
+                eprintln!("{e}");
+                ok = false;
+            }
+        }
+    }
+    if !any {
+        eprintln!("{USAGE}");
+        return ExitCode::from(2);
+    }
+    if ok {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::from(2)
+    }
+}
+
+fn main() -> ExitCode {
+    let mut it = std::env::args().skip(1);
+    match it.next().as_deref() {
+        Some("run") => cmd_run(it),
+        Some("check") => cmd_check(it),
+        Some("-h" | "--help") => {
+            println!("{USAGE}");
+            ExitCode::SUCCESS
+        }
+        _ => {
+            eprintln!("{USAGE}");
+            ExitCode::from(2)
+        }
+    }
 }

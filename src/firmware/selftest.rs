@@ -32,10 +32,12 @@ pub fn run(idle: &mut Idle) -> ! {
     let mut ping = 0u32;
     let mut scanlines = 0u32;
     while stats().periods < PERIODS {
-        // Keep navigation fresh (the periodic task holds on stale navigation).
-        if ping % 8 == 0 {
+        // Keep navigation fresh (the periodic task holds on stale navigation), and serve the
+        // UART as the firmware would.
+        if ping.is_multiple_of(8) {
             send_nav(idle);
         }
+        idle.poll();
         // One synthetic ping: a wall of echoes at a bearing-dependent range, with speckle.
         for (i, b) in bins.iter_mut().enumerate() {
             let r = (i as u32).wrapping_mul(2_654_435_761).wrapping_add(ping) >> 28;
@@ -47,7 +49,7 @@ pub fn run(idle: &mut Idle) -> ! {
         }
         let scan = Scanline {
             time_ms: super::now_ms(),
-            bearing_rad: ((ping % 200) as f32) * 0.0314 - 3.14,
+            bearing_rad: ((ping % 200) as f32) * 0.0314 - core::f32::consts::PI,
             step_rad: 0.0314,
             range_m: 40.0,
             bins: &bins,

@@ -1,0 +1,355 @@
+//! One firmware instance and the serial link to it: QEMU's emulated board on a pty, the
+//! host-process firmware on a pty, or a real board on a serial device.
+//!
+//! Frames go out whole (`send`); what comes back is decoded with the firmware's own stream
+//! decoder and kept as owned [`Reply`]s. A [`Tap`] sees every chunk both ways (the frame log)
+//! and may corrupt or drop outgoing frames (fault injection).
+
+use std::fs::File;
+use std::io::{BufRead, BufReader, Read, Write};
+use std::os::fd::{AsRawFd, FromRawFd};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+
+use vpf::link::{
+    CommandRepr, Decoder, Direction, Message, Outcome, ReplyRepr, TelemetryRepr, MAX_FRAME,
+};
+
+/// Which firmware to run.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Target {
+    /// The release firmware on QEMU's emulated Cortex-M4 (`mps2-an386`).
+    Qemu,
+    /// The same runtime built for the host, as a process.
+    Host,
+    /// A real board on a serial device.
+    Port(PathBuf),
+}
+
+impl std::fmt::Display for Target {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Target::Qemu => f.write_str("qemu"),
+            Target::Host => f.write_str("host"),
+            Target::Port(p) => write!(f, "port:{}", p.display()),
+        }
+    }
+}
+
+/// Something the firmware sent, owned.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Reply {
+    /// A period's command.
+    Command(CommandRepr),
+    /// Telemetry.
+    Telemetry(TelemetryRepr),
+    /// A reply to a request.
+    Reply(ReplyRepr),
+    /// A log line.
+    Log(String),
+}
+
+/// Sees the traffic: logs it, and may alter outgoing frames (faults).
+pub trait Tap {
+    /// An outgoing frame; return what to actually send (possibly corrupted), or `None` to drop.
+    fn outgoing(&mut self, frame: &[u8]) -> Option<Vec<u8>>;
+    /// Bytes that came back.
+    fn incoming(&mut self, bytes: &[u8]);
+}
+
+/// A tap that changes nothing and logs nothing.
+pub struct NoTap;
+
+impl Tap for NoTap {
+    fn outgoing(&mut self, frame: &[u8]) -> Option<Vec<u8>> {
+        Some(frame.to_vec())
+    }
+    fn incoming(&mut self, _: &[u8]) {}
+}
+
+/// A running firmware and its link.
+pub struct Firmware {
+    child: Option<Child>,
+    port: File,
+    decoder: Decoder,
+    seq: u16,
+    inbox: Vec<Reply>,
+    /// What runs.
+    pub target: Target,
+}
+
+impl Drop for Firmware {
+    fn drop(&mut self) {
+        if let Some(c) = self.child.as_mut() {
+            let _ = c.kill();
+            let _ = c.wait();
+        }
+    }
+}
+
+fn workspace_root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .map_or_else(|| PathBuf::from("."), Path::to_path_buf)
+}
+
+/// Whether `qemu-system-arm` can be run here.
+pub fn qemu_available() -> bool {
+    Command::new("qemu-system-arm")
+        .arg("--version")
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .status()
+        .is_ok_and(|s| s.success())
+}
+
+/// Builds the firmware for `target` (release) and returns the binary's path.
+pub fn build(target: &Target) -> std::io::Result<PathBuf> {
+    let root = workspace_root();
+    let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
+    let mut cmd = Command::new(cargo);
+    cmd.current_dir(&root).args([
+        "build",
+        "--quiet",
+        "--release",
+        "-p",
+        "vpf",
+        "--bin",
+        "vpf-firmware",
+    ]);
+    let path = match target {
+        Target::Qemu => {
+            cmd.args(["--target", "thumbv7em-none-eabihf"]);
+            root.join("target/thumbv7em-none-eabihf/release/vpf-firmware")
+        }
+        Target::Host | Target::Port(_) => root.join("target/release/vpf-firmware"),
+    };
+    if matches!(target, Target::Port(_)) {
+        // A real board is flashed by the user; nothing to build here.
+        return Ok(path);
+    }
+    let status = cmd.status()?;
+    if !status.success() {
+        return Err(std::io::Error::other("firmware build failed"));
+    }
+    Ok(path)
+}
+
+/// Puts a terminal in raw mode (no echo, no line discipline), reads returning within 0.1 s.
+fn make_raw(f: &File) -> std::io::Result<()> {
+    // SAFETY: termios calls on a descriptor we own.
+    unsafe {
+        let mut t: libc::termios = std::mem::zeroed();
+        if libc::tcgetattr(f.as_raw_fd(), &mut t) != 0 {
+            return Err(std::io::Error::last_os_error());
+        }
+        libc::cfmakeraw(&mut t);
+        libc::cfsetispeed(&mut t, libc::B115200);
+        libc::cfsetospeed(&mut t, libc::B115200);
+        t.c_cc[libc::VMIN] = 0;
+        t.c_cc[libc::VTIME] = 1;
+        if libc::tcsetattr(f.as_raw_fd(), libc::TCSANOW, &t) != 0 {
+            return Err(std::io::Error::last_os_error());
+        }
+    }
+    Ok(())
+}
+
+/// A new pseudo-terminal pair: (master, slave path).
+fn open_pty() -> std::io::Result<(File, PathBuf)> {
+    let (mut master, mut slave) = (0, 0);
+    // SAFETY: openpty writes two descriptors we then own; the name buffer is large enough.
+    let mut name = [0 as libc::c_char; 128];
+    let rc = unsafe {
+        libc::openpty(
+            &mut master,
+            &mut slave,
+            name.as_mut_ptr(),
+            std::ptr::null(),
+            std::ptr::null(),
+        )
+    };
+    if rc != 0 {
+        return Err(std::io::Error::last_os_error());
+    }
+    // SAFETY: both descriptors are fresh and ours.
+    let (master, slave) = unsafe { (File::from_raw_fd(master), File::from_raw_fd(slave)) };
+    make_raw(&slave)?;
+    make_raw(&master)?;
+    // SAFETY: openpty wrote a NUL-terminated name.
+    let path = unsafe { std::ffi::CStr::from_ptr(name.as_ptr()) }
+        .to_string_lossy()
+        .into_owned();
+    // The slave stays open here until the firmware has it, so no byte is lost meanwhile.
+    std::mem::forget(slave);
+    Ok((master, PathBuf::from(path)))
+}
+
+impl Firmware {
+    /// Starts `target` (built binary at `binary` for QEMU and host) and connects to it.
+    pub fn start(target: &Target, binary: &Path) -> std::io::Result<Self> {
+        match target {
+            Target::Qemu => Self::start_qemu(binary),
+            Target::Host => Self::start_host(binary),
+            Target::Port(path) => {
+                let port = std::fs::OpenOptions::new()
+                    .read(true)
+                    .write(true)
+                    .open(path)?;
+                make_raw(&port)?;
+                Ok(Self::new(None, port, target.clone()))
+            }
+        }
+    }
+
+    fn new(child: Option<Child>, port: File, target: Target) -> Self {
+        Firmware {
+            child,
+            port,
+            decoder: Decoder::accepting(Direction::ToHost),
+            seq: 0,
+            inbox: Vec::new(),
+            target,
+        }
+    }
+
+    /// QEMU, paused with `-S` until the pty is open (bytes sent before would be lost), with
+    /// `-icount shift=0` so the firmware's step costs are instruction counts.
+    fn start_qemu(elf: &Path) -> std::io::Result<Self> {
+        let mut child = Command::new("qemu-system-arm")
+            .args(["-machine", "mps2-an386", "-cpu", "cortex-m4", "-nographic"])
+            .args([
+                "-serial", "pty", "-monitor", "stdio", "-S", "-icount", "shift=0",
+            ])
+            .args(["-semihosting-config", "enable=on,target=native", "-kernel"])
+            .arg(elf)
+            .stdin(Stdio::piped())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::null())
+            .spawn()?;
+        let stdout = child
+            .stdout
+            .take()
+            .ok_or_else(|| std::io::Error::other("no qemu stdout"))?;
+        let mut lines = BufReader::new(stdout).lines();
+        // QEMU 7.2 names the pty on its monitor: "char device redirected to /dev/pts/N".
+        let path = loop {
+            let Some(line) = lines.next() else {
+                return Err(std::io::Error::other("qemu exited before naming its pty"));
+            };
+            let line = line?;
+            if let Some(i) = line.find("/dev/pts/") {
+                break line[i..]
+                    .split_whitespace()
+                    .next()
+                    .unwrap_or_default()
+                    .to_string();
+            }
+        };
+        std::thread::spawn(move || for _ in lines.map_while(Result::ok) {});
+        let port = std::fs::OpenOptions::new()
+            .read(true)
+            .write(true)
+            .open(&path)?;
+        make_raw(&port)?;
+        let mut stdin = child
+            .stdin
+            .take()
+            .ok_or_else(|| std::io::Error::other("no qemu stdin"))?;
+        stdin.write_all(b"cont\n")?;
+        stdin.flush()?;
+        std::mem::forget(stdin); // the monitor stays open while QEMU runs
+        Ok(Self::new(Some(child), port, Target::Qemu))
+    }
+
+    /// The host-process firmware on the slave side of a fresh pty.
+    fn start_host(bin: &Path) -> std::io::Result<Self> {
+        let (master, slave) = open_pty()?;
+        let child = Command::new(bin)
+            .arg("--device")
+            .arg(&slave)
+            .stdin(Stdio::null())
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .spawn()?;
+        Ok(Self::new(Some(child), master, Target::Host))
+    }
+
+    /// Sends one message as a frame, through the tap.
+    pub fn send(&mut self, m: &Message<'_>, tap: &mut dyn Tap) -> std::io::Result<()> {
+        let mut buf = [0u8; MAX_FRAME];
+        self.seq = self.seq.wrapping_add(1);
+        let n = m
+            .emit_frame(self.seq, &mut buf)
+            .map_err(|e| std::io::Error::other(e.to_string()))?;
+        if let Some(bytes) = tap.outgoing(&buf[..n]) {
+            self.port.write_all(&bytes)?;
+        }
+        Ok(())
+    }
+
+    /// Sends raw bytes (line noise for tests), through the tap's log only.
+    pub fn send_raw(&mut self, bytes: &[u8]) -> std::io::Result<()> {
+        self.port.write_all(bytes)
+    }
+
+    /// Reads and decodes what has arrived (waits at most ~0.1 s for the first bytes).
+    fn pump(&mut self, tap: &mut dyn Tap) -> std::io::Result<()> {
+        let mut buf = [0u8; 4096];
+        let n = match self.port.read(&mut buf) {
+            Ok(n) => n,
+            Err(e) if e.kind() == std::io::ErrorKind::WouldBlock => 0,
+            // A pty whose other side has not opened yet reads EIO: nothing yet.
+            Err(e) if e.raw_os_error() == Some(libc::EIO) => {
+                std::thread::sleep(Duration::from_millis(10));
+                0
+            }
+            Err(e) => return Err(e),
+        };
+        if n > 0 {
+            tap.incoming(&buf[..n]);
+        }
+        for &b in &buf[..n] {
+            if let Outcome::Frame(_, m) = self.decoder.push(b) {
+                let r = match m {
+                    Message::Command(c) => Reply::Command(c),
+                    Message::Telemetry(t) => Reply::Telemetry(t),
+                    Message::Reply(r) => Reply::Reply(r),
+                    Message::Log(l) => Reply::Log(l.text.to_string()),
+                    _ => continue,
+                };
+                self.inbox.push(r);
+            }
+        }
+        Ok(())
+    }
+
+    /// Reads until `done(inbox)` holds or `timeout` passes; returns and clears the inbox.
+    pub fn receive_until(
+        &mut self,
+        timeout: Duration,
+        tap: &mut dyn Tap,
+        done: impl Fn(&[Reply]) -> bool,
+    ) -> std::io::Result<Vec<Reply>> {
+        let start = Instant::now();
+        while !done(&self.inbox) {
+            if start.elapsed() > timeout {
+                return Err(std::io::Error::new(
+                    std::io::ErrorKind::TimedOut,
+                    format!("no answer from the {} firmware in {timeout:?}", self.target),
+                ));
+            }
+            if let Some(c) = self.child.as_mut() {
+                if let Ok(Some(status)) = c.try_wait() {
+                    return Err(std::io::Error::other(format!(
+                        "the {} firmware exited ({status})",
+                        self.target
+                    )));
+                }
+            }
+            self.pump(tap)?;
+        }
+        Ok(std::mem::take(&mut self.inbox))
+    }
+}

@@ -1,0 +1,812 @@
+//! `plot.svg`: the top view of a run, with equal scaling on both axes.
+//!
+//! Drawn from the bottom up: contours of the potential field E of the first vehicle (the
+//! firmware's own PDFs: its goal-point attractor plus the stator of every obstacle at its t = 0
+//! position; the rotor term is left out because it is defined relative to the vehicle's
+//! position and changes every step), obstacles at t = 0 (filled) and, for moving ones, a dashed
+//! outline at the end of the run with an arrow, the arrival-radius circles and goals, each
+//! vehicle's trajectory in its own colour with start (dot) and end (heading triangle) markers,
+//! ghost goal-points (hollow diamonds), and rings where a collision episode began.
+//!
+//! E spans many decades near obstacles (the stator grows like e^{A⁺/r²}), so the contours are
+//! drawn in log₁₀(E − E_min + δ), δ being the goal-point's potential rise over a short distance
+//! (so the rings around the goal do not collapse to a point): 18 levels evenly spaced up to the
+//! value exceeded on 10 % of the open water, then one level per decade of E above that (at most
+//! 6), which shows the repulsion's walls as tight rings around the obstacles.
+
+use std::fmt::Write as _;
+
+use super::svg::{self, finite, Frame, PathData, Svg};
+use super::RunOutput;
+use crate::types::{SimObstacle, SimShape, VehicleRecord, P2};
+
+/// Largest plot box, px.
+const MAX_W: f64 = 780.0;
+const MAX_H: f64 = 620.0;
+/// Smallest plot box side, px (a long corridor still gets some height).
+const MIN_SIDE: f64 = 260.0;
+const LEFT: f64 = 80.0;
+const TOP: f64 = 62.0;
+const BOTTOM: f64 = 56.0;
+const LEGEND_W: f64 = 250.0;
+/// Contour levels spaced evenly in log E over the open water.
+const LEVELS: usize = 18;
+/// At most this many more, one per decade of E, for the repulsion near obstacles.
+const DECADES: usize = 6;
+/// Contour grid cell, px.
+const CELL_PX: f64 = 4.0;
+
+/// The plot as SVG text.
+pub fn render(run: &RunOutput) -> String {
+    let t_end = run
+        .vehicles
+        .iter()
+        .flat_map(|v| v.samples.iter().map(|s| s.t))
+        .filter(|t| t.is_finite())
+        .fold(0.0f64, f64::max);
+    let frame = layout(run, t_end);
+    let width = frame.left + frame.width + LEGEND_W;
+    let height = frame.top + frame.height + BOTTOM;
+    let mut s = Svg::new(width, height);
+    defs(&mut s, &frame);
+
+    // Title.
+    let title = if run.scenario_name.is_empty() {
+        "(unnamed scenario)"
+    } else {
+        run.scenario_name.as_str()
+    };
+    s.text(
+        frame.left,
+        24.0,
+        &format!("{title} — top view"),
+        "font-size=\"17\" font-weight=\"bold\"",
+    );
+    let mut sub = format!("firmware: {}", run.firmware);
+    if let Some(v) = run.vehicles.first() {
+        let _ = write!(
+            sub,
+            "; contours: log-compressed potential E of {} (goal + obstacles at t = 0)",
+            if v.name.is_empty() {
+                "(unnamed)"
+            } else {
+                &v.name
+            }
+        );
+    }
+    s.text(frame.left, 43.0, &sub, "font-size=\"12\" fill=\"#555\"");
+
+    let step = svg::nice_step((frame.x1 - frame.x0).max(frame.y1 - frame.y0), 8.0);
+    frame.axes(&mut s, step, step, Some("x [m]"), "y [m]");
+
+    if let Some(v) = run.vehicles.first() {
+        draw_contours(&mut s, &frame, run, v.goal);
+    }
+    for o in &run.obstacles {
+        draw_obstacle(&mut s, &frame, o, t_end);
+    }
+    let r_arr = run.arrival_radius_m;
+    for (i, v) in run.vehicles.iter().enumerate() {
+        draw_goal(&mut s, &frame, v.goal, r_arr, svg::colour(i));
+    }
+    let mut any_collision = false;
+    for (i, v) in run.vehicles.iter().enumerate() {
+        any_collision |= draw_vehicle(&mut s, &frame, v, svg::colour(i));
+    }
+    if run.vehicles.iter().all(|v| v.samples.is_empty()) {
+        s.text(
+            frame.left + frame.width / 2.0,
+            frame.top + 40.0,
+            "no samples recorded",
+            "text-anchor=\"middle\" font-size=\"16\" fill=\"#888\"",
+        );
+    }
+    legend(&mut s, &frame, run, any_collision);
+    s.finish()
+}
+
+/// A data rectangle that holds everything, with equal scaling.
+fn layout(run: &RunOutput, t_end: f64) -> Frame {
+    let mut b = Bounds::default();
+    for o in &run.obstacles {
+        for shift in [P2::default(), o.velocity.scale(t_end)] {
+            match outline(&o.shape, shift) {
+                Outline::Circle(c, r) => b.circle(c, r),
+                Outline::Poly(pts) => pts.iter().for_each(|&p| b.add(p)),
+            }
+        }
+    }
+    let r_arr = if run.arrival_radius_m.is_finite() {
+        run.arrival_radius_m.max(0.0)
+    } else {
+        0.0
+    };
+    for v in &run.vehicles {
+        b.circle(v.goal, r_arr);
+        v.samples.iter().for_each(|s| b.add(s.state.position));
+        v.ghosts.iter().for_each(|&g| b.add(g));
+    }
+    let (mut x0, mut x1, mut y0, mut y1) = b.get().unwrap_or((-10.0, 10.0, -10.0, 10.0));
+    // Margin: 5 % of the larger side, at least 1 m.
+    let pad = (0.05 * (x1 - x0).max(y1 - y0)).max(1.0);
+    x0 -= pad;
+    x1 += pad;
+    y0 -= pad;
+    y1 += pad;
+    let scale = (MAX_W / (x1 - x0)).min(MAX_H / (y1 - y0));
+    // Widen a thin side about its centre so the box keeps a readable size.
+    let widen = |lo: &mut f64, hi: &mut f64| {
+        let px = (*hi - *lo) * scale;
+        if px < MIN_SIDE {
+            let extra = (MIN_SIDE / scale - (*hi - *lo)) / 2.0;
+            *lo -= extra;
+            *hi += extra;
+        }
+    };
+    widen(&mut x0, &mut x1);
+    widen(&mut y0, &mut y1);
+    Frame {
+        left: LEFT,
+        top: TOP,
+        width: (x1 - x0) * scale,
+        height: (y1 - y0) * scale,
+        x0,
+        x1,
+        y0,
+        y1,
+    }
+}
+
+#[derive(Default)]
+struct Bounds(Option<(f64, f64, f64, f64)>);
+
+impl Bounds {
+    fn add(&mut self, p: P2) {
+        // Far-out values (a diverged simulation) would squash the plot to nothing.
+        if !(p.x.is_finite() && p.y.is_finite()) || p.x.abs() > 1e6 || p.y.abs() > 1e6 {
+            return;
+        }
+        self.0 = Some(match self.0 {
+            None => (p.x, p.x, p.y, p.y),
+            Some((a, b, c, d)) => (a.min(p.x), b.max(p.x), c.min(p.y), d.max(p.y)),
+        });
+    }
+    fn circle(&mut self, c: P2, r: f64) {
+        let r = if r.is_finite() { r.abs() } else { 0.0 };
+        self.add(c.sub(P2::new(r, r)));
+        self.add(c.add(P2::new(r, r)));
+    }
+    fn get(&self) -> Option<(f64, f64, f64, f64)> {
+        self.0
+    }
+}
+
+/// An obstacle's outline in the world frame.
+enum Outline {
+    Circle(P2, f64),
+    Poly(Vec<P2>),
+}
+
+fn outline(shape: &SimShape, shift: P2) -> Outline {
+    match shape {
+        SimShape::Circle { center, radius } => Outline::Circle(center.add(shift), *radius),
+        SimShape::Rectangle {
+            center,
+            half_size,
+            angle,
+        } => {
+            let (sn, cs) = angle.sin_cos();
+            let corners = [(1.0, 1.0), (-1.0, 1.0), (-1.0, -1.0), (1.0, -1.0)];
+            Outline::Poly(
+                corners
+                    .iter()
+                    .map(|&(a, b)| {
+                        let (lx, ly) = (a * half_size.x, b * half_size.y);
+                        P2::new(
+                            center.x + shift.x + cs * lx - sn * ly,
+                            center.y + shift.y + sn * lx + cs * ly,
+                        )
+                    })
+                    .collect(),
+            )
+        }
+        SimShape::Polygon { points } => {
+            Outline::Poly(points.iter().map(|p| p.add(shift)).collect())
+        }
+    }
+}
+
+fn shape_center(shape: &SimShape) -> P2 {
+    match shape {
+        SimShape::Circle { center, .. } | SimShape::Rectangle { center, .. } => *center,
+        SimShape::Polygon { points } if !points.is_empty() => points
+            .iter()
+            .fold(P2::default(), |a, &p| a.add(p))
+            .scale(1.0 / points.len() as f64),
+        SimShape::Polygon { .. } => P2::new(f64::NAN, f64::NAN),
+    }
+}
+
+fn defs(s: &mut Svg, f: &Frame) {
+    s.raw(&format!(
+        "<defs>\n\
+         <marker id=\"arrow\" viewBox=\"0 0 10 10\" refX=\"9\" refY=\"5\" markerWidth=\"7\" \
+         markerHeight=\"7\" orient=\"auto\"><path d=\"M0 0L10 5L0 10z\" fill=\"#555\"/></marker>\n\
+         <linearGradient id=\"fieldramp\" x1=\"0\" y1=\"0\" x2=\"1\" y2=\"0\">\
+         <stop offset=\"0\" stop-color=\"{}\"/><stop offset=\"0.5\" stop-color=\"{}\"/>\
+         <stop offset=\"1\" stop-color=\"{}\"/></linearGradient>\n\
+         <clipPath id=\"plotbox\"><rect x=\"{:.2}\" y=\"{:.2}\" width=\"{:.2}\" height=\"{:.2}\"/></clipPath>\n\
+         </defs>\n",
+        ramp(0.0),
+        ramp(0.5),
+        ramp(1.0),
+        f.left,
+        f.top,
+        f.width,
+        f.height
+    ));
+}
+
+/// Contour colour for a level fraction in [0, 1]: blue (low, the goal's basin) through violet
+/// to orange (high, near obstacles).
+fn ramp(t: f64) -> String {
+    let t = if t.is_finite() {
+        t.clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    let stops = [
+        (40.0, 100.0, 190.0),
+        (140.0, 90.0, 170.0),
+        (225.0, 120.0, 30.0),
+    ];
+    let (a, b, u) = if t < 0.5 {
+        (stops[0], stops[1], t * 2.0)
+    } else {
+        (stops[1], stops[2], t * 2.0 - 1.0)
+    };
+    let mix = |x: f64, y: f64| (x + (y - x) * u).round() as u8;
+    format!(
+        "#{:02x}{:02x}{:02x}",
+        mix(a.0, b.0),
+        mix(a.1, b.1),
+        mix(a.2, b.2)
+    )
+}
+
+/// The firmware's view of the scenario's obstacles (at t = 0, charted, with the run's A⁺);
+/// shapes the firmware cannot represent (e.g. a polygon of more than 8 vertices) are skipped.
+pub fn field_obstacles(obstacles: &[SimObstacle], a_plus: f32) -> Vec<vpf::Obstacle> {
+    obstacles
+        .iter()
+        .enumerate()
+        .filter_map(|(i, o)| {
+            let shape = vpf_shape(&o.shape)?;
+            let id = u16::try_from(i).ok()?;
+            vpf::Obstacle::new(id, shape, a_plus, vpf::Origin::Charted, 0).ok()
+        })
+        .collect()
+}
+
+fn vpf_shape(s: &SimShape) -> Option<vpf::field::Shape> {
+    use vpf::field::Shape;
+    match s {
+        SimShape::Circle { center, radius } => Shape::circle(center.to_vpf(), *radius as f32),
+        SimShape::Rectangle {
+            center,
+            half_size,
+            angle,
+        } => Shape::rectangle(center.to_vpf(), half_size.to_vpf(), *angle as f32),
+        SimShape::Polygon { points } => {
+            let pts: Vec<vpf::Vec2> = points.iter().map(|p| p.to_vpf()).collect();
+            Shape::polygon(&pts)
+        }
+    }
+    .ok()
+}
+
+/// E(p) without the rotor: goal-point attractor plus every obstacle's stator (as the
+/// firmware's `planner::gradient::Field::potential` sums them).
+pub fn potential(obstacles: &[vpf::Obstacle], goal: &vpf::field::GoalPdf, p: P2) -> f64 {
+    let x = p.to_vpf();
+    let mut e = goal.potential(x);
+    for o in obstacles {
+        e += o.stator().potential(o.shape.signed_distance(x));
+    }
+    f64::from(e)
+}
+
+fn draw_contours(s: &mut Svg, f: &Frame, run: &RunOutput, goal: P2) {
+    let p = &run.params;
+    let obstacles = field_obstacles(&run.obstacles, p.a_plus);
+    let gpdf = vpf::field::GoalPdf::new(goal.to_vpf(), p.a_minus, p.sigma_m);
+    let nx = ((f.width / CELL_PX).round() as usize).clamp(8, 300);
+    let ny = ((f.height / CELL_PX).round() as usize).clamp(8, 300);
+    let (hx, hy) = ((f.x1 - f.x0) / nx as f64, (f.y1 - f.y0) / ny as f64);
+    let at = |i: usize, j: usize| P2::new(f.x0 + i as f64 * hx, f.y0 + j as f64 * hy);
+    let mut e = Vec::with_capacity((nx + 1) * (ny + 1));
+    let mut outside = Vec::with_capacity(e.capacity());
+    for j in 0..=ny {
+        for i in 0..=nx {
+            let q = at(i, j);
+            e.push(potential(&obstacles, &gpdf, q));
+            let qv = q.to_vpf();
+            outside.push(obstacles.iter().all(|o| o.shape.signed_distance(qv) > 0.0));
+        }
+    }
+    let Some(e_min) = e.iter().copied().filter(|x| x.is_finite()).reduce(f64::min) else {
+        return;
+    };
+    // δ: the attractor's rise over d₀, a short distance from the goal.
+    let diag = (f.x1 - f.x0).hypot(f.y1 - f.y0);
+    let r_arr = run.arrival_radius_m;
+    let d0 = if r_arr.is_finite() && r_arr > 0.0 {
+        r_arr.max(diag / 30.0)
+    } else {
+        diag / 30.0
+    };
+    let sigma = f64::from(p.sigma_m);
+    let mut delta = f64::from(p.a_minus) * (1.0 - (-d0 * d0 / (2.0 * sigma * sigma)).exp());
+    if !(delta.is_finite() && delta > 0.0) {
+        delta = 1e-3 * e_min.abs().max(1.0);
+    }
+    let v: Vec<f64> = e.iter().map(|&x| (x - e_min + delta).log10()).collect();
+    let v_lo = delta.log10();
+    // Levels: evenly in log over [v_lo, v_mid], where v_mid is exceeded on only 10 % of the
+    // open water (mostly the obstacles' shells), then one per decade up to nearly the highest
+    // value outside the obstacles (inside, the clamped stator would spend every level on the
+    // surface). The attractor's basin gets most lines; the repulsion's decades show as rings.
+    let mut out_vals: Vec<f64> = v
+        .iter()
+        .zip(&outside)
+        .filter(|(x, o)| **o && x.is_finite())
+        .map(|(x, _)| *x)
+        .collect();
+    out_vals.sort_by(f64::total_cmp);
+    let quantile = |q: f64| {
+        let i = ((out_vals.len().saturating_sub(1)) as f64 * q) as usize;
+        out_vals.get(i).copied()
+    };
+    let (Some(v_mid), Some(v_top)) = (quantile(0.9), quantile(0.995)) else {
+        return;
+    };
+    if v_mid.is_nan() || v_mid <= v_lo {
+        return;
+    }
+    let mut levels: Vec<(f64, f64)> = (0..LEVELS)
+        .map(|k| {
+            let frac = (k as f64 + 0.5) / LEVELS as f64;
+            (v_lo + frac * (v_mid - v_lo), 0.75 * frac)
+        })
+        .collect();
+    let first_decade = (v_mid + 0.3).ceil();
+    let decades = ((v_top - first_decade).floor().max(-1.0) + 1.0) as usize;
+    for k in 0..decades.min(DECADES) {
+        let frac = 0.8 + 0.2 * k as f64 / (DECADES - 1) as f64;
+        levels.push((first_decade + k as f64, frac));
+    }
+    s.raw("<g clip-path=\"url(#plotbox)\" fill=\"none\" stroke-width=\"0.9\" stroke-opacity=\"0.7\" stroke-linecap=\"round\">\n");
+    for (level, colour_frac) in levels {
+        let mut d = PathData::with_decimals(1);
+        marching_squares(&v, nx, ny, level, |a, b| {
+            d.segment(
+                (f.px(f.x0 + a.0 * hx), f.py(f.y0 + a.1 * hy)),
+                (f.px(f.x0 + b.0 * hx), f.py(f.y0 + b.1 * hy)),
+            );
+        });
+        s.path(&d, &format!("stroke=\"{}\"", ramp(colour_frac)));
+    }
+    s.raw("</g>\n");
+}
+
+/// Iso-line segments of `level` over a grid of (nx + 1) × (ny + 1) values (row-major, x fastest),
+/// in grid coordinates (i, j). Cells with a non-finite corner are skipped; saddles are resolved
+/// by the cell's mean.
+pub fn marching_squares(
+    values: &[f64],
+    nx: usize,
+    ny: usize,
+    level: f64,
+    mut emit: impl FnMut((f64, f64), (f64, f64)),
+) {
+    if values.len() != (nx + 1) * (ny + 1) || !level.is_finite() {
+        return;
+    }
+    let val = |i: usize, j: usize| values.get(j * (nx + 1) + i).copied().unwrap_or(f64::NAN);
+    // Where the level crosses the edge from p (value a) to q (value b).
+    let cross = |p: (f64, f64), a: f64, q: (f64, f64), b: f64| {
+        let t = if b != a {
+            ((level - a) / (b - a)).clamp(0.0, 1.0)
+        } else {
+            0.5
+        };
+        (p.0 + t * (q.0 - p.0), p.1 + t * (q.1 - p.1))
+    };
+    for j in 0..ny {
+        for i in 0..nx {
+            // Corners counter-clockwise from bottom-left.
+            let (a, b, c, d) = (val(i, j), val(i + 1, j), val(i + 1, j + 1), val(i, j + 1));
+            if !finite(&[a, b, c, d]) {
+                continue;
+            }
+            let idx = usize::from(a >= level)
+                | usize::from(b >= level) << 1
+                | usize::from(c >= level) << 2
+                | usize::from(d >= level) << 3;
+            if idx == 0 || idx == 15 {
+                continue;
+            }
+            let (x, y) = (i as f64, j as f64);
+            let pa = (x, y);
+            let pb = (x + 1.0, y);
+            let pc = (x + 1.0, y + 1.0);
+            let pd = (x, y + 1.0);
+            let bottom = || cross(pa, a, pb, b);
+            let right = || cross(pb, b, pc, c);
+            let top = || cross(pd, d, pc, c);
+            let left = || cross(pa, a, pd, d);
+            let centre_high = (a + b + c + d) / 4.0 >= level;
+            match idx {
+                1 | 14 => emit(left(), bottom()),
+                2 | 13 => emit(bottom(), right()),
+                3 | 12 => emit(left(), right()),
+                4 | 11 => emit(right(), top()),
+                6 | 9 => emit(bottom(), top()),
+                7 | 8 => emit(left(), top()),
+                // Saddles: a and c high (5) or b and d high (10). The segments cut off the
+                // two corners that are not connected through the centre.
+                5 | 10 => {
+                    let cut_b_and_d = (idx == 5) == centre_high;
+                    if cut_b_and_d {
+                        emit(bottom(), right());
+                        emit(top(), left());
+                    } else {
+                        emit(left(), bottom());
+                        emit(right(), top());
+                    }
+                }
+                _ => {}
+            }
+        }
+    }
+}
+
+fn page_points(f: &Frame, pts: &[P2]) -> Vec<(f64, f64)> {
+    pts.iter().map(|p| (f.px(p.x), f.py(p.y))).collect()
+}
+
+fn draw_obstacle(s: &mut Svg, f: &Frame, o: &SimObstacle, t_end: f64) {
+    let fill = "fill=\"#b8b8b8\" stroke=\"#444\" stroke-width=\"1.2\"";
+    let ghost =
+        "fill=\"none\" stroke=\"#666\" stroke-width=\"1\" stroke-dasharray=\"4 3\" opacity=\"0.8\"";
+    let shift = o.velocity.scale(t_end);
+    let moving = shift.norm() > 1e-9;
+    let shapes: &[(P2, &str)] = if moving {
+        &[(shift, ghost), (P2::default(), fill)]
+    } else {
+        &[(P2::default(), fill)]
+    };
+    for &(d, style) in shapes {
+        match outline(&o.shape, d) {
+            Outline::Circle(c, r) => s.circle(f.px(c.x), f.py(c.y), r.abs() * f.sx(), style),
+            Outline::Poly(pts) => s.polygon(&page_points(f, &pts), style),
+        }
+    }
+    if moving {
+        let c0 = shape_center(&o.shape);
+        let c1 = c0.add(shift);
+        s.line(
+            f.px(c0.x),
+            f.py(c0.y),
+            f.px(c1.x),
+            f.py(c1.y),
+            "stroke=\"#555\" stroke-width=\"1.3\" marker-end=\"url(#arrow)\"",
+        );
+    }
+}
+
+fn draw_goal(s: &mut Svg, f: &Frame, g: P2, r: f64, colour: &str) {
+    let (x, y) = (f.px(g.x), f.py(g.y));
+    if r.is_finite() && r > 0.0 {
+        s.circle(
+            x,
+            y,
+            r * f.sx(),
+            &format!("fill=\"{colour}\" fill-opacity=\"0.08\" stroke=\"{colour}\" stroke-dasharray=\"3 3\""),
+        );
+    }
+    let k = 6.0;
+    let st = format!("stroke=\"{colour}\" stroke-width=\"2.2\"");
+    s.line(x - k, y - k, x + k, y + k, &st);
+    s.line(x - k, y + k, x + k, y - k, &st);
+}
+
+fn diamond(s: &mut Svg, x: f64, y: f64, k: f64, attrs: &str) {
+    s.polygon(&[(x, y - k), (x + k, y), (x, y + k), (x - k, y)], attrs);
+}
+
+fn heading_triangle(s: &mut Svg, x: f64, y: f64, psi: f64, attrs: &str) {
+    // Page y points down, so the heading's page direction is (cos ψ, −sin ψ).
+    let (sn, cs) = psi.sin_cos();
+    let (dx, dy) = (cs, -sn);
+    let (nx, ny) = (-dy, dx);
+    s.polygon(
+        &[
+            (x + 11.0 * dx, y + 11.0 * dy),
+            (x - 5.0 * dx + 5.0 * nx, y - 5.0 * dy + 5.0 * ny),
+            (x - 5.0 * dx - 5.0 * nx, y - 5.0 * dy - 5.0 * ny),
+        ],
+        attrs,
+    );
+}
+
+/// Draws a vehicle; returns whether it had a collision.
+fn draw_vehicle(s: &mut Svg, f: &Frame, v: &VehicleRecord, colour: &str) -> bool {
+    let mut d = PathData::new();
+    for smp in &v.samples {
+        let p = smp.state.position;
+        d.to(f.px(p.x), f.py(p.y));
+    }
+    s.path(
+        &d,
+        &format!("fill=\"none\" stroke=\"{colour}\" stroke-width=\"2\" stroke-linejoin=\"round\""),
+    );
+    for g in &v.ghosts {
+        diamond(
+            s,
+            f.px(g.x),
+            f.py(g.y),
+            6.0,
+            &format!(
+                "fill=\"white\" fill-opacity=\"0.6\" stroke=\"{colour}\" stroke-width=\"1.8\""
+            ),
+        );
+    }
+    let pos_ok = |p: P2| finite(&[p.x, p.y]);
+    if let Some(first) = v.samples.iter().find(|x| pos_ok(x.state.position)) {
+        let p = first.state.position;
+        s.circle(
+            f.px(p.x),
+            f.py(p.y),
+            5.0,
+            &format!("fill=\"{colour}\" stroke=\"white\" stroke-width=\"1.5\""),
+        );
+    }
+    if let Some(last) = v.samples.iter().rev().find(|x| pos_ok(x.state.position)) {
+        let p = last.state.position;
+        let psi = if last.state.heading.is_finite() {
+            last.state.heading
+        } else {
+            0.0
+        };
+        heading_triangle(
+            s,
+            f.px(p.x),
+            f.py(p.y),
+            psi,
+            &format!("fill=\"{colour}\" stroke=\"white\" stroke-width=\"1\""),
+        );
+    }
+    // A ring where each collision episode began.
+    let mut colliding = false;
+    let mut any = false;
+    for smp in &v.samples {
+        let c = smp.nearest_m;
+        if c.is_nan() {
+            continue;
+        }
+        if c < 0.0 && !colliding {
+            let p = smp.state.position;
+            s.circle(
+                f.px(p.x),
+                f.py(p.y),
+                8.0,
+                "fill=\"none\" stroke=\"#e00000\" stroke-width=\"2.5\"",
+            );
+            any = true;
+        }
+        colliding = c < 0.0;
+    }
+    any
+}
+
+fn legend(s: &mut Svg, f: &Frame, run: &RunOutput, any_collision: bool) {
+    let x = f.left + f.width + 22.0;
+    let mut y = f.top + 8.0;
+    let tx = x + 34.0;
+    let text = |s: &mut Svg, y: f64, t: &str| s.text(tx, y + 4.0, t, "fill=\"#222\"");
+    s.text(x, y, "Legend", "font-weight=\"bold\"");
+    y += 20.0;
+    for (i, v) in run.vehicles.iter().enumerate() {
+        let c = svg::colour(i);
+        s.line(
+            x,
+            y,
+            x + 24.0,
+            y,
+            &format!("stroke=\"{c}\" stroke-width=\"3\""),
+        );
+        let name = if v.name.is_empty() {
+            "(unnamed)"
+        } else {
+            &v.name
+        };
+        text(s, y, name);
+        y += 18.0;
+    }
+    y += 6.0;
+    let grey = "#555";
+    s.circle(
+        x + 12.0,
+        y,
+        5.0,
+        &format!("fill=\"{grey}\" stroke=\"white\" stroke-width=\"1.5\""),
+    );
+    text(s, y, "start");
+    y += 18.0;
+    heading_triangle(s, x + 10.0, y, 0.0, &format!("fill=\"{grey}\""));
+    text(s, y, "end, pointing along heading");
+    y += 18.0;
+    draw_legend_goal(s, x + 12.0, y);
+    let arr = run.arrival_radius_m;
+    if arr.is_finite() {
+        text(s, y, &format!("goal, arrival radius {arr} m"));
+    } else {
+        text(s, y, "goal");
+    }
+    y += 18.0;
+    diamond(
+        s,
+        x + 12.0,
+        y,
+        6.0,
+        &format!("fill=\"white\" stroke=\"{grey}\" stroke-width=\"1.8\""),
+    );
+    text(s, y, "ghost goal-point");
+    y += 18.0;
+    s.rect(
+        x + 2.0,
+        y - 7.0,
+        20.0,
+        14.0,
+        "fill=\"#b8b8b8\" stroke=\"#444\" stroke-width=\"1.2\"",
+    );
+    text(s, y, "obstacle at t = 0");
+    y += 18.0;
+    s.rect(
+        x + 2.0,
+        y - 7.0,
+        20.0,
+        14.0,
+        "fill=\"none\" stroke=\"#666\" stroke-dasharray=\"4 3\"",
+    );
+    text(s, y, "moving obstacle at the end");
+    y += 18.0;
+    if any_collision {
+        s.circle(
+            x + 12.0,
+            y,
+            7.0,
+            "fill=\"none\" stroke=\"#e00000\" stroke-width=\"2.5\"",
+        );
+        text(s, y, "collision");
+        y += 18.0;
+    }
+    if !run.vehicles.is_empty() {
+        y += 8.0;
+        s.text(x, y, "potential field contours", "fill=\"#222\"");
+        y += 10.0;
+        s.rect(x, y, 150.0, 10.0, "fill=\"url(#fieldramp)\"");
+        y += 24.0;
+        s.text(x, y, "low (goal)", "font-size=\"11\" fill=\"#555\"");
+        s.text(
+            x + 150.0,
+            y,
+            "high (obstacles)",
+            "font-size=\"11\" fill=\"#555\" text-anchor=\"end\"",
+        );
+        y += 16.0;
+        for line in [
+            "levels: even in log₁₀(E − E_min + δ),",
+            "then one per decade of E",
+        ] {
+            s.text(x, y, line, "font-size=\"11\" fill=\"#555\"");
+            y += 14.0;
+        }
+    }
+}
+
+fn draw_legend_goal(s: &mut Svg, x: f64, y: f64) {
+    s.circle(
+        x,
+        y,
+        8.0,
+        "fill=\"#555\" fill-opacity=\"0.08\" stroke=\"#555\" stroke-dasharray=\"3 3\"",
+    );
+    let st = "stroke=\"#555\" stroke-width=\"2.2\"";
+    s.line(x - 5.0, y - 5.0, x + 5.0, y + 5.0, st);
+    s.line(x - 5.0, y + 5.0, x + 5.0, y - 5.0, st);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::output::svg::check::well_formed;
+    use crate::output::test_support;
+    use crate::types::VehicleRecord;
+
+    #[test]
+    fn marching_squares_traces_a_circle() {
+        // Cone |p − (10, 10)| on a 20 × 20 grid: the level-5 line is a circle of radius 5.
+        let n = 20;
+        let v: Vec<f64> = (0..=n)
+            .flat_map(|j| (0..=n).map(move |i| (i as f64 - 10.0).hypot(j as f64 - 10.0)))
+            .collect();
+        let mut segs = 0;
+        marching_squares(&v, n, n, 5.0, |a, b| {
+            segs += 1;
+            for p in [a, b] {
+                let r = (p.0 - 10.0).hypot(p.1 - 10.0);
+                assert!((r - 5.0).abs() < 0.15, "{p:?} at r = {r}");
+            }
+        });
+        assert!(segs > 20, "{segs}");
+        // A wrong length or a NaN level draws nothing rather than panicking.
+        marching_squares(&v[1..], n, n, 5.0, |_, _| panic!("drew"));
+        marching_squares(&v, n, n, f64::NAN, |_, _| panic!("drew"));
+    }
+
+    #[test]
+    fn field_matches_the_firmware_pdfs() {
+        let run = test_support::run();
+        let obs = field_obstacles(&run.obstacles, run.params.a_plus);
+        assert_eq!(obs.len(), 3);
+        let g = vpf::field::GoalPdf::new(vpf::Vec2::new(10.0, 0.0), 50.0, 40.0);
+        // At the goal: −A⁻ plus a little repulsion; near the circle: large.
+        let at_goal = potential(&obs, &g, P2::new(10.0, 0.0));
+        assert!((-50.0..-45.0).contains(&at_goal), "{at_goal}");
+        let near = potential(&obs, &g, P2::new(6.1, 0.5));
+        assert!(near > 100.0, "{near}");
+    }
+
+    #[test]
+    fn plot_is_well_formed_and_has_its_parts() {
+        let svg = render(&test_support::run());
+        well_formed(&svg);
+        assert!(svg.contains("two &lt;vehicles&gt; &amp; rocks"));
+        assert!(
+            svg.contains("marker-end=\"url(#arrow)\""),
+            "moving obstacle arrow"
+        );
+        assert!(
+            svg.matches("<path d=").count() > 10,
+            "contours and trajectories"
+        );
+        assert!(svg.contains(">alpha<") && svg.contains(">beta<"));
+    }
+
+    #[test]
+    fn plot_survives_empty_and_nan_input() {
+        let mut run = test_support::run();
+        run.vehicles[0].samples[5].state.position = P2::new(f64::NAN, 1.0);
+        run.vehicles[0].samples[6].nearest_m = f64::NAN;
+        run.vehicles[1].samples[0].state.heading = f64::NAN;
+        run.vehicles[1].ghosts.push(P2::new(f64::INFINITY, 0.0));
+        run.obstacles.push(SimObstacle {
+            shape: SimShape::Polygon { points: vec![] },
+            velocity: P2::new(1.0, 0.0),
+        });
+        run.arrival_radius_m = f64::NAN;
+        well_formed(&render(&run));
+
+        run.vehicles.clear();
+        run.obstacles.clear();
+        well_formed(&render(&run));
+
+        run.vehicles.push(VehicleRecord::default());
+        run.params.sigma_m = 0.0;
+        let svg = render(&run);
+        well_formed(&svg);
+        assert!(svg.contains("no samples recorded"));
+    }
+}

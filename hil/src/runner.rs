@@ -1,0 +1,445 @@
+//! Runs a scenario: one firmware per vehicle, the simulated world in between.
+//!
+//! Per period k (t = k·dt), for every vehicle: sample its navigation sensors and send `Nav`,
+//! send the sonar pings that came due (or the contacts), and in lockstep send `Tick(t)`; then
+//! collect each firmware's command for t, step each vehicle model by dt tracking it, and record.
+//! In lockstep the same scenario and seed give the same outputs, bit for bit, as fast as the
+//! firmware answers. In real time the firmware keeps its own clock, the loop is paced by the
+//! wall clock, and each vehicle follows the newest command it has.
+//!
+//! The vehicles do not talk to each other: each firmware sees the others only through its sonar
+//! (or contacts), and as agents for formation keeping when the scenario gives a formation.
+
+use std::io::IsTerminal;
+use std::path::PathBuf;
+use std::time::{Duration, Instant};
+
+use vpf::link::{ContactList, ContactsRepr, Message, NavRepr, ReplyStatus, TickRepr};
+use vpf::planner::NavState;
+use vpf::Mission;
+
+use crate::faults::{FaultCounts, FaultTap};
+use crate::firmware::{self, Firmware, Reply, Target};
+use crate::output::{self, FrameLog, RunOutput, Summary};
+use crate::scenario::{RunMode, Scenario, Sensing, Window};
+use crate::sim::nav::{NavConfig, NavSensor};
+use crate::sim::sonar::{self as sonar_sim, OtherVehicle, Sonar, SonarConfig};
+use crate::sim::vehicle::{new_model, ModelKind, VehicleModel};
+use crate::types::{SetPoints, VehicleRecord, VehicleState, P2};
+
+/// How long to wait for a period's command before sending its `Tick` again (a Tick lost to a
+/// link fault is otherwise never answered).
+pub const TICK_RETRY: Duration = Duration::from_millis(300);
+/// How many times a `Tick` is sent before the firmware is given up on.
+pub const TICK_ATTEMPTS: u32 = 30;
+
+/// Radius of a vehicle's hull for clearance and collisions, m (a kinematic vehicle is a
+/// point, as in seed 000; a VideoRay Pro III is about 0.36 m × 0.22 m).
+pub fn hull_radius(model: ModelKind) -> f64 {
+    match model {
+        ModelKind::Kinematic => 0.0,
+        ModelKind::VideoRay => 0.2,
+    }
+}
+
+/// How to run.
+#[derive(Clone, Debug)]
+pub struct RunConfig {
+    /// Which firmware.
+    pub target: Target,
+    /// Where the outputs go.
+    pub out_dir: PathBuf,
+    /// Show a progress bar on a terminal.
+    pub progress: bool,
+}
+
+/// Why a run failed.
+#[derive(Debug)]
+pub enum RunError {
+    /// Building, starting or talking to a firmware failed.
+    Firmware(String),
+    /// The firmware refused the scenario's parameters or mission.
+    Refused(String),
+    /// Writing the outputs failed.
+    Output(std::io::Error),
+}
+
+impl std::fmt::Display for RunError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            RunError::Firmware(m) => write!(f, "firmware: {m}"),
+            RunError::Refused(m) => write!(f, "the firmware refused {m}"),
+            RunError::Output(e) => write!(f, "writing outputs: {e}"),
+        }
+    }
+}
+
+impl std::error::Error for RunError {}
+
+fn fw_err(e: std::io::Error) -> RunError {
+    RunError::Firmware(e.to_string())
+}
+
+/// One simulated vehicle and its firmware.
+struct Sim {
+    model: Box<dyn VehicleModel>,
+    kind: ModelKind,
+    nav: NavSensor,
+    sonar: Sonar,
+    sensing: Sensing,
+    fw: Firmware,
+    tap: FaultTap,
+    record: VehicleRecord,
+    setpoints: SetPoints,
+    /// `Tick`s sent again because no command came back in time.
+    tick_retries: u32,
+    /// Navigation samples waiting out the configured delay: (due time, sample).
+    delayed: std::collections::VecDeque<(f64, NavState)>,
+    frozen: Option<NavState>,
+}
+
+/// The result of a run: what was written, and the fault counts per vehicle.
+pub struct RunResult {
+    /// Everything recorded.
+    pub output: RunOutput,
+    /// The per-vehicle metrics and the printable summary.
+    pub summary: Summary,
+    /// Link faults injected, per vehicle.
+    pub faults: Vec<FaultCounts>,
+    /// `Tick`s sent again per vehicle (a lost Tick, or a slow firmware).
+    pub tick_retries: Vec<u32>,
+}
+
+/// Runs `sc` and writes its outputs to `cfg.out_dir`.
+pub fn run(sc: &Scenario, cfg: &RunConfig) -> Result<RunResult, RunError> {
+    std::fs::create_dir_all(&cfg.out_dir).map_err(RunError::Output)?;
+    let binary = firmware::build(&cfg.target).map_err(fw_err)?;
+    let mut params = sc.params;
+    params.period_s = sc.dt_s as f32;
+
+    let mut sims = Vec::new();
+    for (i, v) in sc.vehicles.iter().enumerate() {
+        let fw = Firmware::start(&cfg.target, &binary).map_err(fw_err)?;
+        let log = FrameLog::create(&cfg.out_dir, &v.name).map_err(RunError::Output)?;
+        let seed = sc.seed.wrapping_add(1000 * i as u64);
+        let nav = NavSensor::new(NavConfig {
+            position_sigma_m: sc.navigation.position_sigma_m,
+            heading_sigma_rad: sc.navigation.heading_sigma,
+            velocity_sigma: 0.0,
+            rate_hz: sc.navigation.rate_hz,
+            seed,
+        });
+        let sonar = Sonar::new(SonarConfig {
+            range_m: sc.sonar.range_m,
+            bins: usize::from(sc.sonar.bins),
+            step_deg: sc.sonar.step.to_degrees(),
+            // The sonar's background is exponential with this mean; past ~30 it floods every bin.
+            noise_level: sc.sonar.noise * 30.0,
+            speckle_prob: sc.sonar.speckle,
+            seed: seed.wrapping_add(7),
+            ..SonarConfig::default()
+        });
+        sims.push(Sim {
+            model: new_model(v.model, v.start, v.heading),
+            kind: v.model,
+            nav,
+            sonar,
+            sensing: v.sensing,
+            fw,
+            tap: FaultTap::new(
+                sc.faults.bit_error_rate,
+                sc.faults.drop_rate,
+                seed.wrapping_add(13),
+                Some(log),
+            ),
+            record: VehicleRecord {
+                name: v.name.clone(),
+                goal: v.goal,
+                ..VehicleRecord::default()
+            },
+            setpoints: SetPoints {
+                psi: v.heading,
+                ..SetPoints::default()
+            },
+            tick_retries: 0,
+            delayed: Default::default(),
+            frozen: None,
+        });
+    }
+
+    // Parameters and missions go out first; the firmware answers them at its next period.
+    for (s, v) in sims.iter_mut().zip(&sc.vehicles) {
+        let mission = Mission {
+            goal: v.goal.to_vpf(),
+            formation: v.formation,
+        };
+        // Requests are sent without faults: a scenario's set-up is not what a fault run tests.
+        let mut clean = crate::firmware::NoTap;
+        s.fw.send(&Message::Params(params), &mut clean)
+            .map_err(fw_err)?;
+        s.fw.send(&Message::Mission(mission), &mut clean)
+            .map_err(fw_err)?;
+    }
+
+    let steps = (sc.duration_s / sc.dt_s).round().max(1.0) as u64;
+    let started = Instant::now();
+    let show = cfg.progress && std::io::stderr().is_terminal();
+    let mut replies_checked = vec![false; sims.len()];
+    for k in 0..steps {
+        let t = k as f64 * sc.dt_s;
+        let t_ms = (t * 1000.0).round() as u64;
+        let fleet: Vec<OtherVehicle> = sims
+            .iter()
+            .enumerate()
+            .map(|(i, s)| {
+                let st = s.model.state();
+                OtherVehicle {
+                    // Vehicle contact ids sit above the obstacles' (one per obstacle index).
+                    id: 0x8000 + i as u16,
+                    position: st.position,
+                    velocity: st.velocity,
+                    hull_radius: hull_radius(s.kind),
+                }
+            })
+            .collect();
+        for (i, s) in sims.iter_mut().enumerate() {
+            s.tap.t = t;
+            let truth = s.model.state();
+            let others: Vec<OtherVehicle> = fleet
+                .iter()
+                .enumerate()
+                .filter(|(j, _)| *j != i)
+                .map(|(_, o)| *o)
+                .collect();
+            send_sensors(s, sc, t, t_ms, &truth, &others)?;
+            if sc.mode == RunMode::Lockstep {
+                s.fw.send(&Message::Tick(TickRepr { time_ms: t_ms }), &mut s.tap)
+                    .map_err(fw_err)?;
+            }
+        }
+        if sc.mode == RunMode::Realtime {
+            let due = Duration::from_secs_f64(t + sc.dt_s);
+            if let Some(wait) = due.checked_sub(started.elapsed()) {
+                std::thread::sleep(wait);
+            }
+        }
+        let hulls: Vec<(P2, f64)> = fleet.iter().map(|o| (o.position, o.hull_radius)).collect();
+        for (i, s) in sims.iter_mut().enumerate() {
+            collect(s, sc.mode, t_ms, &mut replies_checked[i])?;
+            let state = s.model.state();
+            let near = nearest(sc, t, &state, hull_radius(s.kind), &hulls, i);
+            if let Some(last) = s.record.samples.last_mut() {
+                last.t = t;
+                last.state = state;
+                last.nearest_m = near;
+            }
+            s.model.step(sc.dt_s, &s.setpoints, sc.current.velocity);
+        }
+        if show && (k % 50 == 0 || k + 1 == steps) {
+            progress(k + 1, steps, t);
+        }
+    }
+    if show {
+        eprintln!();
+    }
+
+    let faults = sims.iter().map(|s| s.tap.counts).collect();
+    let tick_retries = sims.iter().map(|s| s.tick_retries).collect();
+    let vehicles: Vec<VehicleRecord> = sims.into_iter().map(|s| s.record).collect();
+    let output = RunOutput {
+        scenario_name: sc.name.clone(),
+        dt_s: sc.dt_s,
+        obstacles: sc.obstacles.clone(),
+        vehicles,
+        firmware: cfg.target.to_string(),
+        arrival_radius_m: f64::from(params.arrival_radius_m),
+        params,
+    };
+    let summary = output::write_all(&cfg.out_dir, &output).map_err(RunError::Output)?;
+    Ok(RunResult {
+        output,
+        summary,
+        faults,
+        tick_retries,
+    })
+}
+
+/// Sends this period's navigation and sonar, with the scenario's sensor faults.
+fn send_sensors(
+    s: &mut Sim,
+    sc: &Scenario,
+    t: f64,
+    t_ms: u64,
+    truth: &VehicleState,
+    others: &[OtherVehicle],
+) -> Result<(), RunError> {
+    let in_window = |w: &Option<Window>| w.as_ref().is_some_and(|w| w.contains(t));
+    let fresh = s.nav.sample(t, truth);
+    let nav = if in_window(&sc.faults.nav_freeze) {
+        *s.frozen.get_or_insert(fresh)
+    } else {
+        s.frozen = None;
+        fresh
+    };
+    s.delayed
+        .push_back((t + sc.faults.nav_delay_ms / 1000.0, nav));
+    let mut latest = None;
+    while s.delayed.front().is_some_and(|(due, _)| *due <= t + 1e-9) {
+        latest = s.delayed.pop_front().map(|(_, n)| n);
+    }
+    if let (Some(nav), false) = (latest, in_window(&sc.faults.nav_loss)) {
+        let m = Message::Nav(NavRepr {
+            time_ms: t_ms,
+            nav,
+            body: None,
+        });
+        s.fw.send(&m, &mut s.tap).map_err(fw_err)?;
+    }
+    if in_window(&sc.faults.sonar_dropout) {
+        return Ok(());
+    }
+    match s.sensing {
+        Sensing::Sonar => {
+            let hulls: Vec<(P2, f64)> =
+                others.iter().map(|o| (o.position, o.hull_radius)).collect();
+            for ping in s.sonar.poll(t, truth, &sc.obstacles, &hulls) {
+                s.fw.send(&Message::Scanline(ping.as_scanline()), &mut s.tap)
+                    .map_err(fw_err)?;
+            }
+        }
+        Sensing::Contacts => {
+            let found = sonar_sim::contacts(t, truth, &sc.obstacles, others, sc.sonar.range_m);
+            for chunk in found.chunks(vpf::link::MAX_CONTACTS) {
+                let m = Message::Contacts(ContactsRepr {
+                    time_ms: t_ms,
+                    contacts: ContactList::new(chunk),
+                });
+                s.fw.send(&m, &mut s.tap).map_err(fw_err)?;
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Collects the firmware's answer for this period and records it.
+fn collect(
+    s: &mut Sim,
+    mode: RunMode,
+    t_ms: u64,
+    replies_checked: &mut bool,
+) -> Result<(), RunError> {
+    let got = match mode {
+        RunMode::Lockstep => {
+            let mut attempt = 1;
+            loop {
+                let answered = |inbox: &[Reply]| {
+                    inbox
+                        .iter()
+                        .any(|r| matches!(r, Reply::Command(c) if c.time_ms == t_ms))
+                };
+                match s.fw.receive_until(TICK_RETRY, &mut s.tap, answered) {
+                    Ok(got) => break got,
+                    Err(e)
+                        if e.kind() == std::io::ErrorKind::TimedOut && attempt < TICK_ATTEMPTS =>
+                    {
+                        attempt += 1;
+                        s.tick_retries += 1;
+                        s.fw.send(&Message::Tick(TickRepr { time_ms: t_ms }), &mut s.tap)
+                            .map_err(fw_err)?;
+                    }
+                    Err(e) => return Err(fw_err(e)),
+                }
+            }
+        }
+        RunMode::Realtime => {
+            s.fw.receive_until(Duration::ZERO, &mut s.tap, |_| true)
+                .map_err(fw_err)?
+        }
+    };
+    for r in &got {
+        match r {
+            Reply::Reply(rep) if !*replies_checked => {
+                if let ReplyStatus::Rejected { field, problem } = rep.status {
+                    return Err(RunError::Refused(format!(
+                        "the scenario's {:?} message (field {field}: {problem:?})",
+                        rep.to_type
+                    )));
+                }
+            }
+            Reply::Telemetry(tel) => {
+                s.record.telemetry = Some(*tel);
+                s.record.cost_unit = Some(tel.cost_unit);
+                if tel.step_cost > 0 {
+                    s.record.step_costs.push(tel.step_cost);
+                }
+            }
+            _ => {}
+        }
+    }
+    if got.iter().any(|r| matches!(r, Reply::Reply(_))) {
+        *replies_checked = true;
+    }
+    let command = got.iter().rev().find_map(|r| match r {
+        Reply::Command(c) => Some(c.command),
+        _ => None,
+    });
+    if let Some(c) = command {
+        s.setpoints = SetPoints {
+            psi: f64::from(c.psi_set),
+            speed: f64::from(c.v_set),
+            velocity: P2::new(f64::from(c.velocity.x), f64::from(c.velocity.y)),
+        };
+        let target = P2::new(f64::from(c.target.x), f64::from(c.target.y));
+        if target.sub(s.record.goal).norm() > 0.5
+            && !s.record.ghosts.iter().any(|g| g.sub(target).norm() < 0.5)
+            && c.ghost_depth > 0
+        {
+            s.record.ghosts.push(target);
+        }
+        // Time, state and clearance are filled in by the caller.
+        s.record.samples.push(crate::types::Sample {
+            t: 0.0,
+            state: VehicleState::default(),
+            psi_cmd: f64::from(c.psi_set),
+            speed_cmd: f64::from(c.v_set),
+            mode: format!("{:?}", c.mode),
+            ghost_depth: c.ghost_depth,
+            target,
+            nearest_m: f64::INFINITY,
+        });
+    } else if let Some(prev) = s.record.samples.last().cloned() {
+        // Real time, nothing new: the vehicle keeps following the last command.
+        s.record.samples.push(prev);
+    }
+    Ok(())
+}
+
+/// True clearance: distance from the hull to the nearest obstacle surface or other hull.
+fn nearest(
+    sc: &Scenario,
+    t: f64,
+    state: &VehicleState,
+    hull: f64,
+    others: &[(P2, f64)],
+    me: usize,
+) -> f64 {
+    let p = state.position;
+    let obstacles = sc.obstacles.iter().map(|o| o.signed_distance(t, p) - hull);
+    let vehicles = others
+        .iter()
+        .enumerate()
+        .filter(|(j, _)| *j != me)
+        .map(|(_, (q, r))| q.sub(p).norm() - hull - r);
+    obstacles.chain(vehicles).fold(f64::INFINITY, f64::min)
+}
+
+fn progress(done: u64, total: u64, t: f64) {
+    let width = 40;
+    let filled = (done * width / total.max(1)) as usize;
+    eprint!(
+        "\r[{}{}] {:3}%  t = {t:7.1} s",
+        "#".repeat(filled),
+        " ".repeat(width as usize - filled),
+        done * 100 / total.max(1)
+    );
+}

@@ -1,0 +1,146 @@
+//! Plain data shared by the harness's rooms. The harness is host code: it computes in `f64`
+//! and converts to the firmware's `f32` at the wire.
+
+/// A point or vector in the horizontal plane, metres (or m/s).
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct P2 {
+    /// x, m.
+    pub x: f64,
+    /// y, m.
+    pub y: f64,
+}
+
+impl P2 {
+    /// A point from its coordinates.
+    pub const fn new(x: f64, y: f64) -> Self {
+        P2 { x, y }
+    }
+    /// Length.
+    pub fn norm(self) -> f64 {
+        self.x.hypot(self.y)
+    }
+    /// Difference `self − o` (a plain method: no operator traits to import at every use).
+    #[allow(clippy::should_implement_trait)]
+    pub fn sub(self, o: P2) -> P2 {
+        P2::new(self.x - o.x, self.y - o.y)
+    }
+    /// Sum.
+    #[allow(clippy::should_implement_trait)]
+    pub fn add(self, o: P2) -> P2 {
+        P2::new(self.x + o.x, self.y + o.y)
+    }
+    /// Scaled by `k`.
+    pub fn scale(self, k: f64) -> P2 {
+        P2::new(self.x * k, self.y * k)
+    }
+    /// The firmware's `f32` vector.
+    pub fn to_vpf(self) -> vpf::Vec2 {
+        vpf::Vec2::new(self.x as f32, self.y as f32)
+    }
+}
+
+/// The true state of a simulated vehicle in the Earth-fixed frame.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct VehicleState {
+    /// Position, m.
+    pub position: P2,
+    /// Heading ψ, rad (counter-clockwise from +x).
+    pub heading: f64,
+    /// Body-frame surge u and sway v, m/s (relative to the water).
+    pub u: f64,
+    /// Sway, m/s.
+    pub v: f64,
+    /// Yaw rate r, rad/s.
+    pub r: f64,
+    /// Velocity over ground (water-relative velocity rotated to Earth, plus current), m/s.
+    pub velocity: P2,
+    /// Magnitude of the thrust (or thrust-like effort) applied this step, N (an energy proxy).
+    pub thrust: f64,
+}
+
+/// The set-points the firmware commands and the autopilots track.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct SetPoints {
+    /// Heading set-point ψ_set, rad.
+    pub psi: f64,
+    /// Speed set-point v_set, m/s.
+    pub speed: f64,
+    /// The planner's commanded velocity vector (for the kinematic model), m/s.
+    pub velocity: P2,
+}
+
+/// Obstacle geometry in the simulation (world frame, at t = 0). The firmware sees only what the
+/// sonar returns; the harness knows the truth.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub enum SimShape {
+    /// Circle.
+    Circle {
+        /// Centre, m.
+        center: P2,
+        /// Radius, m.
+        radius: f64,
+    },
+    /// Rectangle rotated by `angle` (rad, counter-clockwise) about its centre.
+    Rectangle {
+        /// Centre, m.
+        center: P2,
+        /// Half-sizes along its own axes, m.
+        half_size: P2,
+        /// Rotation, rad.
+        angle: f64,
+    },
+    /// Convex polygon, vertices in order.
+    Polygon {
+        /// Vertices, m.
+        points: Vec<P2>,
+    },
+}
+
+/// An obstacle of the scenario: its shape at t = 0 and a constant velocity.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct SimObstacle {
+    /// Shape at t = 0.
+    pub shape: SimShape,
+    /// Velocity, m/s (zero for a static obstacle).
+    pub velocity: P2,
+}
+
+/// One period of one vehicle, as recorded by the runner.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Sample {
+    /// Simulation time, s.
+    pub t: f64,
+    /// True state.
+    pub state: VehicleState,
+    /// Commanded heading, rad.
+    pub psi_cmd: f64,
+    /// Commanded speed, m/s.
+    pub speed_cmd: f64,
+    /// The firmware's mode, as text (e.g. "Transit", "Hold(StaleNav)").
+    pub mode: String,
+    /// Stacked ghost goal-points.
+    pub ghost_depth: u8,
+    /// The firmware's active target (goal or ghost), m.
+    pub target: P2,
+    /// True signed distance to the nearest obstacle surface or other vehicle hull, m.
+    pub nearest_m: f64,
+}
+
+/// Everything one run produced for one vehicle.
+#[derive(Clone, Debug, Default)]
+pub struct VehicleRecord {
+    /// Vehicle name from the scenario.
+    pub name: String,
+    /// Its goal, m.
+    pub goal: P2,
+    /// The samples, one per period.
+    pub samples: Vec<Sample>,
+    /// Ghost goal-points the firmware used (target positions that were not the goal), m.
+    pub ghosts: Vec<P2>,
+    /// The last telemetry the firmware sent.
+    pub telemetry: Option<vpf::link::TelemetryRepr>,
+    /// Step costs reported by the firmware, in `cost_unit`.
+    pub step_costs: Vec<u32>,
+    /// Unit of the step costs.
+    pub cost_unit: Option<vpf::link::CostUnit>,
+}

@@ -1,0 +1,410 @@
+//! The ST NUCLEO-F446RE (STM32F446RE, Cortex-M4F): a real board, flashed and logged through
+//! its on-board ST-LINK V2-1 with probe-rs.
+//!
+//! - **Clocks**: 180 MHz from the PLL (the HAL's `rcc`, which also turns on the regulator's
+//!   over-drive and sets the flash wait states), fed by the ST-LINK's 8 MHz crystal-accurate MCO
+//!   output on OSC_IN (HSE bypass, the board as shipped) when it is there, else by the internal
+//!   16 MHz HSI (an ST-LINK part snapped off or unpowered). The HSI is ±1 % at 25 °C but up to
+//!   ±4 % over −10…85 °C, which a UART link barely tolerates, so the HSE is preferred; [`init`]
+//!   logs which one runs. Should the MCO stop later, the PLL stops and the watchdog resets the
+//!   chip, which then starts on the HSI.
+//! - **UART**: USART2 at 115 200 baud, 8N1, on PA2 (TX) / PA3 (RX), which the board routes to
+//!   the ST-LINK's virtual COM port (solder bridges SB13/SB14 closed, as shipped). The HAL sets
+//!   it up; one interrupt (USART2) moves bytes both ways: RX-not-empty fills the receive queue,
+//!   TX-empty drains the transmit queue and is on only while bytes remain.
+//! - **Period timer**: SysTick on the 180 MHz core clock, as on the emulated board: the
+//!   firmware owns the SysTick exception, reads its pending bit for overruns and pends it for
+//!   lockstep ticks. A period longer than SysTick's 24 bits reach (93 ms) is split into `k`
+//!   equal interrupts, `k` chosen to divide the period's cycles exactly so the schedule does
+//!   not drift.
+//! - **Cost counter**: the DWT cycle counter (CYCCNT), which counts on real silicon (not on
+//!   QEMU): [`COST_UNIT`] is [`CostUnit::Cycles`].
+//! - **Watchdog**: the independent watchdog (IWDG, on the ~32 kHz LSI), fed by the periodic
+//!   task every period; see [`feed_watchdog`].
+//! - **Log**: defmt over RTT (read by `probe-rs run`); no semihosting, which hard-faults without
+//!   a debugger. [`exit`] uses semihosting only when a debugger is attached.
+#![deny(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::indexing_slicing,
+    clippy::unreachable,
+    clippy::todo,
+    clippy::unimplemented
+)]
+
+use core::cell::Cell;
+use core::num::NonZeroU64;
+use core::sync::atomic::{AtomicBool, AtomicU32, Ordering};
+
+use cortex_m::peripheral::{DCB, NVIC, SCB, SYST};
+use critical_section::Mutex;
+use stm32f4xx_hal::pac::{self, interrupt, Interrupt, USART2};
+use stm32f4xx_hal::prelude::*;
+use stm32f4xx_hal::rcc::Config as ClockConfig;
+use stm32f4xx_hal::serial::{Event, Serial};
+use vpf::link::CostUnit;
+
+mod rtt;
+
+/// Core (and SysTick) clock, Hz.
+pub const SYSCLK_HZ: u32 = 180_000_000;
+/// The ST-LINK's MCO output, which drives OSC_IN on the board as shipped (UM1724), Hz.
+pub const HSE_HZ: u32 = 8_000_000;
+/// The internal RC oscillator, Hz.
+const HSI_HZ: u32 = 16_000_000;
+/// The unit of [`cost_now`].
+pub const COST_UNIT: CostUnit = CostUnit::Cycles;
+/// UART baud rate (8N1).
+pub const BAUD: u32 = 115_200;
+
+/// Watchdog timeout while the timer runs the periods, ms at the LSI's nominal 32 kHz. The LSI
+/// may run up to 47 kHz (datasheet), shortening it to 1.36 s: still longer than the longest
+/// planner period (1 s, `Params::period_s`), so every valid period feeds it in time, and a hung
+/// periodic task resets the board within about 2 s.
+pub const WATCHDOG_MS: u32 = 2_000;
+/// Watchdog timeout in lockstep, where a period runs only when the host's `Tick` comes: the
+/// longest the IWDG can wait (prescaler 256, reload 4095: 32.8 s nominal, 22 s at the fastest
+/// LSI), so a host that pauses does not reset the board, and one that is gone does.
+pub const WATCHDOG_LOCKSTEP_MS: u32 = 32_768;
+const LSI_HZ: u32 = 32_000;
+
+/// SysTick's clock, set by [`init`] from the clocks the HAL configured.
+static SYSTICK_HZ: AtomicU32 = AtomicU32::new(0);
+/// The UART, handed from [`init`] to the USART2 interrupt, which takes it on its first run.
+static SERIAL: Mutex<Cell<Option<Serial<USART2>>>> = Mutex::new(Cell::new(None));
+static LOCKSTEP: AtomicBool = AtomicBool::new(false);
+
+/// Sets up the clocks, USART2 (receive interrupt on), the cycle counter, the watchdog, and the
+/// interrupt priorities. Stops the board ([`exit`]) if the device peripherals were taken or the
+/// UART cannot be configured.
+pub fn init(mut cp: cortex_m::Peripherals) {
+    let Some(dp) = pac::Peripherals::take() else {
+        exit(false)
+    };
+    report_reset_cause(&dp.RCC);
+    if DCB::is_debugger_attached() {
+        // Keep the bus clocked in WFI so the probe can read the RTT buffer while the idle loop
+        // sleeps. The watchdog is deliberately not frozen while the core is halted
+        // (DBGMCU_APB1_FZ.DBG_IWDG_STOP stays clear): a core left halted by a breakpoint, or by
+        // a semihosting call after the probe went away, is reset rather than stuck.
+        dp.DBGMCU.cr().modify(|_, w| w.dbg_sleep().set_bit());
+    }
+
+    // The HAL locks the PLL to 180 MHz from the HSI (one constant configuration, so its clock
+    // arithmetic and asserts fold away at compile time: a second `freeze` call, for the HSE,
+    // kept them, and their panics, in the image); the PLL is then moved onto the HSE if it runs.
+    let mut rcc = dp.RCC.freeze(ClockConfig::hsi().sysclk(SYSCLK_HZ.Hz()));
+    if pll_onto_hse(&rcc) {
+        defmt::info!("vpf-firmware: 180 MHz from the ST-LINK's 8 MHz MCO (HSE bypass)");
+    } else {
+        defmt::warn!("vpf-firmware: no HSE clock input; 180 MHz from the internal HSI");
+    }
+    SYSTICK_HZ.store(rcc.clocks.hclk().raw(), Ordering::Relaxed);
+
+    let gpioa = dp.GPIOA.split(&mut rcc);
+    let Ok(mut serial) = dp
+        .USART2
+        .serial::<u8>((gpioa.pa2, gpioa.pa3), BAUD.bps(), &mut rcc)
+    else {
+        exit(false)
+    };
+    serial.listen(Event::RxNotEmpty);
+    critical_section::with(|cs| SERIAL.borrow(cs).set(Some(serial)));
+
+    cp.DCB.enable_trace();
+    cp.DWT.enable_cycle_counter();
+
+    watchdog_start(WATCHDOG_MS);
+
+    // Priorities (lower is more urgent; the F446 implements the top 4 bits): the byte mover
+    // above the periodic task, the periodic task above thread mode. Their bodies are O(1) per
+    // byte (module docs of `firmware`).
+    // SAFETY: priorities are set once, before the interrupts are unmasked.
+    unsafe {
+        cp.NVIC.set_priority(Interrupt::USART2, 0x00);
+        cp.SCB
+            .set_priority(cortex_m::peripheral::scb::SystemHandler::SysTick, 0x40);
+        NVIC::unmask(Interrupt::USART2);
+    }
+}
+
+/// Moves the PLL, which the HAL locked from the 16 MHz HSI, onto the HSE (the ST-LINK's 8 MHz
+/// MCO on OSC_IN, bypass mode) if that clock is there, keeping the PLL's input at the same
+/// frequency (M scaled by HSE/HSI): the PLL output, and every clock the HAL computed from it,
+/// stay as they were. Returns whether the PLL now runs from the HSE; every wait is bounded, and
+/// on a timeout the HSI configuration is put back.
+fn pll_onto_hse(rcc: &pac::RCC) -> bool {
+    let m_hsi = u32::from(rcc.pllcfgr().read().pllm().bits());
+    let m_hse = m_hsi * HSE_HZ / HSI_HZ;
+    if m_hse < 2 || m_hse * HSI_HZ != m_hsi * HSE_HZ || !hse_bypass_ready(rcc) {
+        return false;
+    }
+    // Run from the HSI while the PLL is reconfigured (the flash wait states, set for 180 MHz,
+    // are safe at any lower clock).
+    rcc.cfgr().modify(|_, w| w.sw().hsi());
+    let mut on_hse = false;
+    if wait_for(|| rcc.cfgr().read().sws().is_hsi()) {
+        on_hse = set_pll_source(rcc, true, m_hse);
+        if !on_hse {
+            // Back to the configuration the HAL locked (and computed its clocks for).
+            set_pll_source(rcc, false, m_hsi);
+        }
+    }
+    rcc.cfgr().modify(|_, w| w.sw().pll());
+    if !wait_for(|| rcc.cfgr().read().sws().is_pll()) {
+        // Not at the clocks the HAL computed (the UART's baud rate, SysTick's period would be
+        // wrong): start again rather than run so.
+        SCB::sys_reset();
+    }
+    if !on_hse {
+        hse_off(rcc);
+    }
+    on_hse
+}
+
+/// Stops the PLL, sets its source and M, restarts it; whether it locked.
+fn set_pll_source(rcc: &pac::RCC, hse: bool, m: u32) -> bool {
+    rcc.cr().modify(|_, w| w.pllon().off());
+    if !wait_for(|| rcc.cr().read().pllrdy().is_not_ready()) {
+        return false;
+    }
+    rcc.pllcfgr().modify(|_, w| {
+        let w = if hse {
+            w.pllsrc().hse()
+        } else {
+            w.pllsrc().hsi()
+        };
+        // SAFETY: M is 2..=63 (checked by the caller, or read back from the register).
+        unsafe { w.pllm().bits(m as u8) }
+    });
+    rcc.cr().modify(|_, w| w.pllon().on());
+    wait_for(|| rcc.cr().read().pllrdy().is_ready())
+}
+
+/// Whether an external clock drives OSC_IN: turns the HSE on in bypass mode and waits for it;
+/// turns it off again if it never becomes ready.
+fn hse_bypass_ready(rcc: &pac::RCC) -> bool {
+    // HSEBYP may be written only while the HSE is off (it is, after reset).
+    rcc.cr().modify(|_, w| w.hsebyp().bypassed());
+    rcc.cr().modify(|_, w| w.hseon().on());
+    if wait_for(|| rcc.cr().read().hserdy().bit_is_set()) {
+        return true;
+    }
+    hse_off(rcc);
+    false
+}
+
+fn hse_off(rcc: &pac::RCC) {
+    rcc.cr().modify(|_, w| w.hseon().off());
+    if wait_for(|| rcc.cr().read().hserdy().bit_is_clear()) {
+        rcc.cr().modify(|_, w| w.hsebyp().not_bypassed());
+    }
+}
+
+/// Polls `done` a bounded number of times (about 15 ms at 180 MHz, 200 ms at the 16 MHz HSI: far
+/// longer than an external clock, a PLL lock or a clock switch needs); whether it came true.
+fn wait_for(mut done: impl FnMut() -> bool) -> bool {
+    (0..400_000u32).any(|_| done())
+}
+
+/// Logs why the chip last reset (a watchdog reset is worth knowing about), then clears the flags.
+fn report_reset_cause(rcc: &pac::RCC) {
+    let csr = rcc.csr().read();
+    if csr.wdgrstf().bit_is_set() {
+        defmt::warn!("vpf-firmware: the last reset was the independent watchdog");
+    } else if csr.sftrstf().bit_is_set() {
+        defmt::info!("vpf-firmware: the last reset was a software reset (`exit`, or a debugger)");
+    }
+    rcc.csr().modify(|_, w| w.rmvf().set_bit());
+}
+
+// SysTick control bits (ARMv7-M SYST_CSR).
+const CSR_ENABLE: u32 = 1 << 0;
+const CSR_TICKINT: u32 = 1 << 1;
+const CSR_CLKSOURCE: u32 = 1 << 2;
+
+fn syst() -> &'static cortex_m::peripheral::syst::RegisterBlock {
+    // SAFETY: SysTick's register block is always mapped; it is written only by `start_timer`
+    // and `enter_lockstep`, each from a context that cannot race the other (start-up / SysTick,
+    // and thread mode only once lockstep begins, after which SysTick runs only when pended).
+    unsafe { &*SYST::PTR }
+}
+
+/// Programs SysTick (on the core clock) for a planner period of `period_ms`: interrupts every
+/// `period / k`, with `k` the smallest count that fits SysTick's 24 bits and divides the
+/// period's cycles exactly (one always does for whole milliseconds at 180 MHz). Returns `k`,
+/// the interrupts per period.
+pub fn start_timer(period_ms: u32) -> u32 {
+    let hz = u64::from(SYSTICK_HZ.load(Ordering::Relaxed));
+    let ticks = hz * u64::from(period_ms.max(1)) / 1000;
+    let min_k = ticks.div_ceil(1 << 24).max(1);
+    let k = (min_k..min_k + 64)
+        .filter_map(NonZeroU64::new)
+        .find(|&k| ticks % k == 0)
+        .map_or(min_k, NonZeroU64::get);
+    let reload = (ticks / k.max(1)).clamp(2, 1 << 24) as u32 - 1;
+    let r = syst();
+    // SAFETY: plain writes to SysTick's reload, current-value and control registers.
+    unsafe {
+        r.csr.write(0);
+        r.rvr.write(reload);
+        r.cvr.write(0);
+        r.csr.write(CSR_ENABLE | CSR_TICKINT | CSR_CLKSOURCE);
+    }
+    k as u32
+}
+
+/// Lockstep: the timer stops raising periods, and the watchdog waits as long as it can for the
+/// host's ticks (the first call only; the firmware calls this on every `Tick`).
+pub fn enter_lockstep() {
+    let r = syst();
+    // SAFETY: as above; clears only the interrupt enable.
+    unsafe { r.csr.modify(|v| v & !CSR_TICKINT) };
+    if !LOCKSTEP.swap(true, Ordering::Relaxed) {
+        watchdog_start(WATCHDOG_LOCKSTEP_MS);
+    }
+}
+
+/// Core clock cycles since boot (the DWT cycle counter, wrapping every 23.9 s at 180 MHz; the
+/// firmware takes wrapping differences).
+pub fn cost_now() -> u32 {
+    cortex_m::peripheral::DWT::cycle_count()
+}
+
+/// Whether the timer has fired again since the current period began.
+pub fn timer_pending() -> bool {
+    SCB::is_pendst_pending()
+}
+
+/// Starts transmission of queued bytes (the USART2 interrupt does the rest).
+pub fn kick_tx() {
+    NVIC::pend(Interrupt::USART2);
+}
+
+fn iwdg() -> &'static pac::iwdg::RegisterBlock {
+    // SAFETY: the IWDG's register block is always mapped. Its prescaler and reload are written
+    // by `watchdog_start` only (at start-up, and once in thread mode on entering lockstep,
+    // inside a critical section against the feed); the periodic task only writes the feed key.
+    unsafe { &*pac::IWDG::ptr() }
+}
+
+/// Starts the IWDG (it cannot be stopped again) or changes its timeout, and feeds it.
+fn watchdog_start(timeout_ms: u32) {
+    // Smallest prescaler 4 << pr whose 12-bit reload reaches the timeout.
+    let counts = u64::from(timeout_ms) * u64::from(LSI_HZ) / 1000;
+    let mut pr = 0u8;
+    while pr < 6 && counts >> (2 + pr) > 0x1000 {
+        pr += 1;
+    }
+    let reload = (counts >> (2 + pr)).clamp(1, 0x1000) as u16 - 1;
+    let w = iwdg();
+    // A previous update must finish before the registers take a new value (5 LSI cycles).
+    wait_watchdog_update(w);
+    // The unlock sequence is broken by any other key (the periodic task's feed): no interrupt
+    // between the unlock and the writes.
+    critical_section::with(|_| {
+        w.kr().write(|k| k.key().start());
+        w.kr().write(|k| k.key().unlock());
+        w.pr().write(|p| p.pr().set(pr));
+        w.rlr().write(|r| r.rl().set(reload));
+    });
+    wait_watchdog_update(w);
+    w.kr().write(|k| k.key().feed());
+}
+
+/// Waits, boundedly, for the IWDG's prescaler and reload updates to finish.
+fn wait_watchdog_update(w: &pac::iwdg::RegisterBlock) {
+    // 5 LSI cycles at the slowest LSI (17 kHz) are 300 µs, or 54 000 core cycles.
+    for _ in 0..100_000u32 {
+        if w.sr().read().bits() == 0 {
+            return;
+        }
+    }
+}
+
+/// Feeds the independent watchdog (the periodic task calls this every period).
+pub fn feed_watchdog() {
+    iwdg().kr().write(|k| k.key().feed());
+}
+
+/// A log line over defmt-RTT (`probe-rs run` prints it), without its line break.
+pub fn log(line: &[u8]) {
+    let line = line.strip_suffix(b"\n").unwrap_or(line);
+    match core::str::from_utf8(line) {
+        Ok(s) => defmt::info!("{=str}", s),
+        Err(_) => defmt::info!("{=[u8]:a}", line),
+    }
+}
+
+/// Ends the program. Under a debugger (`probe-rs run`) a semihosting exit carries the status
+/// back; without one (semihosting would hard-fault) a failure resets the chip, so a vehicle
+/// restarts its guidance rather than hang, and a success parks the core.
+pub fn exit(success: bool) -> ! {
+    if success {
+        defmt::info!("vpf-firmware: exit (success)");
+    } else {
+        defmt::error!("vpf-firmware: exit (failure)");
+    }
+    if DCB::is_debugger_attached() {
+        use cortex_m_semihosting::debug;
+        debug::exit(if success {
+            debug::EXIT_SUCCESS
+        } else {
+            debug::EXIT_FAILURE
+        });
+    }
+    if !success {
+        SCB::sys_reset();
+    }
+    loop {
+        cortex_m::asm::wfi();
+    }
+}
+
+/// USART2, both directions: move every received byte into the receive queue, then send queued
+/// bytes while the UART takes them, keeping the TX-empty interrupt on only while bytes remain.
+#[interrupt]
+fn USART2() {
+    static mut UART: Option<Serial<USART2>> = None;
+    static mut RX: Option<crate::firmware::RxProducer> = None;
+    static mut TX: Option<crate::firmware::TxConsumer> = None;
+    if UART.is_none() {
+        *UART = critical_section::with(|cs| SERIAL.borrow(cs).take());
+    }
+    if RX.is_none() {
+        *RX = crate::firmware::rx_producer();
+    }
+    if TX.is_none() {
+        *TX = crate::firmware::tx_consumer();
+    }
+    let Some(uart) = UART.as_mut() else { return };
+    // Receive. A byte with a framing, noise or parity error, or after an overrun, is dropped
+    // (reading the data register clears the flag); the link's CRC catches the damaged frame.
+    loop {
+        match uart.read() {
+            Ok(b) => {
+                if let Some(p) = RX.as_mut() {
+                    crate::firmware::on_rx_byte(p, b);
+                }
+            }
+            Err(stm32f4xx_hal::nb::Error::Other(_)) => {}
+            Err(stm32f4xx_hal::nb::Error::WouldBlock) => break,
+        }
+    }
+    // Transmit.
+    let Some(c) = TX.as_mut() else { return };
+    while uart.is_tx_empty() {
+        match c.dequeue() {
+            Some(b) => {
+                let _ = uart.write(b);
+            }
+            None => break,
+        }
+    }
+    if c.ready() {
+        uart.listen(Event::TxEmpty);
+    } else {
+        uart.unlisten(Event::TxEmpty);
+    }
+}

@@ -1,0 +1,327 @@
+//! The firmware on the emulated Cortex-M4 (QEMU `mps2-an386`):
+//! - the on-target self-test: planner step cost in instructions at full capacity, deadline
+//!   overruns under a sonar flood, stack high-water;
+//! - the serial link: boots the firmware, talks to its UART through a pty, sends navigation,
+//!   a mission, scanlines and garbage, and checks the commands and counters that come back.
+//!
+//! Where `qemu-system-arm` is not installed these tests say so and pass; under CI (`CI=true`)
+//! they fail instead, so CI cannot skip them.
+
+use std::io::{BufRead, BufReader, Read, Write};
+use std::os::fd::AsRawFd;
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::sync::Mutex;
+use std::time::{Duration, Instant};
+
+use vpf::link::{
+    CommandRepr, Decoder, Direction, Message, NavRepr, Outcome, ReplyStatus, TelemetryRepr,
+    TickRepr, MAX_FRAME,
+};
+use vpf::planner::HoldReason;
+use vpf::sonar::Scanline;
+use vpf::{Mission, Mode, NavState, Vec2};
+
+/// Serialises firmware builds: the two configurations share one output path.
+static BUILD: Mutex<()> = Mutex::new(());
+
+fn qemu_available() -> bool {
+    let found = Command::new("qemu-system-arm")
+        .arg("--version")
+        .stdout(Stdio::null())
+        .status()
+        .is_ok_and(|s| s.success());
+    if !found {
+        assert!(
+            std::env::var("CI").map_or(true, |v| v != "true"),
+            "CI=true but qemu-system-arm is not installed"
+        );
+        eprintln!("SKIPPED: qemu-system-arm is not installed (apt-get install qemu-system-arm)");
+    }
+    found
+}
+
+/// Builds the release firmware with `features` and copies it to a path of its own.
+fn build_firmware(features: &[&str], name: &str) -> PathBuf {
+    let _guard = BUILD.lock().unwrap_or_else(|e| e.into_inner());
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut cmd = Command::new(env!("CARGO"));
+    cmd.current_dir(root).args([
+        "build",
+        "--release",
+        "--target",
+        "thumbv7em-none-eabihf",
+        "--bin",
+        "vpf-firmware",
+    ]);
+    if !features.is_empty() {
+        cmd.args(["--features", &features.join(",")]);
+    }
+    let status = cmd.status().expect("cargo runs");
+    assert!(status.success(), "firmware build failed");
+    let target_dir =
+        std::env::var_os("CARGO_TARGET_DIR").map_or_else(|| root.join("target"), PathBuf::from);
+    let built = target_dir.join("thumbv7em-none-eabihf/release/vpf-firmware");
+    let dir = target_dir.join("qemu-tests");
+    std::fs::create_dir_all(&dir).unwrap();
+    let copy = dir.join(name);
+    std::fs::copy(&built, &copy).unwrap();
+    copy
+}
+
+/// Kills QEMU when a test ends, however it ends.
+struct Qemu(Child);
+
+impl Drop for Qemu {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
+fn number_after(line: &str, key: &str) -> u64 {
+    let rest = &line[line
+        .find(key)
+        .unwrap_or_else(|| panic!("`{key}` in {line}"))
+        + key.len()..];
+    rest.trim_start()
+        .split(|c: char| !c.is_ascii_digit())
+        .next()
+        .and_then(|d| d.parse().ok())
+        .unwrap_or_else(|| panic!("a number after `{key}` in {line}"))
+}
+
+#[test]
+fn selftest_meets_the_budgets_on_the_emulated_cortex_m4() {
+    if !qemu_available() {
+        return;
+    }
+    let elf = build_firmware(&["selftest"], "vpf-selftest.elf");
+    let out = Command::new("qemu-system-arm")
+        .args(["-machine", "mps2-an386", "-cpu", "cortex-m4", "-nographic"])
+        .args(["-serial", "null", "-monitor", "none", "-icount", "shift=0"])
+        .args(["-semihosting-config", "enable=on,target=native", "-kernel"])
+        .arg(&elf)
+        .output()
+        .expect("qemu runs");
+    let text = String::from_utf8_lossy(&out.stdout);
+    println!("{text}");
+    let report = text
+        .lines()
+        .find(|l| l.contains("step cost max"))
+        .expect("the self-test printed its report");
+    let max = number_after(report, "step cost max");
+    let mean = number_after(report, "mean");
+    let overruns = number_after(report, "overruns");
+    let stack = number_after(report, "stack high-water");
+    let scanlines = number_after(report, "scanlines extracted");
+    assert!(max <= 100_000, "step cost {max} instructions over budget");
+    assert!(mean > 1_000 && mean <= max, "implausible mean {mean}");
+    assert_eq!(overruns, 0);
+    assert!(
+        scanlines > 1_000,
+        "the background was not flooded: {scanlines}"
+    );
+    assert!(stack < 20 * 1024, "stack high-water {stack} B");
+    assert!(text.contains("selftest: PASS"));
+    assert!(out.status.success());
+}
+
+/// QEMU with its UART on a pty, paused until the pty is open (bytes sent before would be lost).
+fn boot_on_pty(elf: &Path) -> (Qemu, std::fs::File) {
+    let mut child = Command::new("qemu-system-arm")
+        .args(["-machine", "mps2-an386", "-cpu", "cortex-m4", "-nographic"])
+        .args(["-serial", "pty", "-monitor", "stdio", "-S"])
+        .args(["-semihosting-config", "enable=on,target=native", "-kernel"])
+        .arg(elf)
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::inherit())
+        .spawn()
+        .expect("qemu starts");
+    // QEMU 7.2 names the pty on the monitor (stdout, with `-monitor stdio`):
+    // "char device redirected to /dev/pts/N (label serial0)". (`-chardev pty,path=` is ignored.)
+    let stdout = child.stdout.take().unwrap();
+    let mut lines = BufReader::new(stdout).lines();
+    let path = loop {
+        let line = lines.next().expect("qemu names its pty").unwrap();
+        if let Some(i) = line.find("/dev/pts/") {
+            break line[i..].split_whitespace().next().unwrap().to_string();
+        }
+    };
+    // Keep draining the monitor and the semihosting log, echoing the log lines.
+    std::thread::spawn(move || {
+        for line in lines.map_while(Result::ok) {
+            if line.contains("vpf-firmware") {
+                println!("firmware: {line}");
+            }
+        }
+    });
+    let pty = std::fs::OpenOptions::new()
+        .read(true)
+        .write(true)
+        .open(&path)
+        .unwrap();
+    // Raw mode: no echo, no line discipline between the test and the UART.
+    // SAFETY: plain termios calls on a file descriptor we own.
+    unsafe {
+        let mut t: libc::termios = std::mem::zeroed();
+        assert_eq!(libc::tcgetattr(pty.as_raw_fd(), &mut t), 0);
+        libc::cfmakeraw(&mut t);
+        t.c_cc[libc::VMIN] = 0;
+        t.c_cc[libc::VTIME] = 1;
+        assert_eq!(libc::tcsetattr(pty.as_raw_fd(), libc::TCSANOW, &t), 0);
+    }
+    let mut stdin = child.stdin.take().unwrap();
+    stdin.write_all(b"cont\n").unwrap();
+    stdin.flush().unwrap();
+    std::mem::forget(stdin); // keep the monitor open for the life of QEMU
+    (Qemu(child), pty)
+}
+
+/// What came back from the firmware.
+#[derive(Default)]
+struct Received {
+    decoder: Option<Decoder>,
+    commands: Vec<CommandRepr>,
+    telemetry: Vec<TelemetryRepr>,
+    replies: Vec<vpf::link::ReplyRepr>,
+}
+
+impl Received {
+    fn take(&mut self, bytes: &[u8]) {
+        let d = self
+            .decoder
+            .get_or_insert_with(|| Decoder::accepting(Direction::ToHost));
+        for &b in bytes {
+            if let Outcome::Frame(_, m) = d.push(b) {
+                match m {
+                    Message::Command(c) => self.commands.push(c),
+                    Message::Telemetry(t) => self.telemetry.push(t),
+                    Message::Reply(r) => self.replies.push(r),
+                    _ => {}
+                }
+            }
+        }
+    }
+}
+
+fn send(pty: &mut std::fs::File, seq: &mut u16, m: Message<'_>) {
+    let mut buf = [0u8; MAX_FRAME];
+    *seq = seq.wrapping_add(1);
+    let n = m.emit_frame(*seq, &mut buf).unwrap();
+    pty.write_all(&buf[..n]).unwrap();
+}
+
+/// Reads until `done` holds or `timeout` passes.
+fn read_until(
+    pty: &mut std::fs::File,
+    rx: &mut Received,
+    timeout: Duration,
+    done: impl Fn(&Received) -> bool,
+) {
+    let start = Instant::now();
+    let mut buf = [0u8; 4096];
+    while !done(rx) && start.elapsed() < timeout {
+        match pty.read(&mut buf) {
+            Ok(n) => rx.take(&buf[..n]),
+            Err(e) if e.kind() == std::io::ErrorKind::WouldBlock => {}
+            Err(e) => panic!("pty read: {e}"),
+        }
+    }
+}
+
+#[test]
+fn firmware_answers_over_its_uart() {
+    if !qemu_available() {
+        return;
+    }
+    let elf = build_firmware(&[], "vpf-firmware.elf");
+    let (_qemu, mut pty) = boot_on_pty(&elf);
+    let mut rx = Received::default();
+    let mut seq = 0u16;
+
+    // Real time first: no navigation yet, so the periodic task holds, at 10 Hz.
+    read_until(&mut pty, &mut rx, Duration::from_secs(20), |r| {
+        r.commands.len() >= 3
+    });
+    assert!(rx.commands.len() >= 3, "no commands from the firmware");
+    let c = rx.commands.last().unwrap().command;
+    assert_eq!(c.mode, Mode::Hold(HoldReason::StaleNav));
+
+    // Then lockstep: mission, garbage, scanlines and navigation, one Tick per period.
+    send(
+        &mut pty,
+        &mut seq,
+        Message::Mission(Mission {
+            goal: Vec2::new(40.0, 10.0),
+            formation: None,
+        }),
+    );
+    pty.write_all(&[0x11, 0x22, 0x00, 0x7E, 0x00, 0x01, 0x02, 0x03])
+        .unwrap();
+    let mut bins = [0u8; 200];
+    bins[80..84].fill(220);
+    let (mut p, mut v) = (Vec2::ZERO, Vec2::ZERO);
+    let first_lockstep = rx.commands.len();
+    for k in 0..30u64 {
+        let t = 100_000 + k * 100;
+        let nav = NavState {
+            position: p,
+            heading: 0.0,
+            velocity: v,
+        };
+        send(
+            &mut pty,
+            &mut seq,
+            Message::Nav(NavRepr {
+                time_ms: t,
+                nav,
+                body: None,
+            }),
+        );
+        let scan = Scanline {
+            time_ms: t,
+            bearing_rad: -0.5 + 0.03 * k as f32,
+            step_rad: 0.03,
+            range_m: 20.0,
+            bins: &bins,
+        };
+        send(&mut pty, &mut seq, Message::Scanline(scan));
+        send(&mut pty, &mut seq, Message::Tick(TickRepr { time_ms: t }));
+        let want = first_lockstep + k as usize + 1;
+        read_until(&mut pty, &mut rx, Duration::from_secs(10), |r| {
+            r.commands.iter().any(|c| c.time_ms == t) && r.commands.len() >= want
+        });
+        let cmd = rx
+            .commands
+            .iter()
+            .rev()
+            .find(|c| c.time_ms == t)
+            .unwrap_or_else(|| panic!("no command for tick {t}"))
+            .command;
+        v = cmd.velocity;
+        p += v * 0.1;
+    }
+    let last = rx.commands.last().unwrap().command;
+    let tel = rx.telemetry.last().unwrap();
+    println!(
+        "after 30 lockstep periods: {p:?}, v_set {:.2}, psi {:.2}, mode {:?}, counters {:?}",
+        last.v_set, last.psi_set, last.mode, tel.counters
+    );
+    assert_eq!(
+        rx.replies.first().map(|r| r.status),
+        Some(ReplyStatus::Accepted)
+    );
+    assert_eq!(last.mode, Mode::Transit);
+    assert!(last.v_set > 0.1, "not moving");
+    // Heading towards the goal (40, 10) from near the origin: about 0.24 rad.
+    assert!((last.psi_set - 0.24).abs() < 0.3, "psi {}", last.psi_set);
+    assert!(tel.counters.rx_framing_errors + tel.counters.rx_crc_errors >= 1);
+    // 91 frames sent; the background publishes its counters after the chunk that held the
+    // Tick, so the last telemetry is a frame or two behind.
+    assert!(tel.counters.rx_frames >= 85, "{}", tel.counters.rx_frames);
+    assert_eq!(tel.counters.deadline_overruns, 0);
+    assert_eq!(tel.cost_unit, vpf::link::CostUnit::Instructions);
+    assert!(tel.step_cost > 0);
+}
