@@ -61,6 +61,7 @@ pub fn main() -> ExitCode {
             };
         }
     };
+    let is_device = matches!(port, Port::Device(_));
     let (reader, writer): (Box<dyn Read + Send>, Box<dyn Write>) = match &port {
         Port::Stdio => (Box::new(std::io::stdin()), Box::new(std::io::stdout())),
         Port::Device(path) => {
@@ -87,7 +88,7 @@ pub fn main() -> ExitCode {
             Port::Device(p) => p.clone(),
         }
     );
-    match run(reader, writer) {
+    match run(reader, writer, is_device) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("vpf-firmware: {e}");
@@ -97,7 +98,11 @@ pub fn main() -> ExitCode {
 }
 
 /// The event loop: bytes from a reader thread, periods from the clock (until lockstep).
-fn run(mut reader: Box<dyn Read + Send>, mut writer: Box<dyn Write>) -> std::io::Result<()> {
+fn run(
+    mut reader: Box<dyn Read + Send>,
+    mut writer: Box<dyn Write>,
+    is_device: bool,
+) -> std::io::Result<()> {
     let mut fw = SingleContext::new(
         Params::default(),
         RuntimeConfig::default(),
@@ -110,6 +115,8 @@ fn run(mut reader: Box<dyn Read + Send>, mut writer: Box<dyn Write>) -> std::io:
         let mut buf = [0u8; 4096];
         loop {
             match reader.read(&mut buf) {
+                // A serial line set to time out reads returns 0 when quiet: not the end.
+                Ok(0) if is_device => std::thread::sleep(Duration::from_millis(5)),
                 Ok(0) | Err(_) => break,
                 Ok(n) => {
                     if tx.send(buf[..n].to_vec()).is_err() {

@@ -136,7 +136,9 @@ pub fn build(target: &Target) -> std::io::Result<PathBuf> {
     Ok(path)
 }
 
-/// Puts a terminal in raw mode (no echo, no line discipline), reads returning within 0.1 s.
+/// Puts a terminal in raw mode (no echo, no line discipline). Reads block until a byte comes
+/// (VMIN = 1): the firmware reading the slave side must not mistake a quiet line for the end of
+/// input; this side bounds its own waits with `poll`.
 fn make_raw(f: &File) -> std::io::Result<()> {
     // SAFETY: termios calls on a descriptor we own.
     unsafe {
@@ -147,8 +149,8 @@ fn make_raw(f: &File) -> std::io::Result<()> {
         libc::cfmakeraw(&mut t);
         libc::cfsetispeed(&mut t, libc::B115200);
         libc::cfsetospeed(&mut t, libc::B115200);
-        t.c_cc[libc::VMIN] = 0;
-        t.c_cc[libc::VTIME] = 1;
+        t.c_cc[libc::VMIN] = 1;
+        t.c_cc[libc::VTIME] = 0;
         if libc::tcsetattr(f.as_raw_fd(), libc::TCSANOW, &t) != 0 {
             return Err(std::io::Error::last_os_error());
         }
@@ -294,8 +296,19 @@ impl Firmware {
         self.port.write_all(bytes)
     }
 
-    /// Reads and decodes what has arrived (waits at most ~0.1 s for the first bytes).
+    /// Reads and decodes what has arrived (waits at most 10 ms for the first bytes: termios
+    /// timeouts do not apply to a pty's master side, so `poll` bounds the wait).
     fn pump(&mut self, tap: &mut dyn Tap) -> std::io::Result<()> {
+        let mut pfd = libc::pollfd {
+            fd: self.port.as_raw_fd(),
+            events: libc::POLLIN,
+            revents: 0,
+        };
+        // SAFETY: one valid pollfd for a descriptor we own.
+        let ready = unsafe { libc::poll(&mut pfd, 1, 10) };
+        if ready <= 0 {
+            return Ok(());
+        }
         let mut buf = [0u8; 4096];
         let n = match self.port.read(&mut buf) {
             Ok(n) => n,

@@ -29,9 +29,9 @@ use crate::types::{SetPoints, VehicleRecord, VehicleState, P2};
 
 /// How long to wait for a period's command before sending its `Tick` again (a Tick lost to a
 /// link fault is otherwise never answered).
-pub const TICK_RETRY: Duration = Duration::from_millis(300);
+pub const TICK_RETRY: Duration = Duration::from_millis(50);
 /// How many times a `Tick` is sent before the firmware is given up on.
-pub const TICK_ATTEMPTS: u32 = 30;
+pub const TICK_ATTEMPTS: u32 = 200;
 
 /// Radius of a vehicle's hull for clearance and collisions, m (a kinematic vehicle is a
 /// point, as in seed 000; a VideoRay Pro III is about 0.36 m × 0.22 m).

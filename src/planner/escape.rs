@@ -3,8 +3,11 @@
 //! **Detection** (the paper leaves the test open): the vehicle is in a local minimum when its
 //! planned speed has stayed below `stall_speed` for `stall_time_s` while it is farther than
 //! `arrival_radius_m` from the active goal-point. With friction the planner settles in a minimum,
-//! so a settled vehicle away from its goal is exactly the symptom of Fig. 4. When a stall is
-//! confirmed the caller says what holds the vehicle ([`StallCause`]):
+//! so a settled vehicle away from its goal is exactly the symptom of Fig. 4. A vehicle that is
+//! merely creeping up the Gaussian's shallow tail towards its goal is no such case: if it came
+//! closer by more than a tenth of `stall_speed × stall_time_s` during the window, the window
+//! starts again. When a stall is confirmed the caller says what holds the vehicle
+//! ([`StallCause`]):
 //! - the *static* field (obstacles and the goal-point alone): a ghost goal-point is placed;
 //! - the formation's virtual leader (the field without it has a way down) away from the goal:
 //!   the formation is released for `ghost_timeout_s` — the "partial formation break-up for
@@ -77,7 +80,8 @@ pub struct EscapeCounters {
 #[derive(Clone, Debug)]
 pub struct Escape {
     stack: Vec<GhostGoal, MAX_GHOSTS>,
-    stall_since_ms: Option<u64>,
+    /// When the current stall began, and the distance to the target then.
+    stall_since: Option<(u64, f32)>,
     formation_released_until_ms: Option<u64>,
     rng: XorShift32,
     /// Counters.
@@ -89,7 +93,7 @@ impl Escape {
     pub fn new(seed: u32) -> Self {
         Escape {
             stack: Vec::new(),
-            stall_since_ms: None,
+            stall_since: None,
             formation_released_until_ms: None,
             rng: XorShift32::new(seed),
             counters: EscapeCounters::default(),
@@ -115,7 +119,7 @@ impl Escape {
     /// Forgets all ghosts, the stall timer and a formation release (new mission, hold).
     pub fn reset(&mut self) {
         self.stack.clear();
-        self.stall_since_ms = None;
+        self.stall_since = None;
         self.formation_released_until_ms = None;
     }
 
@@ -141,31 +145,36 @@ impl Escape {
                 break;
             }
             self.stack.pop();
-            self.stall_since_ms = None;
+            self.stall_since = None;
         }
 
         let target = self.active_target(goal);
-        let far = (target - p).norm() > params.arrival_radius_m;
+        let dist = (target - p).norm();
+        let far = dist > params.arrival_radius_m;
         if params.max_ghosts == 0 || !(far && speed < params.stall_speed) {
-            self.stall_since_ms = None;
+            self.stall_since = None;
             return;
         }
-        let since = *self.stall_since_ms.get_or_insert(now_ms);
+        let (since, start_dist) = *self.stall_since.get_or_insert((now_ms, dist));
         if now_ms.saturating_sub(since) < (params.stall_time_s * 1000.0) as u64 {
             return;
         }
-        let timeout_ms = (params.ghost_timeout_s * 1000.0) as u64;
+        if start_dist - dist > 0.1 * params.stall_speed * params.stall_time_s {
+            // Creeping towards the target, not trapped: watch another window.
+            self.stall_since = Some((now_ms, dist));
+            return;
+        }
         match cause(target) {
             StallCause::Static => {}
             StallCause::Formation => {
                 self.formation_released_until_ms = Some(now_ms.saturating_add(timeout_ms));
                 self.counters.formation_released =
                     self.counters.formation_released.saturating_add(1);
-                self.stall_since_ms = None;
+                self.stall_since = None;
                 return;
             }
             StallCause::Vehicles => {
-                self.stall_since_ms = None;
+                self.stall_since = None;
                 return;
             }
         }
@@ -183,7 +192,7 @@ impl Escape {
             // Unreachable while max_ghosts <= MAX_GHOSTS (validated); counted if it ever is.
             self.counters.replaced_full = self.counters.replaced_full.saturating_add(1);
         }
-        self.stall_since_ms = None;
+        self.stall_since = None;
     }
 
     /// 000 eq. 16–17.
@@ -264,6 +273,25 @@ mod tests {
         });
         assert!(e.ghosts().is_empty());
         assert_eq!(e.counters.timed_out, MAX_GHOSTS as u32 - 1);
+    }
+
+    #[test]
+    fn no_ghost_while_creeping_towards_the_goal() {
+        let p = params();
+        let mut e = Escape::new(3);
+        // 0.03 m/s towards the goal: slow, but 0.6 m closer in 20 s.
+        for k in 0..200u64 {
+            let x = 0.003 * k as f32;
+            e.update(
+                k * 100,
+                Vec2::new(x, 0.0),
+                0.03,
+                Vec2::new(20.0, 0.0),
+                &p,
+                |_| StallCause::Static,
+            );
+        }
+        assert!(e.ghosts().is_empty());
     }
 
     #[test]
