@@ -202,8 +202,8 @@ pub fn cos(a: f32) -> f32 {
 /// Sine and cosine in single precision: Cody–Waite reduction by π/2 to |r| ≤ π/4, then the
 /// Taylor polynomials of sin and cos to degree 9 and 8 (error below 4·10⁻⁷ absolute for
 /// |a| ≤ 10⁴ rad, checked against libm in the tests). libm's `sinf`/`cosf` evaluate their
-/// kernels in `f64`, which is software floating point on the Cortex-M4F. Non-finite input
-/// gives (0, 1).
+/// kernels in double precision, which is software floating point on the Cortex-M4F.
+/// Non-finite input gives (0, 1).
 pub fn sin_cos(a: f32) -> (f32, f32) {
     if !a.is_finite() {
         return (0.0, 1.0);

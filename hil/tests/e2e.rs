@@ -185,3 +185,35 @@ fn a_scenario_runs_on_the_emulated_cortex_m4() {
     );
     assert!(a.sub(b).norm() < 0.05, "QEMU {a:?} vs host {b:?}");
 }
+
+#[test]
+fn no_collision_under_any_fault() {
+    // A VideoRay with its sonar in clutter, under each fault kind in turn.
+    let base = scenario("random_clutter.toml");
+    let faults: [(&str, fn(&mut Scenario)); 5] = [
+        ("bit errors", |s| s.faults.bit_error_rate = 1e-4),
+        ("dropped frames", |s| s.faults.drop_rate = 0.05),
+        ("delayed navigation", |s| s.faults.nav_delay_ms = 500.0),
+        ("frozen navigation", |s| {
+            s.faults.nav_freeze = Some(Window {
+                from_s: 40.0,
+                to_s: 45.0,
+            })
+        }),
+        ("sonar dropout", |s| {
+            s.faults.sonar_dropout = Some(Window {
+                from_s: 20.0,
+                to_s: 60.0,
+            })
+        }),
+    ];
+    for (i, (what, apply)) in faults.iter().enumerate() {
+        let mut sc = base.clone();
+        sc.duration_s = 150.0;
+        apply(&mut sc);
+        let r = run_on(&sc, Target::Host, &format!("fault_{i}"));
+        let m = &r.summary.vehicles[0];
+        println!("{what}: min clearance {:?}, collisions {}", m.min_clearance_m, m.collisions);
+        assert_eq!(m.collisions, 0, "collision under {what}");
+    }
+}

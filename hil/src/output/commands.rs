@@ -127,27 +127,7 @@ pub fn render(run: &RunOutput) -> String {
 
     // Legend.
     let x = LEFT + PANEL_W + 20.0;
-    let mut y = TOP + 8.0;
-    s.text(x, y, "Legend", "font-weight=\"bold\"");
-    y += 20.0;
-    for (i, v) in run.vehicles.iter().enumerate() {
-        let c = svg::colour(i);
-        s.line(
-            x,
-            y,
-            x + 24.0,
-            y,
-            &format!("stroke=\"{c}\" stroke-width=\"2.5\""),
-        );
-        let name = if v.name.is_empty() {
-            "(unnamed)"
-        } else {
-            &v.name
-        };
-        s.text(x + 32.0, y + 4.0, name, "fill=\"#222\"");
-        y += 18.0;
-    }
-    y += 6.0;
+    let mut y = svg::vehicle_legend(&mut s, x, TOP + 8.0, &run.vehicles, 2.5);
     s.line(x, y, x + 24.0, y, "stroke=\"#555\" stroke-width=\"1.8\"");
     s.text(x + 32.0, y + 4.0, "set-point", "fill=\"#222\"");
     y += 18.0;

@@ -612,29 +612,9 @@ fn draw_vehicle(s: &mut Svg, f: &Frame, v: &VehicleRecord, colour: &str) -> bool
 
 fn legend(s: &mut Svg, f: &Frame, run: &RunOutput, any_collision: bool) {
     let x = f.left + f.width + 22.0;
-    let mut y = f.top + 8.0;
     let tx = x + 34.0;
     let text = |s: &mut Svg, y: f64, t: &str| s.text(tx, y + 4.0, t, "fill=\"#222\"");
-    s.text(x, y, "Legend", "font-weight=\"bold\"");
-    y += 20.0;
-    for (i, v) in run.vehicles.iter().enumerate() {
-        let c = svg::colour(i);
-        s.line(
-            x,
-            y,
-            x + 24.0,
-            y,
-            &format!("stroke=\"{c}\" stroke-width=\"3\""),
-        );
-        let name = if v.name.is_empty() {
-            "(unnamed)"
-        } else {
-            &v.name
-        };
-        text(s, y, name);
-        y += 18.0;
-    }
-    y += 6.0;
+    let mut y = svg::vehicle_legend(s, x, f.top + 8.0, &run.vehicles, 3.0);
     let grey = "#555";
     s.circle(
         x + 12.0,

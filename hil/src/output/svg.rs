@@ -411,3 +411,29 @@ mod tests {
         assert!(out.contains("a &lt; b &amp; &quot;c&quot;"));
     }
 }
+
+/// The legend's title and one line of each vehicle's colour with its name; returns the y below.
+pub fn vehicle_legend(
+    s: &mut Svg,
+    x: f64,
+    y: f64,
+    vehicles: &[crate::types::VehicleRecord],
+    stroke_width: f64,
+) -> f64 {
+    let mut y = y;
+    s.text(x, y, "Legend", "font-weight=\"bold\"");
+    y += 20.0;
+    for (i, v) in vehicles.iter().enumerate() {
+        let c = colour(i);
+        let style = format!("stroke=\"{c}\" stroke-width=\"{stroke_width}\"");
+        s.line(x, y, x + 24.0, y, &style);
+        let name = if v.name.is_empty() {
+            "(unnamed)"
+        } else {
+            &v.name
+        };
+        s.text(x + 32.0, y + 4.0, name, "fill=\"#222\"");
+        y += 18.0;
+    }
+    y + 6.0
+}
