@@ -213,7 +213,10 @@ fn no_collision_under_any_fault() {
         apply(&mut sc);
         let r = run_on(&sc, Target::Host, &format!("fault_{i}"));
         let m = &r.summary.vehicles[0];
-        println!("{what}: min clearance {:?}, collisions {}", m.min_clearance_m, m.collisions);
+        println!(
+            "{what}: min clearance {:?}, collisions {}",
+            m.min_clearance_m, m.collisions
+        );
         assert_eq!(m.collisions, 0, "collision under {what}");
     }
 }
