@@ -190,7 +190,8 @@ fn a_scenario_runs_on_the_emulated_cortex_m4() {
 fn no_collision_under_any_fault() {
     // A VideoRay with its sonar in clutter, under each fault kind in turn.
     let base = scenario("random_clutter.toml");
-    let faults: [(&str, fn(&mut Scenario)); 5] = [
+    type Fault = (&'static str, fn(&mut Scenario));
+    let faults: [Fault; 5] = [
         ("bit errors", |s| s.faults.bit_error_rate = 1e-4),
         ("dropped frames", |s| s.faults.drop_rate = 0.05),
         ("delayed navigation", |s| s.faults.nav_delay_ms = 500.0),
