@@ -17,7 +17,7 @@
 //! | --- | --- | --- |
 //! | received bytes (board) | [`RX_QUEUE`] | byte dropped, counted (`rx_bytes_dropped`); the decoder resyncs on the next 0x00 |
 //! | sightings | [`SIGHTING_QUEUE`] | sighting dropped, counted (`features_dropped`) |
-//! | requests | [`CONTROL_QUEUE`] | request refused, counted (`bad_mission`/`bad_params`), no reply |
+//! | requests | [`CONTROL_QUEUE`] | request dropped, counted (`BackgroundCounters::controls_dropped`; not yet in telemetry), no reply |
 //! | transmitted bytes (board) | [`TX_QUEUE`] | whole frame dropped, counted (`tx_frames_dropped`) |
 //!
 //! Time is passed in (milliseconds); nothing here reads a clock.
