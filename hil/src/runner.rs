@@ -119,7 +119,8 @@ pub fn run(sc: &Scenario, cfg: &RunConfig) -> Result<RunResult, RunError> {
 
     let mut sims = Vec::new();
     for (i, v) in sc.vehicles.iter().enumerate() {
-        let fw = Firmware::start(&cfg.target, &binary).map_err(fw_err)?;
+        let lockstep = sc.mode == RunMode::Lockstep;
+        let fw = Firmware::start(&cfg.target, &binary, lockstep).map_err(fw_err)?;
         let log = FrameLog::create(&cfg.out_dir, &v.name).map_err(RunError::Output)?;
         let seed = sc.seed.wrapping_add(1000 * i as u64);
         let nav = NavSensor::new(NavConfig {
@@ -167,7 +168,24 @@ pub fn run(sc: &Scenario, cfg: &RunConfig) -> Result<RunResult, RunError> {
         });
     }
 
-    // Parameters and missions go out first; the firmware answers them at its next period.
+    // Lockstep starts before anything else: a first `Tick` stops the firmware's own clock from
+    // running periods between the set-up messages and the first planned period (which would
+    // make the run depend on timing). Its command (a hold: no mission, no navigation yet) is
+    // discarded.
+    if sc.mode == RunMode::Lockstep {
+        for s in sims.iter_mut() {
+            let mut clean = crate::firmware::NoTap;
+            s.fw.send(&Message::Tick(TickRepr { time_ms: 0 }), &mut clean)
+                .map_err(fw_err)?;
+            s.fw.receive_until(Duration::from_secs(10), &mut clean, |inbox| {
+                inbox
+                    .iter()
+                    .any(|r| matches!(r, Reply::Command(c) if c.time_ms == 0))
+            })
+            .map_err(fw_err)?;
+        }
+    }
+    // Parameters and missions go out next; the firmware answers them at its next period.
     for (s, v) in sims.iter_mut().zip(&sc.vehicles) {
         let mission = Mission {
             goal: v.goal.to_vpf(),
