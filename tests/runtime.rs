@@ -298,3 +298,26 @@ fn a_flood_of_contacts_is_counted_not_fatal() {
     assert_eq!(tel.counters.features_dropped, 40 - 16);
     assert_eq!(tel.obstacles, 16);
 }
+
+/// A `Tick` repeated for the same time (the host's answer was slow or lost) gets the same
+/// command again, without a second planner step: lockstep results do not depend on timing.
+#[test]
+fn a_repeated_tick_repeats_the_command_without_planning_again() {
+    let mut host = Host::new(Params::default());
+    host.send(mission(Vec2::new(30.0, 0.0)));
+    host.nav(0, Vec2::ZERO, Vec2::ZERO);
+    let first = host.tick(0);
+    host.nav(100, Vec2::ZERO, Vec2::ZERO);
+    let a = host.tick(100);
+    let again = host.tick(100);
+    assert_eq!(a, again);
+    let b = host.tick(200);
+    // A second step at t = 100 would have integrated the force once more.
+    let mut reference = Host::new(Params::default());
+    reference.send(mission(Vec2::new(30.0, 0.0)));
+    reference.nav(0, Vec2::ZERO, Vec2::ZERO);
+    assert_eq!(reference.tick(0), first);
+    reference.nav(100, Vec2::ZERO, Vec2::ZERO);
+    reference.tick(100);
+    assert_eq!(reference.tick(200), b);
+}

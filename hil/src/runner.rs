@@ -29,7 +29,7 @@ use crate::types::{SetPoints, VehicleRecord, VehicleState, P2};
 
 /// How long to wait for a period's command before sending its `Tick` again (a Tick lost to a
 /// link fault is otherwise never answered).
-pub const TICK_RETRY: Duration = Duration::from_millis(50);
+pub const TICK_RETRY: Duration = Duration::from_millis(200);
 /// How many times a `Tick` is sent before the firmware is given up on.
 pub const TICK_ATTEMPTS: u32 = 200;
 

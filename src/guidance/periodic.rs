@@ -11,7 +11,7 @@ use crate::link::{
 };
 use crate::math::Vec2;
 use crate::params::Params;
-use crate::planner::{Command, Mode, Planner};
+use crate::planner::{Command, Planner};
 use crate::world::World;
 
 use super::failsafe::{self, FailsafeConfig, Situation};
@@ -63,8 +63,11 @@ pub struct Periodic {
     seq: u16,
     last_cost: u32,
     cost_unit: CostUnit,
-    last_mode: Mode,
     last_heading: f32,
+    /// The last period's time and command: a repeated `Tick` for the same time (the host sent
+    /// it again because the answer was slow or lost) gets the same command again instead of a
+    /// second planner step, so lockstep runs do not depend on timing.
+    last: Option<(u64, Command)>,
     counters: TelemetryCounters,
 }
 
@@ -83,8 +86,8 @@ impl Periodic {
             seq: 0,
             last_cost: 0,
             cost_unit,
-            last_mode: Mode::Hold(crate::planner::HoldReason::NoMission),
             last_heading: 0.0,
+            last: None,
             counters: TelemetryCounters::default(),
         })
     }
@@ -129,6 +132,14 @@ impl Periodic {
         cost: &mut impl FnMut() -> u32,
         tx: &mut impl FnMut(&[u8]) -> bool,
     ) -> Command {
+        if let Some((t, cmd)) = self.last.filter(|(t, _)| *t == now_ms) {
+            let command = CommandRepr {
+                time_ms: t,
+                command: cmd,
+            };
+            self.send(&Message::Command(command), tx);
+            return cmd;
+        }
         while let Some(c) = inputs.control() {
             let reply = self.apply(c);
             self.send(&Message::Reply(reply), tx);
@@ -142,7 +153,7 @@ impl Periodic {
         self.world.expire(now_ms, self.config.max_age_ms);
 
         let cmd = self.plan(now_ms, nav, cost);
-        self.last_mode = cmd.mode;
+        self.last = Some((now_ms, cmd));
         self.last_heading = cmd.psi_set;
         let command = CommandRepr {
             time_ms: now_ms,
