@@ -13,6 +13,7 @@ pub const N_GAMMA_MAX: usize = 32;
 /// How the force and commanded velocity are bounded.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub enum Bounding {
     /// Bound the modulus, keep the direction (seed 001 eq. 5 and 7).
     Plain,
@@ -26,6 +27,7 @@ pub enum Bounding {
 /// [`Planner::set_params`](crate::planner::Planner::set_params), which validate.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub struct Params {
     /// T, the planner period in seconds (seed 000 eq. 5). 0.02 ..= 1.0 (50 Hz .. 1 Hz).
     pub period_s: f32,

@@ -46,8 +46,11 @@ fn build_firmware(features: &[&str], name: &str) -> PathBuf {
     let _guard = BUILD.lock().unwrap_or_else(|e| e.into_inner());
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let mut cmd = Command::new(env!("CARGO"));
+    // `-p vpf`: the firmware's features alone (the HIL harness turns on host-only ones).
     cmd.current_dir(root).args([
         "build",
+        "-p",
+        "vpf",
         "--release",
         "--target",
         "thumbv7em-none-eabihf",

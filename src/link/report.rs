@@ -202,6 +202,7 @@ impl CostUnit {
 /// The firmware's counters since boot, each a saturating u32, in wire order.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub struct TelemetryCounters {
     /// Frames received and accepted.
     pub rx_frames: u32,

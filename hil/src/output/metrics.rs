@@ -23,6 +23,7 @@ use serde::Serialize;
 
 use super::RunOutput;
 use crate::types::{VehicleRecord, P2};
+use vpf::link::TelemetryCounters;
 
 /// Everything `metrics.json` holds; its `Display` is the end-of-run summary.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -38,7 +39,7 @@ pub struct Summary {
     /// The rule behind `reached_goal`, spelled out for whoever reads the file.
     pub reached_goal_rule: &'static str,
     /// The planner parameters.
-    pub params: ParamsRecord,
+    pub params: vpf::Params,
     /// One entry per vehicle, in scenario order.
     pub vehicles: Vec<VehicleMetrics>,
 }
@@ -83,7 +84,7 @@ pub struct VehicleMetrics {
     /// Step cost statistics.
     pub step_cost: StepCost,
     /// The last telemetry's counters (null if no telemetry arrived).
-    pub counters: Option<CountersRecord>,
+    pub counters: Option<TelemetryCounters>,
 }
 
 /// Statistics of the firmware's reported planner step costs.
@@ -99,192 +100,24 @@ pub struct StepCost {
     pub unit: Option<&'static str>,
 }
 
-/// [`vpf::link::TelemetryCounters`] by name, in wire order.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
-pub struct CountersRecord {
-    /// Frames received and accepted.
-    pub rx_frames: u32,
-    /// Frames refused for a CRC mismatch.
-    pub rx_crc_errors: u32,
-    /// Frames dropped for exceeding `MAX_FRAME`.
-    pub rx_oversize: u32,
-    /// Frames refused for bad COBS or too short.
-    pub rx_framing_errors: u32,
-    /// Frames refused for an unknown version, type or direction.
-    pub rx_unknown: u32,
-    /// Frames whose payload was refused.
-    pub rx_bad_payload: u32,
-    /// Nav messages the planner refused.
-    pub bad_nav: u32,
-    /// Params messages refused.
-    pub bad_params: u32,
-    /// Mission and chart messages refused.
-    pub bad_mission: u32,
-    /// Received bytes lost to a full receive queue.
-    pub rx_bytes_dropped: u32,
-    /// Sonar features lost to a full feature queue.
-    pub features_dropped: u32,
-    /// Frames not sent because the transmit queue was full.
-    pub tx_frames_dropped: u32,
-    /// Planner periods that overran their deadline.
-    pub deadline_overruns: u32,
-    /// Objects refused by a full table.
-    pub table_full: u32,
-    /// Sensed obstacles evicted by nearer ones.
-    pub table_evicted: u32,
-    /// Sonar features extracted.
-    pub features_extracted: u32,
-}
-
-impl From<vpf::link::TelemetryCounters> for CountersRecord {
-    fn from(c: vpf::link::TelemetryCounters) -> Self {
-        // Exhaustive destructuring: a counter added to the firmware fails to compile here
-        // instead of silently missing from the JSON.
-        let vpf::link::TelemetryCounters {
-            rx_frames,
-            rx_crc_errors,
-            rx_oversize,
-            rx_framing_errors,
-            rx_unknown,
-            rx_bad_payload,
-            bad_nav,
-            bad_params,
-            bad_mission,
-            rx_bytes_dropped,
-            features_dropped,
-            tx_frames_dropped,
-            deadline_overruns,
-            table_full,
-            table_evicted,
-            features_extracted,
-        } = c;
-        CountersRecord {
-            rx_frames,
-            rx_crc_errors,
-            rx_oversize,
-            rx_framing_errors,
-            rx_unknown,
-            rx_bad_payload,
-            bad_nav,
-            bad_params,
-            bad_mission,
-            rx_bytes_dropped,
-            features_dropped,
-            tx_frames_dropped,
-            deadline_overruns,
-            table_full,
-            table_evicted,
-            features_extracted,
-        }
-    }
-}
-
-impl CountersRecord {
-    /// The counters that indicate trouble, by name, with their values (all of them; zero ones
-    /// included).
-    fn trouble(&self) -> [(&'static str, u32); 13] {
-        [
-            ("rx_crc_errors", self.rx_crc_errors),
-            ("rx_oversize", self.rx_oversize),
-            ("rx_framing_errors", self.rx_framing_errors),
-            ("rx_unknown", self.rx_unknown),
-            ("rx_bad_payload", self.rx_bad_payload),
-            ("bad_nav", self.bad_nav),
-            ("bad_params", self.bad_params),
-            ("bad_mission", self.bad_mission),
-            ("rx_bytes_dropped", self.rx_bytes_dropped),
-            ("features_dropped", self.features_dropped),
-            ("tx_frames_dropped", self.tx_frames_dropped),
-            ("deadline_overruns", self.deadline_overruns),
-            ("table_full", self.table_full),
-        ]
-    }
-}
-
-/// [`vpf::Params`] by name, with the firmware's field names.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
-#[allow(missing_docs)] // the fields are vpf::Params's, documented there
-pub struct ParamsRecord {
-    pub period_s: f32,
-    pub epsilon_m: f32,
-    pub n_gamma: u8,
-    pub mu: f32,
-    pub f_max: f32,
-    pub v_max: f32,
-    pub a_plus: f32,
-    pub a_rotor: f32,
-    pub a_minus: f32,
-    pub sigma_m: f32,
-    /// `"Plain"` or `"Split"`.
-    pub bounding: &'static str,
-    pub agent_radius_m: f32,
-    pub agent_a_plus: f32,
-    pub arrival_radius_m: f32,
-    pub ghost_lambda: f32,
-    pub ghost_alpha: f32,
-    pub ghost_eps_m: f32,
-    pub stall_speed: f32,
-    pub stall_time_s: f32,
-    pub ghost_timeout_s: f32,
-    pub max_ghosts: u8,
-    pub seed: u32,
-}
-
-impl From<vpf::Params> for ParamsRecord {
-    fn from(p: vpf::Params) -> Self {
-        // Exhaustive, as for the counters.
-        let vpf::Params {
-            period_s,
-            epsilon_m,
-            n_gamma,
-            mu,
-            f_max,
-            v_max,
-            a_plus,
-            a_rotor,
-            a_minus,
-            sigma_m,
-            bounding,
-            agent_radius_m,
-            agent_a_plus,
-            arrival_radius_m,
-            ghost_lambda,
-            ghost_alpha,
-            ghost_eps_m,
-            stall_speed,
-            stall_time_s,
-            ghost_timeout_s,
-            max_ghosts,
-            seed,
-        } = p;
-        ParamsRecord {
-            period_s,
-            epsilon_m,
-            n_gamma,
-            mu,
-            f_max,
-            v_max,
-            a_plus,
-            a_rotor,
-            a_minus,
-            sigma_m,
-            bounding: match bounding {
-                vpf::Bounding::Plain => "Plain",
-                vpf::Bounding::Split => "Split",
-            },
-            agent_radius_m,
-            agent_a_plus,
-            arrival_radius_m,
-            ghost_lambda,
-            ghost_alpha,
-            ghost_eps_m,
-            stall_speed,
-            stall_time_s,
-            ghost_timeout_s,
-            max_ghosts,
-            seed,
-        }
-    }
+/// The counters that indicate trouble, by name, with their values (all of them; zero ones
+/// included).
+fn trouble(c: &TelemetryCounters) -> [(&'static str, u32); 13] {
+    [
+        ("rx_crc_errors", c.rx_crc_errors),
+        ("rx_oversize", c.rx_oversize),
+        ("rx_framing_errors", c.rx_framing_errors),
+        ("rx_unknown", c.rx_unknown),
+        ("rx_bad_payload", c.rx_bad_payload),
+        ("bad_nav", c.bad_nav),
+        ("bad_params", c.bad_params),
+        ("bad_mission", c.bad_mission),
+        ("rx_bytes_dropped", c.rx_bytes_dropped),
+        ("features_dropped", c.features_dropped),
+        ("tx_frames_dropped", c.tx_frames_dropped),
+        ("deadline_overruns", c.deadline_overruns),
+        ("table_full", c.table_full),
+    ]
 }
 
 impl Summary {
@@ -296,7 +129,7 @@ impl Summary {
             dt_s: run.dt_s,
             arrival_radius_m: run.arrival_radius_m,
             reached_goal_rule: REACHED_GOAL_RULE,
-            params: run.params.into(),
+            params: run.params,
             vehicles: run
                 .vehicles
                 .iter()
@@ -407,7 +240,7 @@ impl VehicleMetrics {
             ghost_goal_points: v.ghosts.len(),
             final_mode: v.samples.last().map(|s| s.mode.clone()),
             step_cost,
-            counters: v.telemetry.map(|t| t.counters.into()),
+            counters: v.telemetry.map(|t| t.counters),
         }
     }
 }
@@ -485,8 +318,7 @@ impl fmt::Display for VehicleMetrics {
                     "; firmware received {} frames, extracted {} sonar features, evicted {} obstacles",
                     c.rx_frames, c.features_extracted, c.table_evicted
                 )?;
-                let bad: Vec<String> = c
-                    .trouble()
+                let bad: Vec<String> = trouble(c)
                     .iter()
                     .filter(|(_, n)| *n > 0)
                     .map(|(k, n)| format!("{k} {n}"))

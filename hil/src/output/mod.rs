@@ -23,7 +23,7 @@ use std::path::Path;
 use crate::types::{SimObstacle, VehicleRecord};
 
 pub use frames::{Dir, FrameLog};
-pub use metrics::{ParamsRecord, StepCost, Summary, VehicleMetrics};
+pub use metrics::{StepCost, Summary, VehicleMetrics};
 
 /// Everything a run produced, as handed to [`write_all`].
 #[derive(Clone, Debug)]
