@@ -47,6 +47,6 @@ pub mod sonar;
 pub mod world;
 
 pub use math::Vec2;
-pub use params::{Bounding, ParamError, Params};
+pub use params::{Bounding, ParamError, Params, Strategy};
 pub use planner::{Command, Mission, Mode, NavState, Planner, StepError};
 pub use world::{Agent, Obstacle, Origin, World};

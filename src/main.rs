@@ -29,7 +29,7 @@ fn main() -> ! {
     board::init(cp);
     firmware::start();
     #[cfg(feature = "selftest")]
-    firmware::selftest::run(&mut idle);
+    firmware::selftest::run(&mut idle, vpf::Params::default());
     #[cfg(not(feature = "selftest"))]
     loop {
         if !idle.poll() {

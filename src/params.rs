@@ -22,6 +22,41 @@ pub enum Bounding {
     Split,
 }
 
+/// Which guidance strategy turns the world into set-points. All three produce the same
+/// [`Command`](crate::planner::Command), bounded by F_max and v_max, from the same obstacle
+/// table, under the same fail-safes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
+#[cfg_attr(feature = "serde", serde(rename_all = "lowercase"))]
+pub enum Strategy {
+    /// The virtual potential field of seeds 000/001 (sampled PDF gradient, friction, ghosts,
+    /// rotors, formation).
+    Vpf,
+    /// The multipoint potential field of seed 003 (minimum-potential point on an arc ahead).
+    Multipoint,
+    /// Rimon–Koditschek navigation functions on a sphere world (seed 004).
+    Navfn,
+}
+
+impl Strategy {
+    /// The name used in scenario files and parameter files.
+    pub const fn name(self) -> &'static str {
+        match self {
+            Strategy::Vpf => "vpf",
+            Strategy::Multipoint => "multipoint",
+            Strategy::Navfn => "navfn",
+        }
+    }
+
+    /// The strategy called `name`, if any.
+    pub fn from_name(name: &str) -> Option<Strategy> {
+        [Strategy::Vpf, Strategy::Multipoint, Strategy::Navfn]
+            .into_iter()
+            .find(|s| s.name() == name)
+    }
+}
+
 /// The planner's parameters. Build from [`Params::default`] and change fields, then pass to
 /// [`Planner::new`](crate::planner::Planner::new) or
 /// [`Planner::set_params`](crate::planner::Planner::set_params), which validate.
@@ -86,12 +121,43 @@ pub struct Params {
     pub max_ghosts: u8,
     /// Seed of the deterministic generator for the ghost's random side ρ (000 eq. 17).
     pub seed: u32,
+    /// The guidance strategy.
+    pub strategy: Strategy,
+    /// Prediction horizon for moving obstacles, s: every strategy sees a moving obstacle where
+    /// it will be at the closest approach within this horizon (`crate::world::Obstacle::
+    /// predicted_shift`). 0 ..= 120 (0: obstacles are taken where they are).
+    pub horizon_s: f32,
+    /// Multipoint (003): r, radius of the arc of candidate points ahead of the bow, m.
+    /// 0.1 ..= 100.
+    pub mp_arc_m: f32,
+    /// Multipoint (003): N, points on the arc. 3 ..= 32.
+    pub mp_points: u8,
+    /// Multipoint (003): ψ_m, the arc spans heading ± ψ_m (the largest turn), rad. 0.05 ..= π.
+    pub mp_turn_rad: f32,
+    /// Multipoint (003 eq. 4): ξ, attraction gain. 0.001 ..= 10⁴.
+    pub mp_xi: f32,
+    /// Multipoint (003 eq. 5): η, repulsion gain. 0 ..= 10⁶.
+    pub mp_eta: f32,
+    /// Multipoint (003 eq. 5): d_t, influence distance of an obstacle point, m. 0.1 ..= 1000.
+    pub mp_influence_m: f32,
+    /// Multipoint (003): K, points on the facing half of each obstacle's periphery. 2 ..= 16.
+    pub mp_periphery: u8,
+    /// Navigation function (004): κ. 0 picks κ = M + 2 for M obstacles (the notes' rule of
+    /// thumb κ > M + 1); otherwise 1 ..= 64.
+    pub nf_kappa: f32,
+    /// Navigation function (004): ρ₀, radius of the spherical workspace (obstacle 0), centred
+    /// on the goal, m. 1 ..= 10⁵.
+    pub nf_workspace_m: f32,
 }
 
 impl Default for Params {
     /// A VideoRay-class default: 10 Hz, 1 m/s, the papers' μ = 0.4 and agent circle
     /// {r₀ = 0.5, A⁺ = 2.5}. The other values are a starting point for the tuning of seed 002.
+    /// The multipoint settings are [`ArcConfig::default`]'s, reasoned there.
+    ///
+    /// [`ArcConfig::default`]: crate::planner::multipoint::ArcConfig
     fn default() -> Self {
+        let arc = crate::planner::multipoint::ArcConfig::default();
         Params {
             period_s: 0.1,
             epsilon_m: 0.25,
@@ -115,6 +181,17 @@ impl Default for Params {
             ghost_timeout_s: 60.0,
             max_ghosts: 4,
             seed: 1,
+            strategy: Strategy::Vpf,
+            horizon_s: 10.0,
+            mp_arc_m: arc.arc_m,
+            mp_points: arc.points,
+            mp_turn_rad: arc.max_turn_rad,
+            mp_xi: arc.xi,
+            mp_eta: arc.eta,
+            mp_influence_m: arc.influence_m,
+            mp_periphery: arc.periphery,
+            nf_kappa: 0.0,
+            nf_workspace_m: 1000.0,
         }
     }
 }
@@ -184,6 +261,20 @@ impl Params {
         check("ghost_timeout_s", self.ghost_timeout_s, 1.0, 3600.0)?;
         let ghosts = crate::planner::MAX_GHOSTS as f32;
         check("max_ghosts", self.max_ghosts as f32, 0.0, ghosts)?;
+        check("horizon_s", self.horizon_s, 0.0, 120.0)?;
+        check("mp_arc_m", self.mp_arc_m, 0.1, 100.0)?;
+        let arc = crate::planner::multipoint::MAX_ARC_POINTS as f32;
+        check("mp_points", self.mp_points as f32, 3.0, arc)?;
+        check("mp_turn_rad", self.mp_turn_rad, 0.05, core::f32::consts::PI)?;
+        check("mp_xi", self.mp_xi, 0.001, 1e4)?;
+        check("mp_eta", self.mp_eta, 0.0, 1e6)?;
+        check("mp_influence_m", self.mp_influence_m, 0.1, 1000.0)?;
+        let k = crate::planner::multipoint::MAX_PERIPHERY_POINTS as f32;
+        check("mp_periphery", self.mp_periphery as f32, 2.0, k)?;
+        if self.nf_kappa != 0.0 {
+            check("nf_kappa", self.nf_kappa, 1.0, 64.0)?;
+        }
+        check("nf_workspace_m", self.nf_workspace_m, 1.0, 1e5)?;
         Ok(())
     }
 }

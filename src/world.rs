@@ -120,6 +120,35 @@ impl Obstacle {
     pub fn a_plus(&self) -> f32 {
         self.stator.a_plus()
     }
+
+    /// How far a moving obstacle is shifted for planning at `now_ms`, for a vehicle at `p`
+    /// moving with `v`: to where it will be at the closest approach, at most `horizon_s` ahead.
+    ///
+    /// Every strategy plans against the shifted shape (`shape` moved by this amount), so that
+    /// a crossing obstacle repels from where the encounter will happen rather than from where
+    /// it is now — the "predicted position over a short horizon" choice of issue 5. None of
+    /// the seeds models motion in the field itself: 003 §5 re-plans every 1 s on the
+    /// obstacles' *current* positions, which is the `horizon_s = 0` case. The time of closest
+    /// approach of the two constant-velocity points is t* = −(Δp·Δv)/|Δv|² (Δp the obstacle's
+    /// centre relative to the vehicle, Δv its velocity relative to the vehicle's), clamped to
+    /// 0 ..= `horizon_s`; the time since the obstacle was seen (also at most the horizon) is
+    /// added, so a sighting carried over a few periods is dead-reckoned to now. A static
+    /// obstacle is never shifted.
+    pub fn predicted_shift(&self, now_ms: u64, p: Vec2, v: Vec2, horizon_s: f32) -> Vec2 {
+        if self.velocity == Vec2::ZERO || horizon_s.is_nan() || horizon_s <= 0.0 {
+            return Vec2::ZERO;
+        }
+        let age_s = crate::math::min(now_ms.saturating_sub(self.seen_ms) as f32 * 1e-3, horizon_s);
+        let dp = self.shape.center() + self.velocity * age_s - p;
+        let dv = self.velocity - v;
+        let dv2 = dv.norm2();
+        let t = if dv2 > 1e-6 {
+            crate::math::max(0.0, crate::math::min(-dp.dot(dv) / dv2, horizon_s))
+        } else {
+            0.0
+        };
+        self.velocity * (age_s + t)
+    }
 }
 
 /// Another vehicle as seen by this one (000 §III: a circle; 001 §3.2: a formation neighbour).
@@ -355,6 +384,30 @@ mod tests {
         assert_eq!(w.obstacles().len(), 1);
         assert!(w.agents().is_empty());
         assert_eq!(w.counters.expired, 2);
+    }
+
+    #[test]
+    fn a_crossing_obstacle_is_planned_at_the_closest_approach() {
+        let shape = Shape::circle(Vec2::new(10.0, -10.0), 1.0).unwrap();
+        let o = Obstacle::new(1, shape, 1.0, Origin::Sensed, 0)
+            .unwrap()
+            .moving(Vec2::new(0.0, 1.0))
+            .unwrap();
+        // Vehicle at the origin going +x at 1 m/s: they meet at (10, 0) after 10 s.
+        let v = Vec2::new(1.0, 0.0);
+        let s = o.predicted_shift(0, Vec2::ZERO, v, 30.0);
+        assert!((s - Vec2::new(0.0, 10.0)).norm() < 1e-4, "{s:?}");
+        // The horizon caps the look-ahead; a sighting 2 s old is carried forward.
+        let s = o.predicted_shift(0, Vec2::ZERO, v, 4.0);
+        assert!((s - Vec2::new(0.0, 4.0)).norm() < 1e-4, "{s:?}");
+        let s = o.predicted_shift(2000, Vec2::ZERO, v, 4.0);
+        assert!((s - Vec2::new(0.0, 6.0)).norm() < 1e-3, "{s:?}");
+        // Receding: no look-ahead beyond now. Static, or horizon 0: no shift.
+        let s = o.predicted_shift(0, Vec2::new(0.0, -20.0), Vec2::ZERO, 30.0);
+        assert_eq!(s, Vec2::ZERO);
+        assert_eq!(o.predicted_shift(0, Vec2::ZERO, v, 0.0), Vec2::ZERO);
+        let still = Obstacle::new(2, shape, 1.0, Origin::Sensed, 0).unwrap();
+        assert_eq!(still.predicted_shift(0, Vec2::ZERO, v, 30.0), Vec2::ZERO);
     }
 
     #[test]

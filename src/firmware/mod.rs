@@ -96,7 +96,6 @@ pub struct PeriodicCtx {
     timer_period_ms: u32,
     /// Firmware time, ms: the sum of the periods run (real-time mode).
     time_ms: u64,
-    stats: Stats,
 }
 
 /// What the periodic task has done, for reports.
@@ -212,7 +211,6 @@ pub fn init(params: Params) -> Option<Idle> {
         tick: 0,
         timer_period_ms: 0,
         time_ms: 0,
-        stats: Stats::default(),
     };
     // SAFETY: SysTick, the owner, is not running yet (`start` enables it later).
     if !unsafe { PERIODIC.init(ctx) } {
@@ -232,6 +230,12 @@ pub fn init(params: Params) -> Option<Idle> {
 #[cfg(feature = "selftest")]
 pub fn stats() -> Stats {
     critical_section::with(|cs| STATS.borrow(cs).get())
+}
+
+/// The statistics so far, which then start again from zero (for reports per phase).
+#[cfg(feature = "selftest")]
+pub fn take_stats() -> Stats {
+    critical_section::with(|cs| STATS.borrow(cs).take())
 }
 
 struct PeriodicInputs<'a> {
@@ -299,17 +303,20 @@ pub fn on_systick(ctx: &mut PeriodicCtx) {
     board::feed_watchdog();
 
     let cost = ctx.periodic.last_cost();
-    let st = &mut ctx.stats;
-    st.periods = st.periods.saturating_add(1);
-    st.max_cost = st.max_cost.max(cost);
-    st.sum_cost = st.sum_cost.saturating_add(u64::from(cost));
     // The next timer interrupt already came while this period ran: a missed deadline.
-    if !lockstep && board::timer_pending() {
+    let overrun = !lockstep && board::timer_pending();
+    if overrun {
         ctx.periodic.count_overrun();
-        st.overruns = st.overruns.saturating_add(1);
     }
-    let stats = *st;
-    critical_section::with(|cs| STATS.borrow(cs).set(stats));
+    critical_section::with(|cs| {
+        let cell = STATS.borrow(cs);
+        let mut st = cell.get();
+        st.periods = st.periods.saturating_add(1);
+        st.max_cost = st.max_cost.max(cost);
+        st.sum_cost = st.sum_cost.saturating_add(u64::from(cost));
+        st.overruns = st.overruns.saturating_add(u32::from(overrun));
+        cell.set(st);
+    });
     // A new period from the parameters: reprogram the timer (absolute from here on).
     let period = ctx.periodic.period_ms();
     if !lockstep && period != ctx.timer_period_ms {

@@ -1,24 +1,52 @@
-//! Sonar features into the obstacle table: association by position, ids, and the table's
-//! eviction policy.
+//! Sonar features into the obstacle table: association across sweeps, a velocity per track
+//! (alpha–beta filter), ids, and the table's eviction policy.
 //!
-//! The extractor (`crate::sonar`) emits a feature per sweep per obstacle, without identity. A
-//! feature whose centre lies within the association gate of a sensed obstacle already in the
-//! table updates that obstacle (new shape, refreshed `seen_ms`); otherwise it becomes a new
-//! sensed obstacle with a fresh id from [`SONAR_ID_BASE`] upwards. Features below the confidence
-//! floor are dropped (a single sweep cannot tell three beams of speckle from a small target; see
-//! the sonar module). When the table is full, the sensed obstacle farthest from the vehicle is
-//! evicted if the newcomer is nearer ([`World::upsert_obstacle_or_evict`]); otherwise the
-//! newcomer is dropped. Stale sensed obstacles age out in the periodic task.
+//! The extractor (`crate::sonar`) emits a feature per sweep per obstacle, without identity.
+//!
+//! **Association.** Each sensed obstacle in the table has a track: a filtered centre, a
+//! velocity and the time of its last update. A feature belongs to the nearest track whose
+//! *predicted* centre (centre + velocity × elapsed time) lies within the gate: the larger of
+//! the two radii + `gate_m` + `gate_speed_mps` × elapsed time (so a target that moved between
+//! sweeps is still recognised, even before its velocity is known). It then updates that
+//! obstacle (new shape, moved to the filtered centre; refreshed `seen_ms`); otherwise it
+//! becomes a new sensed obstacle with a fresh id from [`SONAR_ID_BASE`] upwards.
+//!
+//! **Velocity.** An alpha–beta filter per track (e.g. Bar-Shalom & Li, *Estimation and
+//! Tracking*, §5.3): with the residual r = z − (x + v·Δt),
+//! x ← x + v·Δt + α·r and v ← v + (β/Δt)·r. The default α = 0.5 and β = α²/(2 − α) = 1/6 are
+//! the critically damped pair (no overshoot of the velocity estimate). Updates less than
+//! `min_update_ms` apart move the centre but leave the velocity alone, since a short Δt turns
+//! centre noise into speed. The velocity is handed to the planner (`Obstacle::velocity`) only
+//! once a track has `min_hits` updates and its speed exceeds `min_speed_mps`; below that a
+//! feature's centre noise would make static rocks drift. Speeds are capped at `max_speed_mps`.
+//!
+//! **Capacity.** One track per sensed obstacle: [`MAX_TRACKS`] = the obstacle table's size.
+//! Tracks whose obstacle has left the table (aged out by `World::expire`, evicted, removed)
+//! are dropped before a new one is opened, so the track table cannot fill while the world has
+//! room; if it ever did, the obstacle is kept without a velocity.
+//!
+//! Features below the confidence floor are dropped (a single sweep cannot tell three beams of
+//! speckle from a small target; see the sonar module). When the table is full, the sensed
+//! obstacle farthest from the vehicle is evicted if the newcomer is nearer
+//! ([`World::upsert_obstacle_or_evict`]); otherwise the newcomer is dropped.
 
-use crate::math::Vec2;
+use heapless::Vec;
+
+use crate::math::{min, Vec2};
 use crate::sonar::Feature;
-use crate::world::{Obstacle, Origin, World};
+use crate::world::{Obstacle, Origin, World, MAX_OBJECT_SPEED, MAX_OBSTACLES};
 
 /// First id given to sonar-derived obstacles; ids from the host (charts, contacts) should stay
 /// below it.
 pub const SONAR_ID_BASE: u16 = 0xC000;
 
-/// Association settings.
+/// Capacity of the track table: one per obstacle table entry.
+pub const MAX_TRACKS: usize = MAX_OBSTACLES;
+
+/// Longest time a track is extrapolated over, s (beyond it the gate stops growing).
+const MAX_GAP_S: f32 = 10.0;
+
+/// Association and tracking settings.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct TrackConfig {
@@ -27,8 +55,22 @@ pub struct TrackConfig {
     /// Extra distance beyond the larger of the two radii within which a feature is the same
     /// obstacle, m.
     pub gate_m: f32,
+    /// The gate also grows by this speed × the time since the track's last update, m/s.
+    pub gate_speed_mps: f32,
     /// Repulsiveness A⁺ given to sonar obstacles.
     pub a_plus: f32,
+    /// α of the alpha–beta filter, 0 ..= 1.
+    pub alpha: f32,
+    /// β of the alpha–beta filter, 0 ..= 2.
+    pub beta: f32,
+    /// Updates closer together than this do not change the velocity, ms.
+    pub min_update_ms: u64,
+    /// Updates a track needs before its velocity is used.
+    pub min_hits: u16,
+    /// Speeds below this are reported as zero, m/s.
+    pub min_speed_mps: f32,
+    /// Speeds are capped here, m/s (≤ `MAX_OBJECT_SPEED`).
+    pub max_speed_mps: f32,
 }
 
 impl Default for TrackConfig {
@@ -36,7 +78,14 @@ impl Default for TrackConfig {
         TrackConfig {
             min_confidence: 0.5,
             gate_m: 1.0,
+            gate_speed_mps: 1.0,
             a_plus: 2.5,
+            alpha: 0.5,
+            beta: 1.0 / 6.0,
+            min_update_ms: 500,
+            min_hits: 3,
+            min_speed_mps: 0.1,
+            max_speed_mps: 3.0,
         }
     }
 }
@@ -56,21 +105,78 @@ pub enum Admission {
     TableFull,
 }
 
-/// Id allocation for sonar obstacles.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+/// One sensed obstacle's filter state.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Track {
+    /// The obstacle's id in the world table.
+    pub id: u16,
+    /// Filtered centre at `time_ms`, m.
+    pub center: Vec2,
+    /// Estimated velocity, m/s.
+    pub velocity: Vec2,
+    /// Time of the last update, ms.
+    pub time_ms: u64,
+    /// Updates so far (the first sighting is 1).
+    pub hits: u16,
+}
+
+impl Track {
+    fn predict(&self, time_ms: u64) -> (Vec2, f32) {
+        let dt = min(
+            time_ms.saturating_sub(self.time_ms) as f32 * 1e-3,
+            MAX_GAP_S,
+        );
+        (self.center + self.velocity * dt, dt)
+    }
+
+    /// The alpha–beta update with measurement `z` at `time_ms` (see the module notes).
+    fn update(&mut self, cfg: &TrackConfig, z: Vec2, time_ms: u64) {
+        let (predicted, dt) = self.predict(time_ms);
+        let r = z - predicted;
+        self.center = predicted + r * cfg.alpha;
+        if time_ms >= self.time_ms.saturating_add(cfg.min_update_ms) && dt > 0.0 {
+            let cap = min(cfg.max_speed_mps, MAX_OBJECT_SPEED);
+            self.velocity = (self.velocity + r * (cfg.beta / dt)).bounded(cap);
+            self.time_ms = time_ms;
+        } else {
+            self.time_ms = self.time_ms.max(time_ms);
+        }
+        self.hits = self.hits.saturating_add(1);
+    }
+
+    /// The velocity the planner is given.
+    fn reported_velocity(&self, cfg: &TrackConfig) -> Vec2 {
+        let confirmed = self.hits >= cfg.min_hits;
+        if confirmed && self.velocity.norm2() >= cfg.min_speed_mps * cfg.min_speed_mps {
+            self.velocity
+        } else {
+            Vec2::ZERO
+        }
+    }
+}
+
+/// Track table and id allocation for sonar obstacles.
+#[derive(Clone, Debug, PartialEq)]
 pub struct Tracks {
     next_id: u16,
+    tracks: Vec<Track, MAX_TRACKS>,
 }
 
 impl Default for Tracks {
     fn default() -> Self {
         Tracks {
             next_id: SONAR_ID_BASE,
+            tracks: Vec::new(),
         }
     }
 }
 
 impl Tracks {
+    /// The tracks.
+    pub fn tracks(&self) -> &[Track] {
+        &self.tracks
+    }
+
     /// Puts `f` into `world`, seen from the vehicle at `vehicle`.
     pub fn admit(
         &mut self,
@@ -87,22 +193,58 @@ impl Tracks {
         let Ok(shape) = f.to_shape() else {
             return Admission::Invalid;
         };
-        let same = world.obstacles().iter().find(|o| {
-            o.origin == Origin::Sensed
-                && o.id >= SONAR_ID_BASE
-                && (o.shape.center() - f.center).norm()
-                    <= o.shape.bounding_radius().max(f.radius) + cfg.gate_m
-        });
-        let (id, fresh) = match same {
-            Some(o) => (o.id, false),
-            None => (self.next_id, true),
+        self.tracks
+            .retain(|t| world.obstacles().iter().any(|o| o.id == t.id));
+
+        // The nearest track whose predicted centre gates the feature.
+        let mut best: Option<(usize, f32)> = None;
+        for (i, t) in self.tracks.iter().enumerate() {
+            let Some(o) = world.obstacles().iter().find(|o| o.id == t.id) else {
+                continue;
+            };
+            let (predicted, dt) = t.predict(f.time_ms);
+            let d = (predicted - f.center).norm();
+            let reach = crate::math::max(o.shape.bounding_radius(), f.radius);
+            let gate = reach + cfg.gate_m + cfg.gate_speed_mps * dt;
+            if d <= gate && best.is_none_or(|(_, b)| d < b) {
+                best = Some((i, d));
+            }
+        }
+        let (id, track) = match best.and_then(|(i, _)| self.tracks.get_mut(i)) {
+            Some(t) => {
+                t.update(cfg, f.center, f.time_ms);
+                (t.id, Some(*t))
+            }
+            None => (self.next_id, None),
         };
-        let Ok(o) = Obstacle::new(id, shape, cfg.a_plus, Origin::Sensed, f.time_ms) else {
+        let fresh = track.is_none();
+        let center = track.map_or(f.center, |t| t.center);
+        let velocity = track.map_or(Vec2::ZERO, |t| t.reported_velocity(cfg));
+        let o = Obstacle::new(
+            id,
+            shape.translated(center - f.center),
+            cfg.a_plus,
+            Origin::Sensed,
+            f.time_ms,
+        )
+        .and_then(|o| o.moving(velocity));
+        let Ok(o) = o else {
             return Admission::Invalid;
         };
         match world.upsert_obstacle_or_evict(o, vehicle) {
             Ok(_) if fresh => {
                 self.next_id = self.next_id.checked_add(1).unwrap_or(SONAR_ID_BASE);
+                // Drop the track of an obstacle this one evicted; then there is room, since
+                // every track's obstacle is in the table.
+                self.tracks
+                    .retain(|t| world.obstacles().iter().any(|o| o.id == t.id));
+                let _ = self.tracks.push(Track {
+                    id,
+                    center,
+                    velocity: Vec2::ZERO,
+                    time_ms: f.time_ms,
+                    hits: 1,
+                });
                 Admission::Added(id)
             }
             Ok(_) => Admission::Updated(id),
@@ -139,6 +281,104 @@ mod tests {
         let c = t.admit(&cfg, &mut w, &feature(20.0, 0.0, 1.0, 0.9), Vec2::ZERO);
         assert_eq!(c, Admission::Added(SONAR_ID_BASE + 1));
         assert_eq!(w.obstacles().len(), 2);
+    }
+
+    fn at(mut f: Feature, t_ms: u64) -> Feature {
+        f.time_ms = t_ms;
+        f
+    }
+
+    #[test]
+    fn a_moving_feature_gets_its_velocity_and_a_static_one_none() {
+        let cfg = TrackConfig::default();
+        let mut w = World::new();
+        let mut t = Tracks::default();
+        let mut rng = crate::math::XorShift32::new(7);
+        let mut noise = || (rng.next_u32() as f32 / u32::MAX as f32 - 0.5) * 0.4; // ±0.2 m
+                                                                                  // A sweep every 4 s; one target crosses at (0.5, −0.3) m/s, a rock sits still.
+        for k in 0..12u64 {
+            let s = 4.0 * k as f32;
+            let mover = feature(20.0 + 0.5 * s + noise(), 5.0 - 0.3 * s + noise(), 1.5, 0.9);
+            let rock = feature(-15.0 + noise(), 8.0 + noise(), 2.0, 0.9);
+            for f in [mover, rock] {
+                let a = t.admit(&cfg, &mut w, &at(f, 4000 * k), Vec2::ZERO);
+                assert!(
+                    matches!(a, Admission::Added(_) | Admission::Updated(_)),
+                    "{a:?}"
+                );
+            }
+        }
+        assert_eq!(w.obstacles().len(), 2, "each target stays one obstacle");
+        let v = w.obstacles()[0].velocity;
+        assert!((v - Vec2::new(0.5, -0.3)).norm() < 0.08, "mover {v:?}");
+        assert_eq!(
+            w.obstacles()[1].velocity,
+            Vec2::ZERO,
+            "the rock does not drift"
+        );
+        // The mover's centre is the filtered one, near the truth at t = 44 s.
+        let c = w.obstacles()[0].shape.center();
+        assert!((c - Vec2::new(42.0, -8.2)).norm() < 0.5, "{c:?}");
+    }
+
+    #[test]
+    fn an_unconfirmed_track_reports_no_velocity_and_stale_tracks_go() {
+        let cfg = TrackConfig::default();
+        let mut w = World::new();
+        let mut t = Tracks::default();
+        t.admit(
+            &cfg,
+            &mut w,
+            &at(feature(10.0, 0.0, 1.0, 0.9), 0),
+            Vec2::ZERO,
+        );
+        // Moved 3 m in 4 s: beyond radius + gate_m, within the speed allowance; one hit more.
+        let a = t.admit(
+            &cfg,
+            &mut w,
+            &at(feature(13.0, 0.0, 1.0, 0.9), 4000),
+            Vec2::ZERO,
+        );
+        assert_eq!(a, Admission::Updated(SONAR_ID_BASE));
+        assert_eq!(
+            w.obstacles()[0].velocity,
+            Vec2::ZERO,
+            "two hits: not yet confirmed"
+        );
+        assert_eq!(t.tracks().len(), 1);
+        // Not seen for 30 s: the world drops it, and the track goes with it.
+        w.expire(40_000, 30_000);
+        assert!(w.obstacles().is_empty());
+        t.admit(
+            &cfg,
+            &mut w,
+            &at(feature(-20.0, 0.0, 1.0, 0.9), 40_000),
+            Vec2::ZERO,
+        );
+        assert_eq!(t.tracks().len(), 1);
+        assert_eq!(t.tracks()[0].id, SONAR_ID_BASE + 1);
+    }
+
+    #[test]
+    fn the_track_table_never_outgrows_the_world() {
+        let cfg = TrackConfig::default();
+        let mut w = World::new();
+        let mut t = Tracks::default();
+        // 40 features far apart, walking away: later ones evict none (farther), so the world
+        // and the tracks stay at capacity together.
+        for i in 0..40u64 {
+            let f = feature(10.0 * i as f32, 0.0, 1.0, 0.9);
+            t.admit(&cfg, &mut w, &at(f, 100 * i), Vec2::ZERO);
+            assert!(t.tracks().len() <= w.obstacles().len());
+        }
+        assert_eq!(w.obstacles().len(), MAX_TRACKS);
+        // Nearer ones evict the farthest: tracks follow.
+        for i in 0..8u64 {
+            let f = feature(-5.0 - 10.0 * i as f32, 50.0, 1.0, 0.9);
+            let a = t.admit(&cfg, &mut w, &at(f, 5000 + 100 * i), Vec2::new(-40.0, 50.0));
+            assert!(matches!(a, Admission::Added(_)), "{a:?}");
+            assert_eq!(t.tracks().len(), w.obstacles().len());
+        }
     }
 
     #[test]

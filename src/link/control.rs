@@ -9,7 +9,7 @@ use super::message::Payload;
 use super::shape::{read_shape, shape_len, write_shape};
 use super::{Error, Problem};
 use crate::field::Shape;
-use crate::params::{Bounding, Params};
+use crate::params::{Bounding, Params, Strategy};
 use crate::planner::{Formation, Mission, MAX_COORD_M};
 use crate::world::{ObjectError, Obstacle, Origin};
 
@@ -198,7 +198,7 @@ impl<'a> Payload<'a> for ChartClearRepr {
 
 /// The names of [`Params`]' fields in wire order: the parameter index of a `Params` field and
 /// of a [`ReplyRepr`](super::ReplyRepr) rejecting it.
-pub const PARAM_NAMES: [&str; 22] = [
+pub const PARAM_NAMES: [&str; 33] = [
     "period_s",
     "epsilon_m",
     "n_gamma",
@@ -221,6 +221,17 @@ pub const PARAM_NAMES: [&str; 22] = [
     "ghost_timeout_s",
     "max_ghosts",
     "seed",
+    "strategy",
+    "horizon_s",
+    "mp_arc_m",
+    "mp_points",
+    "mp_turn_rad",
+    "mp_xi",
+    "mp_eta",
+    "mp_influence_m",
+    "mp_periphery",
+    "nf_kappa",
+    "nf_workspace_m",
 ];
 
 /// The wire index of the parameter called `name` (as in
@@ -233,10 +244,10 @@ pub fn param_index(name: &str) -> Option<u8> {
 }
 
 /// `Params` payload length.
-pub const PARAMS_LEN: usize = 79;
+pub const PARAMS_LEN: usize = 114;
 
-/// The 18 `f32` parameters with their indices, for the finiteness check.
-fn param_floats(p: &Params) -> [(u8, f32); 18] {
+/// The 26 `f32` parameters with their indices, for the finiteness check.
+fn param_floats(p: &Params) -> [(u8, f32); 26] {
     [
         (0, p.period_s),
         (1, p.epsilon_m),
@@ -256,7 +267,24 @@ fn param_floats(p: &Params) -> [(u8, f32); 18] {
         (17, p.stall_speed),
         (18, p.stall_time_s),
         (19, p.ghost_timeout_s),
+        (23, p.horizon_s),
+        (24, p.mp_arc_m),
+        (26, p.mp_turn_rad),
+        (27, p.mp_xi),
+        (28, p.mp_eta),
+        (29, p.mp_influence_m),
+        (31, p.nf_kappa),
+        (32, p.nf_workspace_m),
     ]
+}
+
+/// Wire code of a [`Strategy`].
+const fn strategy_code(s: Strategy) -> u8 {
+    match s {
+        Strategy::Vpf => 0,
+        Strategy::Multipoint => 1,
+        Strategy::Navfn => 2,
+    }
 }
 
 fn check_params(p: &Params) -> Result<(), Error> {
@@ -264,8 +292,9 @@ fn check_params(p: &Params) -> Result<(), Error> {
 }
 
 /// `Params` (0x07): the whole parameter set, every field of [`Params`] in declaration order
-/// (the index is the row; see [`PARAM_NAMES`]); `n_gamma` and `max_ghosts` are u8,
-/// `bounding` a u8 code (0 plain, 1 split), `seed` a u32, the other 18 are f32.
+/// (the index is the row; see [`PARAM_NAMES`]); `n_gamma`, `max_ghosts`, `mp_points` and
+/// `mp_periphery` are u8, `bounding` a u8 code (0 plain, 1 split), `strategy` a u8 code (0 vpf,
+/// 1 multipoint, 2 navfn), `seed` a u32, the other 26 are f32.
 ///
 /// Only non-finite numbers and unknown codes are refused here. Ranges are checked by
 /// [`Planner::set_params`](crate::planner::Planner::set_params), whose
@@ -315,6 +344,22 @@ impl<'a> Payload<'a> for Params {
             ghost_timeout_s: r.f32()?,
             max_ghosts: r.u8()?,
             seed: r.u32()?,
+            strategy: match r.u8()? {
+                0 => Strategy::Vpf,
+                1 => Strategy::Multipoint,
+                2 => Strategy::Navfn,
+                _ => return refuse(22, Problem::UnknownCode),
+            },
+            horizon_s: r.f32()?,
+            mp_arc_m: r.f32()?,
+            mp_points: r.u8()?,
+            mp_turn_rad: r.f32()?,
+            mp_xi: r.f32()?,
+            mp_eta: r.f32()?,
+            mp_influence_m: r.f32()?,
+            mp_periphery: r.u8()?,
+            nf_kappa: r.f32()?,
+            nf_workspace_m: r.f32()?,
         };
         r.finish()?;
         check_params(&p)?;
@@ -361,6 +406,21 @@ impl<'a> Payload<'a> for Params {
         }
         w.u8(self.max_ghosts)?;
         w.u32(self.seed)?;
+        w.u8(strategy_code(self.strategy))?;
+        w.f32(self.horizon_s)?;
+        w.f32(self.mp_arc_m)?;
+        w.u8(self.mp_points)?;
+        for v in [
+            self.mp_turn_rad,
+            self.mp_xi,
+            self.mp_eta,
+            self.mp_influence_m,
+        ] {
+            w.f32(v)?;
+        }
+        w.u8(self.mp_periphery)?;
+        w.f32(self.nf_kappa)?;
+        w.f32(self.nf_workspace_m)?;
         Ok(w.len())
     }
 }
@@ -405,6 +465,7 @@ pub(crate) mod tests {
     use crate::link::shape::tests::arb_shape;
     use crate::math::Vec2;
     use proptest::prelude::*;
+    use proptest::strategy::Strategy;
     use std::vec::Vec;
 
     fn le(vals: &[f32]) -> Vec<u8> {
@@ -537,6 +598,11 @@ pub(crate) mod tests {
         assert_eq!(&out[70..74], &[0x00, 0x00, 0x70, 0x42]); // ghost_timeout_s 60
         assert_eq!(out[74], 4); // max_ghosts
         assert_eq!(&out[75..79], &[1, 0, 0, 0]); // seed
+        assert_eq!(out[79], 0); // strategy: vpf
+        assert_eq!(&out[80..84], &[0x00, 0x00, 0x20, 0x41]); // horizon_s 10
+        assert_eq!(out[88], 25); // mp_points
+        assert_eq!(out[105], 9); // mp_periphery
+        assert_eq!(&out[110..114], &[0x00, 0x00, 0x7a, 0x44]); // nf_workspace_m 1000
         assert_eq!(Params::parse(&out), Ok(p));
 
         // Non-finite and unknown codes are refused at the wire, naming the parameter.
@@ -559,7 +625,14 @@ pub(crate) mod tests {
         let parsed = Params::parse(&far).unwrap();
         let e = parsed.validate().unwrap_err();
         assert_eq!(param_index(e.name), Some(0));
-        assert_eq!(Params::parse(&out[..78]), Err(Error::Length));
+        assert_eq!(Params::parse(&out[..PARAMS_LEN - 1]), Err(Error::Length));
+        let mut bad = out;
+        bad[79] = 3;
+        assert_eq!(
+            Params::parse(&bad),
+            Err(Error::field(22, Problem::UnknownCode))
+        );
+        assert_eq!(PARAM_NAMES[22], "strategy");
     }
 
     #[test]
@@ -616,39 +689,58 @@ pub(crate) mod tests {
 
     pub(crate) fn arb_params() -> impl Strategy<Value = Params> {
         (
-            proptest::array::uniform18(-1e6f32..1e6),
-            (any::<u8>(), any::<u8>()),
-            any::<bool>(),
+            proptest::array::uniform26(-1e6f32..1e6),
+            (any::<u8>(), any::<u8>(), any::<u8>(), any::<u8>()),
+            (any::<bool>(), 0u8..3),
             any::<u32>(),
         )
-            .prop_map(|(f, (n_gamma, max_ghosts), split, seed)| Params {
-                period_s: f[0],
-                epsilon_m: f[1],
-                n_gamma,
-                mu: f[2],
-                f_max: f[3],
-                v_max: f[4],
-                a_plus: f[5],
-                a_rotor: f[6],
-                a_minus: f[7],
-                sigma_m: f[8],
-                bounding: if split {
-                    Bounding::Split
-                } else {
-                    Bounding::Plain
+            .prop_map(
+                |(f, (n_gamma, max_ghosts, mp_points, mp_periphery), (split, strategy), seed)| {
+                    Params {
+                        period_s: f[0],
+                        epsilon_m: f[1],
+                        n_gamma,
+                        mu: f[2],
+                        f_max: f[3],
+                        v_max: f[4],
+                        a_plus: f[5],
+                        a_rotor: f[6],
+                        a_minus: f[7],
+                        sigma_m: f[8],
+                        bounding: if split {
+                            Bounding::Split
+                        } else {
+                            Bounding::Plain
+                        },
+                        agent_radius_m: f[9],
+                        agent_a_plus: f[10],
+                        arrival_radius_m: f[11],
+                        ghost_lambda: f[12],
+                        ghost_alpha: f[13],
+                        ghost_eps_m: f[14],
+                        stall_speed: f[15],
+                        stall_time_s: f[16],
+                        ghost_timeout_s: f[17],
+                        max_ghosts,
+                        seed,
+                        strategy: match strategy {
+                            0 => crate::params::Strategy::Vpf,
+                            1 => crate::params::Strategy::Multipoint,
+                            _ => crate::params::Strategy::Navfn,
+                        },
+                        horizon_s: f[18],
+                        mp_arc_m: f[19],
+                        mp_points,
+                        mp_turn_rad: f[20],
+                        mp_xi: f[21],
+                        mp_eta: f[22],
+                        mp_influence_m: f[23],
+                        mp_periphery,
+                        nf_kappa: f[24],
+                        nf_workspace_m: f[25],
+                    }
                 },
-                agent_radius_m: f[9],
-                agent_a_plus: f[10],
-                arrival_radius_m: f[11],
-                ghost_lambda: f[12],
-                ghost_alpha: f[13],
-                ghost_eps_m: f[14],
-                stall_speed: f[15],
-                stall_time_s: f[16],
-                ghost_timeout_s: f[17],
-                max_ghosts,
-                seed,
-            })
+            )
     }
 
     pub(crate) fn arb_chart() -> impl Strategy<Value = ChartObstacleRepr> {

@@ -356,7 +356,7 @@ mod tests {
 
     /// The Tick frame of frame.rs's vector, byte for byte.
     const TICK_1000_SEQ_1: [u8; 16] = [
-        0x04, 0x01, 0x08, 0x01, 0x03, 0xe8, 0x03, 0x01, 0x01, 0x01, 0x01, 0x01, 0x03, 0x26, 0xfc,
+        0x04, 0x02, 0x08, 0x01, 0x03, 0xe8, 0x03, 0x01, 0x01, 0x01, 0x01, 0x01, 0x03, 0xb9, 0xf9,
         0x00,
     ];
 
@@ -410,7 +410,7 @@ mod tests {
         s.extend([0x05, 0x01, 0x00]);
         s.extend([0x03, 0x01, 0x02, 0x00]);
         // Version and type, with good CRCs.
-        for (v, t) in [(2u8, 0x08u8), (1, 0x7e)] {
+        for (v, t) in [(1u8, 0x08u8), (2, 0x7e)] {
             let mut raw = std::vec![v, t, 0, 0];
             let crc = crate::link::crc::crc16(&raw);
             raw.extend(crc.to_le_bytes());
@@ -450,7 +450,7 @@ mod tests {
                 Error::Crc,
                 Error::Cobs,
                 Error::Truncated,
-                Error::Version(2),
+                Error::Version(1),
                 Error::UnknownType(0x7e),
                 Error::Length,
                 Error::field(0, crate::link::Problem::UnknownCode),

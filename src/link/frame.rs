@@ -247,29 +247,29 @@ mod tests {
         };
         let mut b = [0u8; 4];
         assert_eq!(h.emit(&mut b), Ok(4));
-        assert_eq!(b, [0x01, 0x08, 0x01, 0x02]);
+        assert_eq!(b, [0x02, 0x08, 0x01, 0x02]);
         assert_eq!(Header::parse(&b), Ok(h));
-        assert_eq!(Header::parse(&[2, 8, 0, 0]), Err(Error::Version(2)));
+        assert_eq!(Header::parse(&[1, 8, 0, 0]), Err(Error::Version(1)));
         assert_eq!(
-            Header::parse(&[1, 0x42, 0, 0]),
+            Header::parse(&[2, 0x42, 0, 0]),
             Err(Error::UnknownType(0x42))
         );
-        assert_eq!(Header::parse(&[1, 8, 0]), Err(Error::Truncated));
+        assert_eq!(Header::parse(&[2, 8, 0]), Err(Error::Truncated));
     }
 
     /// A Tick frame worked by hand (the example in docs/protocol.md):
-    /// raw = 01 08 01 00 | e8 03 00 00 00 00 00 00 | CRC. The CRC was computed independently
-    /// with Python's `binascii.crc_hqx(raw, 0xFFFF)` = 0xFC26, sent LE as 26 fc.
-    /// COBS: "01 08 01" + zero → 04 01 08 01; "e8 03" + zero → 03 e8 03; five single zeros
-    /// → 01 ×5; the tail "26 fc" → 03 26 fc; then the delimiter 00.
+    /// raw = 02 08 01 00 | e8 03 00 00 00 00 00 00 | CRC. The CRC was computed independently
+    /// with Python's `binascii.crc_hqx(raw, 0xFFFF)` = 0xF9B9, sent LE as b9 f9.
+    /// COBS: "02 08 01" + zero → 04 02 08 01; "e8 03" + zero → 03 e8 03; five single zeros
+    /// → 01 ×5; the tail "b9 f9" → 03 b9 f9; then the delimiter 00.
     #[test]
     fn tick_frame_vector() {
         let raw = [
-            0x01, 0x08, 0x01, 0x00, 0xe8, 0x03, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x26, 0xfc,
+            0x02, 0x08, 0x01, 0x00, 0xe8, 0x03, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0xb9, 0xf9,
         ];
         let wire = [
-            0x04, 0x01, 0x08, 0x01, 0x03, 0xe8, 0x03, 0x01, 0x01, 0x01, 0x01, 0x01, 0x03, 0x26,
-            0xfc, 0x00,
+            0x04, 0x02, 0x08, 0x01, 0x03, 0xe8, 0x03, 0x01, 0x01, 0x01, 0x01, 0x01, 0x03, 0xb9,
+            0xf9, 0x00,
         ];
         let mut out = [0u8; 32];
         let n = encode_frame(
@@ -297,18 +297,18 @@ mod tests {
 
     #[test]
     fn split_frame_checks_in_order() {
-        assert_eq!(split_frame(&[1, 8, 0, 0, 0]), Err(Error::Truncated));
+        assert_eq!(split_frame(&[2, 8, 0, 0, 0]), Err(Error::Truncated));
         let mut raw = [
-            0x01, 0x08, 0x01, 0x00, 0xe8, 0x03, 0, 0, 0, 0, 0, 0, 0x26, 0xfc,
+            0x02, 0x08, 0x01, 0x00, 0xe8, 0x03, 0, 0, 0, 0, 0, 0, 0xb9, 0xf9,
         ];
         raw[5] ^= 0x10;
         assert_eq!(split_frame(&raw), Err(Error::Crc));
-        // A well-formed frame of version 2 is refused for its version, with a valid CRC.
-        let mut v2: Vec<u8> = std::vec![2, 8, 0, 0];
-        let crc = crate::link::crc::crc16(&v2);
-        v2.extend(crc.to_le_bytes());
-        assert_eq!(split_frame(&v2), Err(Error::Version(2)));
-        let mut t: Vec<u8> = std::vec![1, 0x55, 0, 0];
+        // A well-formed frame of version 1 is refused for its version, with a valid CRC.
+        let mut v1: Vec<u8> = std::vec![1, 8, 0, 0];
+        let crc = crate::link::crc::crc16(&v1);
+        v1.extend(crc.to_le_bytes());
+        assert_eq!(split_frame(&v1), Err(Error::Version(1)));
+        let mut t: Vec<u8> = std::vec![2, 0x55, 0, 0];
         let crc = crate::link::crc::crc16(&t);
         t.extend(crc.to_le_bytes());
         assert_eq!(split_frame(&t), Err(Error::UnknownType(0x55)));

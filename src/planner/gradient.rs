@@ -71,6 +71,9 @@ pub struct Forces {
 pub struct Field<'a> {
     /// Obstacles (stator PDFs with their own A⁺).
     pub obstacles: &'a [Obstacle],
+    /// Where each obstacle is evaluated relative to its table position (moving obstacles at
+    /// their predicted positions), one per obstacle; an obstacle without one is left out.
+    pub shifts: &'a [Vec2],
     /// Other vehicles, seen as circles of radius `agent_radius` (000 §III).
     pub agents: &'a [Agent],
     /// r₀ of an agent's circle.
@@ -104,8 +107,8 @@ impl Field<'_> {
 
     fn terms(&self, x: Vec2) -> Terms {
         let mut fixed = (x - self.origin).dot(self.rotor_gradient) + self.goal.potential(x);
-        for o in self.obstacles {
-            fixed += o.stator().potential(o.shape.signed_distance(x));
+        for (o, &shift) in self.obstacles.iter().zip(self.shifts) {
+            fixed += o.stator().potential(o.shape.signed_distance(x - shift));
         }
         let mut vehicles = 0.0;
         for a in self.agents {
@@ -157,6 +160,7 @@ mod tests {
     fn force_points_at_the_goal_with_the_potential_drop_as_modulus() {
         let f = Field {
             obstacles: &[],
+            shifts: &[],
             agents: &[],
             agent_radius: 0.5,
             agent_stator: Stator::new(2.5),
@@ -179,6 +183,7 @@ mod tests {
         for origin in [Vec2::new(3.0, 0.0), Vec2::new(1.0, 0.0)] {
             let f = Field {
                 obstacles: &obs,
+                shifts: &[Vec2::ZERO],
                 agents: &[],
                 agent_radius: 0.5,
                 agent_stator: Stator::new(2.5),
@@ -196,6 +201,7 @@ mod tests {
     fn local_minimum_gives_zero_force() {
         let f = Field {
             obstacles: &[],
+            shifts: &[],
             agents: &[],
             agent_radius: 0.5,
             agent_stator: Stator::new(2.5),
@@ -216,6 +222,7 @@ mod tests {
         let agents = [Agent::new(1, Vec2::new(1.5, 0.0), Vec2::ZERO, 0).unwrap()];
         let f = Field {
             obstacles: &[],
+            shifts: &[],
             agents: &agents,
             agent_radius: 0.5,
             agent_stator: Stator::new(2.5),

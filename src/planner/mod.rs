@@ -25,14 +25,18 @@ pub mod bound;
 pub mod escape;
 pub mod formation;
 pub mod gradient;
+pub mod multipoint;
+pub mod navfn;
 pub mod setpoints;
+mod strategy;
+mod vpf;
 
 use heapless::Vec;
 
-use crate::field::{GoalPdf, RotorSense, RotorTerm, Stator};
+use crate::field::{RotorSense, Stator};
 use crate::math::Vec2;
-use crate::params::{ParamError, Params};
-use crate::world::World;
+use crate::params::{ParamError, Params, Strategy};
+use crate::world::{World, MAX_OBSTACLES};
 
 pub use escape::{EscapeCounters, GhostGoal, StallCause, MAX_GHOSTS};
 pub use formation::{Formation, FormationError};
@@ -40,16 +44,14 @@ pub use gradient::SampleCircle;
 pub use setpoints::PidSetpoints;
 
 use escape::Escape;
-use gradient::Field;
 use setpoints::{Measured, SetpointState};
+use strategy::ArcState;
 
 /// Largest coordinate accepted for the vehicle or a goal, m (100 km: beyond any AUV mission in a
 /// local frame, and where `f32` still resolves 8 mm).
 pub const MAX_COORD_M: f32 = 100_000.0;
 /// Largest speed over ground accepted from navigation, m/s.
 pub const MAX_NAV_SPEED: f32 = 20.0;
-/// Step of the central differences for obstacle normals, m.
-const NORMAL_STEP_M: f32 = 0.01;
 
 /// The vehicle's navigation state, as the planner needs it.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -217,6 +219,56 @@ struct Integrator {
     velocity: Vec2,
 }
 
+/// Everything a step changes: worked on as a copy and kept only if the step succeeds.
+#[derive(Clone, Debug)]
+struct Motion {
+    integrator: Integrator,
+    setpoints: SetpointState,
+    escape: Escape,
+    rotor_sense: RotorSense,
+    arc: ArcState,
+}
+
+impl Motion {
+    fn new(seed: u32) -> Self {
+        Motion {
+            integrator: Integrator::default(),
+            setpoints: SetpointState::default(),
+            escape: Escape::new(seed),
+            rotor_sense: RotorSense::Free,
+            arc: ArcState::default(),
+        }
+    }
+}
+
+/// Per-obstacle planning shifts for moving obstacles ([`crate::world::Obstacle::predicted_shift`]),
+/// in table order.
+type Shifts = Vec<Vec2, MAX_OBSTACLES>;
+
+/// What one step reads, shared by the strategies.
+struct Context<'a> {
+    now_ms: u64,
+    nav: &'a NavState,
+    world: &'a World,
+    mission: Mission,
+    /// Where each obstacle is planned against, relative to where it is.
+    shifts: &'a Shifts,
+    /// Signed distance to the nearest obstacle or vehicle circle as they are now, m.
+    clearance: f32,
+}
+
+impl Context<'_> {
+    /// The obstacles' shapes at their predicted positions.
+    fn predicted_shapes(&self) -> impl Iterator<Item = crate::field::Shape> + '_ {
+        let shift = |i: usize| self.shifts.get(i).copied().unwrap_or(Vec2::ZERO);
+        self.world
+            .obstacles()
+            .iter()
+            .enumerate()
+            .map(move |(i, o)| o.shape.translated(shift(i)))
+    }
+}
+
 /// The planner: parameters, mission and the state carried between periods.
 #[derive(Clone, Debug)]
 pub struct Planner {
@@ -224,10 +276,7 @@ pub struct Planner {
     circle: SampleCircle,
     agent_stator: Stator,
     mission: Option<Mission>,
-    integrator: Integrator,
-    setpoints: SetpointState,
-    escape: Escape,
-    rotor_sense: RotorSense,
+    motion: Motion,
     /// Refused-input counters.
     pub counters: PlannerCounters,
 }
@@ -260,10 +309,7 @@ impl Planner {
             circle: SampleCircle::new(params.epsilon_m, params.n_gamma),
             agent_stator: Stator::new(params.agent_a_plus),
             mission: None,
-            integrator: Integrator::default(),
-            setpoints: SetpointState::default(),
-            escape: Escape::new(params.seed),
-            rotor_sense: RotorSense::Free,
+            motion: Motion::new(params.seed),
             counters: PlannerCounters::default(),
         })
     }
@@ -306,8 +352,9 @@ impl Planner {
             return checked;
         }
         self.mission = Some(mission);
-        self.escape.reset();
-        self.rotor_sense = RotorSense::Free;
+        self.motion.escape.reset();
+        self.motion.rotor_sense = RotorSense::Free;
+        self.motion.arc = ArcState::default();
         Ok(())
     }
 
@@ -319,29 +366,30 @@ impl Planner {
 
     /// Forgets the planned motion and ghosts (after a hold, so planning restarts from rest).
     pub fn reset_motion(&mut self) {
-        self.integrator = Integrator::default();
-        self.setpoints.reset();
-        self.escape.reset();
-        self.rotor_sense = RotorSense::Free;
+        self.motion.integrator = Integrator::default();
+        self.motion.setpoints.reset();
+        self.motion.escape.reset();
+        self.motion.rotor_sense = RotorSense::Free;
+        self.motion.arc = ArcState::default();
     }
 
     /// The ghost goal-points, bottom first.
     pub fn ghosts(&self) -> &[GhostGoal] {
-        self.escape.ghosts()
+        self.motion.escape.ghosts()
     }
 
     /// Ghost goal-point counters.
     pub fn escape_counters(&self) -> EscapeCounters {
-        self.escape.counters
+        self.motion.escape.counters
     }
 
     /// The rotor sense chosen for the current obstacle encounter.
     pub fn rotor_sense(&self) -> RotorSense {
-        self.rotor_sense
+        self.motion.rotor_sense
     }
 
     /// One planner period at time `now_ms` (ms since boot, monotonic), for the vehicle in state
-    /// `nav` in `world`. On error the state is unchanged.
+    /// `nav` in `world`, by the strategy in `params.strategy`. On error the state is unchanged.
     pub fn step(
         &mut self,
         now_ms: u64,
@@ -357,124 +405,81 @@ impl Planner {
             return Ok(Command::hold(HoldReason::NoMission, nav.heading));
         };
         let p = nav.position;
-        let prm = self.params;
-        let target = self.escape.active_target(mission.goal);
-
-        // Attractors: the active goal-point and the virtual leader (001 Table 1).
-        let goal = GoalPdf::new(target, prm.a_minus, prm.sigma_m);
-        let formation = mission
-            .formation
-            .filter(|_| !self.escape.formation_released(now_ms));
-        let leader = formation.and_then(|f| {
-            let vl = f.virtual_leader(p, world.agents())?;
-            Some((f, GoalPdf::new(vl, f.attraction, f.sigma())))
-        });
-
-        // Clearance, and the rotor terms: one normal per obstacle, one sense per encounter.
-        let mut normals: Vec<(Vec2, f32), { crate::world::MAX_OBSTACLES }> = Vec::new();
+        let mut shifts = Shifts::new();
         let mut clearance = f32::INFINITY;
         for o in world.obstacles() {
-            let r = o.shape.signed_distance(p);
-            clearance = clearance.min(r);
-            if prm.a_rotor > 0.0 {
-                let _ = normals.push((
-                    o.shape.outward_normal(p, r, NORMAL_STEP_M),
-                    o.stator().reach(r),
-                ));
-            }
+            clearance = clearance.min(o.shape.signed_distance(p));
+            let shift = o.predicted_shift(now_ms, p, nav.velocity, self.params.horizon_s);
+            // Same capacity as the obstacle table: never full.
+            let _ = shifts.push(shift);
         }
         for a in world.agents() {
-            clearance = clearance.min((p - a.position).norm() - prm.agent_radius_m);
+            clearance = clearance.min((p - a.position).norm() - self.params.agent_radius_m);
         }
-        let strongest = normals.iter().copied().max_by(|a, b| a.1.total_cmp(&b.1));
-        let sense = self.rotor_sense.update(strongest, target - p);
-        let rotor_gradient = normals.iter().fold(Vec2::ZERO, |g, &(n, h)| {
-            g + RotorTerm::new(prm.a_rotor, n, h, sense).gradient
-        });
-
-        let field = Field {
-            obstacles: world.obstacles(),
-            agents: world.agents(),
-            agent_radius: prm.agent_radius_m,
-            agent_stator: self.agent_stator,
-            goal,
-            leader: leader.map(|(_, pdf)| pdf),
-            rotor_gradient,
-            origin: p,
+        let cx = Context {
+            now_ms,
+            nav,
+            world,
+            mission,
+            shifts: &shifts,
+            clearance,
         };
-        let measured = Measured {
-            position: p,
-            velocity: nav.velocity,
-            heading: nav.heading,
-        };
-        let e1 = Some(measured.e1());
-
-        let forces = field.sampled_forces(&self.circle);
-        let f_nf = forces.full;
-        let f = f_nf - self.integrator.velocity * prm.mu;
-        let f_bar = bound::bound(f, prm.f_max, e1, prm.bounding);
-        let v_c = (f_bar + self.integrator.force) * (0.5 * prm.period_s) + self.integrator.velocity;
-        let v_bar = bound::bound(v_c, prm.v_max, e1, prm.bounding);
-
-        let mut setpoints = self.setpoints;
-        let sp = setpoints.decompose(prm.period_s, f_bar, v_bar, &measured);
-        let mut escape = self.escape.clone();
-        // What holds a stalled vehicle (escape.rs): is there a way down without the virtual
-        // leader, or without the other vehicles too? "A way down" is a descent stronger than
-        // what friction balances at the stall speed.
-        let cause = |target: Vec2| {
-            let free = |f: Vec2| f.norm() > prm.mu * prm.stall_speed;
-            if let Some((f, _)) = leader {
-                if free(forces.without_leader) {
-                    // Held by the formation near the goal is arrival in formation, not a stall:
-                    // N + 1 lattice cells of side λ fit within λ·√(N + 1) of it.
-                    let n = world.agents().len() as f32 + 1.0;
-                    let footprint = f.lattice_m * crate::math::sqrt(n);
-                    return if (target - p).norm() <= footprint {
-                        StallCause::Vehicles
-                    } else {
-                        StallCause::Formation
-                    };
-                }
-            }
-            if free(forces.static_field) {
-                StallCause::Vehicles
-            } else {
-                StallCause::Static
-            }
-        };
-        escape.update(now_ms, p, v_bar.norm(), mission.goal, &prm, cause);
-
-        let goal_dist = (mission.goal - p).norm();
-        let mode = if goal_dist <= prm.arrival_radius_m {
-            Mode::Arrived
-        } else if escape.ghosts().is_empty() {
-            Mode::Transit
-        } else {
-            Mode::Escape
-        };
-        let cmd = Command {
-            psi_set: sp.phi_c,
-            v_set: v_bar.norm().min(prm.v_max),
-            setpoints: sp,
-            mode,
-            force: f_bar,
-            velocity: v_bar,
-            target: escape.active_target(mission.goal),
-            ghost_depth: escape.ghosts().len() as u8,
-            clearance_m: clearance,
+        let mut motion = self.motion.clone();
+        let cmd = match self.params.strategy {
+            Strategy::Vpf => self.plan_vpf(&mut motion, &cx),
+            Strategy::Multipoint => self.plan_multipoint(&mut motion, &cx),
+            Strategy::Navfn => self.plan_navfn(&mut motion, &cx),
         };
         if !cmd.is_finite() {
             self.counters.non_finite = self.counters.non_finite.saturating_add(1);
             return Err(StepError::NonFinite);
         }
-        self.integrator = Integrator {
+        self.motion = motion;
+        Ok(cmd)
+    }
+
+    /// Arrived within the arrival radius, escaping while a ghost goal-point is up, else in
+    /// transit.
+    fn mode(&self, m: &Motion, cx: &Context<'_>) -> Mode {
+        if (cx.mission.goal - cx.nav.position).norm() <= self.params.arrival_radius_m {
+            Mode::Arrived
+        } else if m.escape.ghosts().is_empty() {
+            Mode::Transit
+        } else {
+            Mode::Escape
+        }
+    }
+
+    /// Steps 4–6 of the loop, shared by every strategy: bound the force F (001 eq. 5),
+    /// integrate it bilinearly into the planned velocity and bound that (000 eq. 5, 001
+    /// eq. 6–7), and decompose into set-points (000 eq. 6–7, 001 §2).
+    fn integrate(&self, m: &mut Motion, cx: &Context<'_>, f: Vec2) -> Command {
+        let prm = &self.params;
+        let measured = Measured {
+            position: cx.nav.position,
+            velocity: cx.nav.velocity,
+            heading: cx.nav.heading,
+        };
+        let e1 = Some(measured.e1());
+        let f_bar = bound::bound(f, prm.f_max, e1, prm.bounding);
+        let v_c = (f_bar + m.integrator.force) * (0.5 * prm.period_s) + m.integrator.velocity;
+        let v_bar = bound::bound(v_c, prm.v_max, e1, prm.bounding);
+        let sp = m.setpoints.decompose(prm.period_s, f_bar, v_bar, &measured);
+        m.integrator = Integrator {
             force: f_bar,
             velocity: v_bar,
         };
-        self.setpoints = setpoints;
-        self.escape = escape;
-        self.rotor_sense = sense;
-        Ok(cmd)
+        let goal = cx.mission.goal;
+        Command {
+            psi_set: sp.phi_c,
+            v_set: v_bar.norm().min(prm.v_max),
+            setpoints: sp,
+            mode: self.mode(m, cx),
+            force: f_bar,
+            velocity: v_bar,
+            target: m.escape.active_target(goal),
+            ghost_depth: m.escape.ghosts().len() as u8,
+            clearance_m: cx.clearance,
+        }
     }
 }

@@ -1,0 +1,157 @@
+//! The alternative strategies in the planner loop: each turns the world into a force F, and
+//! [`Planner::integrate`] bounds and integrates it exactly as for the VPF, so every strategy
+//! respects F_max and v_max and emits the same [`Command`].
+//!
+//! Both see moving obstacles at their predicted positions ([`Context::predicted_shapes`]) and
+//! other vehicles as circles of radius `agent_radius_m`. Neither uses ghost goal-points: those
+//! are the VPF's escape (seed 000 §III); seed 003 leaves local minima to future work, and a
+//! navigation function has none in a valid sphere world.
+
+use super::multipoint::{self, ArcConfig};
+use super::navfn::{self, NavfnError, SphereWorld};
+use super::{Context, Motion, Planner};
+use crate::field::Shape;
+use crate::math::{max, min, sqrt, Vec2};
+use crate::params::Params;
+use crate::planner::Command;
+
+/// Gain of the alternative strategies' velocity tracking, × 1/T. With the bilinear integrator,
+/// F = g·(v_d − v_c) has real poles (no overshoot) for g·T/2 ≤ 3 − 2√2 ≈ 0.17; 0.3/T (g·T/2 =
+/// 0.15) is the fastest round value inside that.
+const TRACK_GAIN: f32 = 0.3;
+
+/// The multipoint strategy's state between periods: the arc point being steered to and the
+/// periods until the next choice (seed 003 §4: "the next one-step position").
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub(super) struct ArcState {
+    target: Option<Vec2>,
+    periods_left: u32,
+}
+
+fn arc_config(p: &Params) -> ArcConfig {
+    ArcConfig {
+        arc_m: p.mp_arc_m,
+        points: p.mp_points,
+        max_turn_rad: p.mp_turn_rad,
+        xi: p.mp_xi,
+        eta: p.mp_eta,
+        influence_m: p.mp_influence_m,
+        periphery: p.mp_periphery,
+    }
+}
+
+impl Context<'_> {
+    /// Obstacles at their predicted positions, then the other vehicles' circles.
+    fn obstacle_shapes(&self, agent_radius: f32) -> impl Iterator<Item = Shape> + '_ {
+        let agents = self
+            .world
+            .agents()
+            .iter()
+            .filter_map(move |a| Shape::circle(a.position, agent_radius).ok());
+        self.predicted_shapes().chain(agents)
+    }
+}
+
+impl Planner {
+    /// Multipoint potential field (seed 003 §3–4). Every `replan_periods` (the time to cover
+    /// the arc at the commanded speed, as the paper scales its interval with speed) the
+    /// minimum-potential arc point is chosen (eq. 4–8); in between the vehicle is steered at
+    /// it. Within one arc radius of the goal it steers at the goal itself (the last path
+    /// element ends there).
+    pub(super) fn plan_multipoint(&self, m: &mut Motion, cx: &Context<'_>) -> Command {
+        let prm = &self.params;
+        let p = cx.nav.position;
+        let goal = cx.mission.goal;
+        let speed = self.cruise_speed(cx);
+        let arc = &mut m.arc;
+        let reached = arc
+            .target
+            .is_none_or(|t| (t - p).norm() < 0.25 * prm.mp_arc_m);
+        if (goal - p).norm() <= prm.mp_arc_m {
+            *arc = ArcState {
+                target: Some(goal),
+                periods_left: 0,
+            };
+        } else if arc.periods_left == 0 || reached {
+            let choice = multipoint::choose(
+                &arc_config(prm),
+                p,
+                cx.nav.heading,
+                speed,
+                goal,
+                cx.obstacle_shapes(prm.agent_radius_m),
+            );
+            *arc = ArcState {
+                target: choice.map(|c| c.point),
+                periods_left: multipoint::replan_periods(prm.mp_arc_m, speed, prm.period_s)
+                    .saturating_sub(1),
+            };
+        } else {
+            arc.periods_left = arc.periods_left.saturating_sub(1);
+        }
+        let aim = arc.target.unwrap_or(goal) - p;
+        self.track(m, cx, aim.normalized(1e-6).unwrap_or(Vec2::ZERO) * speed)
+    }
+
+    /// Navigation function on a sphere world (seed 004): the vehicle descends φ_κ along
+    /// −∇φ/‖∇φ‖ at the cruise speed. Only the direction of the gradient is used: ‖∇φ‖ spans
+    /// tens of orders of magnitude (φ is a plateau just below 1 away from the goal), so a
+    /// force proportional to it would crawl far out and be violent near obstacles.
+    ///
+    /// The workspace is the disc of radius ρ₀ = `nf_workspace_m` about the goal (obstacle 0).
+    /// Each obstacle becomes its enclosing circle ([`navfn::enclosing_circle`]) grown by the
+    /// vehicle's own radius (taken as `agent_radius_m`, the size vehicles are given), other
+    /// vehicles circles of twice that; overlapping circles are merged into one enclosing both,
+    /// since a sphere world needs disjoint obstacles. κ = `nf_kappa`, or M + 2 for the M
+    /// circles left (the notes' rule of thumb; with tens of circles it can leave spurious
+    /// minima, see `navfn.rs`). Outside the free space (inside an enclosing circle, beyond ρ₀)
+    /// the vehicle heads out along the way out; with the goal inside a circle there is no
+    /// navigation function and it heads straight at the goal.
+    pub(super) fn plan_navfn(&self, m: &mut Motion, cx: &Context<'_>) -> Command {
+        let p = cx.nav.position;
+        let straight = (cx.mission.goal - p).normalized(1e-6).unwrap_or(Vec2::ZERO);
+        let direction = match self.sphere_world(cx) {
+            Ok(world) => match world.eval(p) {
+                Ok(e) => e.descent,
+                Err(NavfnError::GoalBlocked) => straight,
+                Err(_) => world.escape_direction(p).unwrap_or(straight),
+            },
+            Err(_) => straight,
+        };
+        self.track(m, cx, direction * self.cruise_speed(cx))
+    }
+
+    /// v_max (seed 003's constant u), reduced near the goal to √(2·F_max·d) so the vehicle
+    /// can stop on it at the largest deceleration the bounds allow; zero on arrival.
+    fn cruise_speed(&self, cx: &Context<'_>) -> f32 {
+        let prm = &self.params;
+        let d = (cx.mission.goal - cx.nav.position).norm();
+        if d <= prm.arrival_radius_m {
+            0.0
+        } else {
+            min(prm.v_max, sqrt(2.0 * prm.f_max * d))
+        }
+    }
+
+    /// F = [`TRACK_GAIN`]/T · (v_d − v_c): the force that makes the planned velocity follow
+    /// `desired`, then the shared bounding and integration.
+    fn track(&self, m: &mut Motion, cx: &Context<'_>, desired: Vec2) -> Command {
+        let f = (desired - m.integrator.velocity) * (TRACK_GAIN / self.params.period_s);
+        self.integrate(m, cx, f)
+    }
+
+    fn sphere_world(&self, cx: &Context<'_>) -> Result<SphereWorld, NavfnError> {
+        let prm = &self.params;
+        let goal = cx.mission.goal;
+        let mut world = SphereWorld::new(goal, prm.nf_workspace_m, goal, 1.0)?;
+        for shape in cx.predicted_shapes() {
+            let (c, r) = navfn::enclosing_circle(&shape);
+            world.push_merged(c, r + prm.agent_radius_m)?;
+        }
+        for a in cx.world.agents() {
+            world.push_merged(a.position, 2.0 * prm.agent_radius_m)?;
+        }
+        world.set_kappa(max(1.0, navfn::kappa(prm.nf_kappa, world.len())))?;
+        Ok(world)
+    }
+}
