@@ -111,6 +111,15 @@ impl Obstacle {
         Ok(self)
     }
 
+    /// The same obstacle with repulsiveness `a_plus` (checked as in [`Obstacle::new`]).
+    pub fn with_a_plus(self, a_plus: f32) -> Result<Self, ObjectError> {
+        let o = Obstacle::new(self.id, self.shape, a_plus, self.origin, self.seen_ms)?;
+        Ok(Obstacle {
+            velocity: self.velocity,
+            ..o
+        })
+    }
+
     /// Its stator PDF.
     pub fn stator(&self) -> &Stator {
         &self.stator

@@ -200,8 +200,8 @@ pub fn init(params: Params) -> Option<Idle> {
         }
         RUNTIME.get()?
     };
-    let a_plus = RuntimeConfig::default().tracks.a_plus;
-    let background = Background::new(ExtractorConfig::default(), a_plus)?;
+    // Contacts get the planner's A_s⁺ when the periodic task admits them.
+    let background = Background::new(ExtractorConfig::default(), params.a_plus)?;
     let ctx = PeriodicCtx {
         periodic,
         tx: tx_p,

@@ -239,16 +239,23 @@ impl Periodic {
         }
     }
 
-    /// Puts a sighting into the tables.
+    /// Puts a sighting into the tables. Sensed obstacles (sonar features and contacts) get
+    /// the planner's A_s⁺ (`Params::a_plus`, seed 002's static repulsion), so tuning it reaches
+    /// them; charted obstacles keep their own.
     fn admit(&mut self, s: Sighting, vehicle: Vec2) {
+        let a_plus = self.planner.params().a_plus;
         match s {
             // Refusals and evictions are counted by the world table.
             Sighting::Feature(f) => {
                 let cfg = self.config.tracks;
-                let _ = self.tracks.admit(&cfg, &mut self.world, &f, vehicle);
+                let _ = self
+                    .tracks
+                    .admit(&cfg, a_plus, &mut self.world, &f, vehicle);
             }
             Sighting::Obstacle(o) => {
-                let _ = self.world.upsert_obstacle_or_evict(o, vehicle);
+                if let Ok(o) = o.with_a_plus(a_plus) {
+                    let _ = self.world.upsert_obstacle_or_evict(o, vehicle);
+                }
             }
             Sighting::Agent(a) => {
                 let _ = self.world.upsert_agent(a);

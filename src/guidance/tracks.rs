@@ -6,10 +6,13 @@
 //! **Association.** Each sensed obstacle in the table has a track: a filtered centre, a
 //! velocity and the time of its last update. A feature belongs to the nearest track whose
 //! *predicted* centre (centre + velocity × elapsed time) lies within the gate: the larger of
-//! the two radii + `gate_m` + `gate_speed_mps` × elapsed time (so a target that moved between
-//! sweeps is still recognised, even before its velocity is known). It then updates that
-//! obstacle (new shape, moved to the filtered centre; refreshed `seen_ms`); otherwise it
-//! becomes a new sensed obstacle with a fresh id from [`SONAR_ID_BASE`] upwards.
+//! the two radii + `gate_m`, + `gate_speed_mps` × elapsed time once at least `revisit_ms` have
+//! passed (so a target that moved between sweeps is still recognised, even before its velocity
+//! is known). The allowance waits for `revisit_ms` because a scanning head sees a target again
+//! only a sweep later: a feature a second or two after a track's update is a *different*
+//! object further round the sweep, and must not be pulled into a neighbour's gate. It then
+//! updates that obstacle (new shape at the filtered centre; refreshed `seen_ms`); otherwise
+//! it becomes a new sensed obstacle with a fresh id from [`SONAR_ID_BASE`] upwards.
 //!
 //! **Velocity.** An alpha–beta filter per track (e.g. Bar-Shalom & Li, *Estimation and
 //! Tracking*, §5.3): with the residual r = z − (x + v·Δt),
@@ -55,10 +58,10 @@ pub struct TrackConfig {
     /// Extra distance beyond the larger of the two radii within which a feature is the same
     /// obstacle, m.
     pub gate_m: f32,
-    /// The gate also grows by this speed × the time since the track's last update, m/s.
+    /// The gate also grows by this speed × the time since the track's last update, m/s ...
     pub gate_speed_mps: f32,
-    /// Repulsiveness A⁺ given to sonar obstacles.
-    pub a_plus: f32,
+    /// ... once this long has passed since it, ms (about half a sonar sweep).
+    pub revisit_ms: u64,
     /// α of the alpha–beta filter, 0 ..= 1.
     pub alpha: f32,
     /// β of the alpha–beta filter, 0 ..= 2.
@@ -79,7 +82,7 @@ impl Default for TrackConfig {
             min_confidence: 0.5,
             gate_m: 1.0,
             gate_speed_mps: 1.0,
-            a_plus: 2.5,
+            revisit_ms: 4000,
             alpha: 0.5,
             beta: 1.0 / 6.0,
             min_update_ms: 500,
@@ -177,10 +180,12 @@ impl Tracks {
         &self.tracks
     }
 
-    /// Puts `f` into `world`, seen from the vehicle at `vehicle`.
+    /// Puts `f` into `world` with repulsiveness `a_plus` (the planner's A_s⁺), seen from the
+    /// vehicle at `vehicle`.
     pub fn admit(
         &mut self,
         cfg: &TrackConfig,
+        a_plus: f32,
         world: &mut World,
         f: &Feature,
         vehicle: Vec2,
@@ -205,7 +210,13 @@ impl Tracks {
             let (predicted, dt) = t.predict(f.time_ms);
             let d = (predicted - f.center).norm();
             let reach = crate::math::max(o.shape.bounding_radius(), f.radius);
-            let gate = reach + cfg.gate_m + cfg.gate_speed_mps * dt;
+            let revisit = f.time_ms >= t.time_ms.saturating_add(cfg.revisit_ms);
+            let allowance = if revisit {
+                cfg.gate_speed_mps * dt
+            } else {
+                0.0
+            };
+            let gate = reach + cfg.gate_m + allowance;
             if d <= gate && best.is_none_or(|(_, b)| d < b) {
                 best = Some((i, d));
             }
@@ -218,12 +229,14 @@ impl Tracks {
             None => (self.next_id, None),
         };
         let fresh = track.is_none();
-        let center = track.map_or(f.center, |t| t.center);
         let velocity = track.map_or(Vec2::ZERO, |t| t.reported_velocity(cfg));
+        // The filtered centre, also for still obstacles: it averages the feature noise (the
+        // raw centres gave closer passes in the random-clutter scenario).
+        let center = track.map_or(f.center, |t| t.center);
         let o = Obstacle::new(
             id,
             shape.translated(center - f.center),
-            cfg.a_plus,
+            a_plus,
             Origin::Sensed,
             f.time_ms,
         )
@@ -240,7 +253,7 @@ impl Tracks {
                     .retain(|t| world.obstacles().iter().any(|o| o.id == t.id));
                 let _ = self.tracks.push(Track {
                     id,
-                    center,
+                    center: f.center,
                     velocity: Vec2::ZERO,
                     time_ms: f.time_ms,
                     hits: 1,
@@ -274,11 +287,11 @@ mod tests {
         let cfg = TrackConfig::default();
         let mut w = World::new();
         let mut t = Tracks::default();
-        let a = t.admit(&cfg, &mut w, &feature(10.0, 0.0, 1.0, 0.9), Vec2::ZERO);
+        let a = t.admit(&cfg, 2.5, &mut w, &feature(10.0, 0.0, 1.0, 0.9), Vec2::ZERO);
         assert_eq!(a, Admission::Added(SONAR_ID_BASE));
-        let b = t.admit(&cfg, &mut w, &feature(10.4, 0.3, 1.1, 0.9), Vec2::ZERO);
+        let b = t.admit(&cfg, 2.5, &mut w, &feature(10.4, 0.3, 1.1, 0.9), Vec2::ZERO);
         assert_eq!(b, Admission::Updated(SONAR_ID_BASE));
-        let c = t.admit(&cfg, &mut w, &feature(20.0, 0.0, 1.0, 0.9), Vec2::ZERO);
+        let c = t.admit(&cfg, 2.5, &mut w, &feature(20.0, 0.0, 1.0, 0.9), Vec2::ZERO);
         assert_eq!(c, Admission::Added(SONAR_ID_BASE + 1));
         assert_eq!(w.obstacles().len(), 2);
     }
@@ -301,7 +314,7 @@ mod tests {
             let mover = feature(20.0 + 0.5 * s + noise(), 5.0 - 0.3 * s + noise(), 1.5, 0.9);
             let rock = feature(-15.0 + noise(), 8.0 + noise(), 2.0, 0.9);
             for f in [mover, rock] {
-                let a = t.admit(&cfg, &mut w, &at(f, 4000 * k), Vec2::ZERO);
+                let a = t.admit(&cfg, 2.5, &mut w, &at(f, 4000 * k), Vec2::ZERO);
                 assert!(
                     matches!(a, Admission::Added(_) | Admission::Updated(_)),
                     "{a:?}"
@@ -328,6 +341,7 @@ mod tests {
         let mut t = Tracks::default();
         t.admit(
             &cfg,
+            2.5,
             &mut w,
             &at(feature(10.0, 0.0, 1.0, 0.9), 0),
             Vec2::ZERO,
@@ -335,6 +349,7 @@ mod tests {
         // Moved 3 m in 4 s: beyond radius + gate_m, within the speed allowance; one hit more.
         let a = t.admit(
             &cfg,
+            2.5,
             &mut w,
             &at(feature(13.0, 0.0, 1.0, 0.9), 4000),
             Vec2::ZERO,
@@ -351,12 +366,48 @@ mod tests {
         assert!(w.obstacles().is_empty());
         t.admit(
             &cfg,
+            2.5,
             &mut w,
             &at(feature(-20.0, 0.0, 1.0, 0.9), 40_000),
             Vec2::ZERO,
         );
         assert_eq!(t.tracks().len(), 1);
         assert_eq!(t.tracks()[0].id, SONAR_ID_BASE + 1);
+    }
+
+    #[test]
+    fn a_neighbour_seen_later_in_the_same_sweep_is_not_merged() {
+        let cfg = TrackConfig::default();
+        let mut w = World::new();
+        let mut t = Tracks::default();
+        // Two rocks 5 m apart, seen 2 s apart in one sweep and again 9 s later.
+        for sweep in 0..3u64 {
+            let t0 = 9000 * sweep;
+            t.admit(
+                &cfg,
+                2.5,
+                &mut w,
+                &at(feature(10.0, 0.0, 1.0, 0.9), t0),
+                Vec2::ZERO,
+            );
+            t.admit(
+                &cfg,
+                2.5,
+                &mut w,
+                &at(feature(10.0, 5.0, 1.0, 0.9), t0 + 2000),
+                Vec2::ZERO,
+            );
+        }
+        assert_eq!(w.obstacles().len(), 2);
+        for o in w.obstacles() {
+            assert_eq!(o.velocity, Vec2::ZERO);
+        }
+        let near = |y: f32| {
+            w.obstacles()
+                .iter()
+                .any(|o| (o.shape.center().y - y).abs() < 1e-3)
+        };
+        assert!(near(0.0) && near(5.0));
     }
 
     #[test]
@@ -368,14 +419,20 @@ mod tests {
         // and the tracks stay at capacity together.
         for i in 0..40u64 {
             let f = feature(10.0 * i as f32, 0.0, 1.0, 0.9);
-            t.admit(&cfg, &mut w, &at(f, 100 * i), Vec2::ZERO);
+            t.admit(&cfg, 2.5, &mut w, &at(f, 100 * i), Vec2::ZERO);
             assert!(t.tracks().len() <= w.obstacles().len());
         }
         assert_eq!(w.obstacles().len(), MAX_TRACKS);
         // Nearer ones evict the farthest: tracks follow.
         for i in 0..8u64 {
             let f = feature(-5.0 - 10.0 * i as f32, 50.0, 1.0, 0.9);
-            let a = t.admit(&cfg, &mut w, &at(f, 5000 + 100 * i), Vec2::new(-40.0, 50.0));
+            let a = t.admit(
+                &cfg,
+                2.5,
+                &mut w,
+                &at(f, 5000 + 100 * i),
+                Vec2::new(-40.0, 50.0),
+            );
             assert!(matches!(a, Admission::Added(_)), "{a:?}");
             assert_eq!(t.tracks().len(), w.obstacles().len());
         }
@@ -388,17 +445,17 @@ mod tests {
         let mut t = Tracks::default();
         let weak = feature(10.0, 0.0, 1.0, 0.3);
         assert_eq!(
-            t.admit(&cfg, &mut w, &weak, Vec2::ZERO),
+            t.admit(&cfg, 2.5, &mut w, &weak, Vec2::ZERO),
             Admission::LowConfidence
         );
         let nan = feature(10.0, 0.0, 1.0, f32::NAN);
         assert_eq!(
-            t.admit(&cfg, &mut w, &nan, Vec2::ZERO),
+            t.admit(&cfg, 2.5, &mut w, &nan, Vec2::ZERO),
             Admission::LowConfidence
         );
         let broken = feature(f32::INFINITY, 0.0, 1.0, 0.9);
         assert_eq!(
-            t.admit(&cfg, &mut w, &broken, Vec2::ZERO),
+            t.admit(&cfg, 2.5, &mut w, &broken, Vec2::ZERO),
             Admission::Invalid
         );
         assert!(w.obstacles().is_empty());

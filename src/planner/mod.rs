@@ -227,6 +227,8 @@ struct Motion {
     escape: Escape,
     rotor_sense: RotorSense,
     arc: ArcState,
+    /// Arrival latch of the alternative strategies (`strategy.rs`).
+    arrived: bool,
 }
 
 impl Motion {
@@ -237,6 +239,7 @@ impl Motion {
             escape: Escape::new(seed),
             rotor_sense: RotorSense::Free,
             arc: ArcState::default(),
+            arrived: false,
         }
     }
 }
@@ -355,6 +358,7 @@ impl Planner {
         self.motion.escape.reset();
         self.motion.rotor_sense = RotorSense::Free;
         self.motion.arc = ArcState::default();
+        self.motion.arrived = false;
         Ok(())
     }
 
@@ -371,6 +375,7 @@ impl Planner {
         self.motion.escape.reset();
         self.motion.rotor_sense = RotorSense::Free;
         self.motion.arc = ArcState::default();
+        self.motion.arrived = false;
     }
 
     /// The ghost goal-points, bottom first.
@@ -438,10 +443,11 @@ impl Planner {
         Ok(cmd)
     }
 
-    /// Arrived within the arrival radius, escaping while a ghost goal-point is up, else in
-    /// transit.
+    /// Arrived within the arrival radius (or latched there, `strategy.rs`), escaping while a
+    /// ghost goal-point is up, else in transit.
     fn mode(&self, m: &Motion, cx: &Context<'_>) -> Mode {
-        if (cx.mission.goal - cx.nav.position).norm() <= self.params.arrival_radius_m {
+        let d = (cx.mission.goal - cx.nav.position).norm();
+        if d <= self.params.arrival_radius_m || m.arrived {
             Mode::Arrived
         } else if m.escape.ghosts().is_empty() {
             Mode::Transit

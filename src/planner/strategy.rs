@@ -20,6 +20,11 @@ use crate::planner::Command;
 /// 0.15) is the fastest round value inside that.
 const TRACK_GAIN: f32 = 0.3;
 
+/// Once arrived, the alternative strategies hold zero speed until the vehicle is this many
+/// arrival radii from the goal: a vehicle that cannot brake or turn on the spot (the flat-fish
+/// coasts for metres) would otherwise circle the goal, re-approaching each time it drifts out.
+const ARRIVAL_RELEASE: f32 = 4.0;
+
 /// The multipoint strategy's state between periods: the arc point being steered to and the
 /// periods until the next choice (seed 003 §4: "the next one-step position").
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -62,7 +67,7 @@ impl Planner {
         let prm = &self.params;
         let p = cx.nav.position;
         let goal = cx.mission.goal;
-        let speed = self.cruise_speed(cx);
+        let speed = self.cruise_speed(m, cx);
         let arc = &mut m.arc;
         let reached = arc
             .target
@@ -118,18 +123,36 @@ impl Planner {
             },
             Err(_) => straight,
         };
-        self.track(m, cx, direction * self.cruise_speed(cx))
+        let speed = self.cruise_speed(m, cx);
+        self.track(m, cx, direction * speed)
     }
 
-    /// v_max (seed 003's constant u), reduced near the goal to √(2·F_max·d) so the vehicle
-    /// can stop on it at the largest deceleration the bounds allow; zero on arrival.
-    fn cruise_speed(&self, cx: &Context<'_>) -> f32 {
+    /// v_max (seed 003's constant u), reduced near the goal so that the goal stays reachable
+    /// within the bounds: to √(2·F_max·d) to stop on it, and to √(F_max·d / (2 sin θ)), θ the
+    /// angle between the heading and the goal, so that the turn onto it, of radius v²/F_max at
+    /// the bounded lateral acceleration, fits inside the circle through the goal tangent to the
+    /// heading (diameter d / sin θ; a goal behind counts as θ = 90°). Zero from arrival until
+    /// the vehicle is [`ARRIVAL_RELEASE`] arrival radii away.
+    fn cruise_speed(&self, m: &mut Motion, cx: &Context<'_>) -> f32 {
         let prm = &self.params;
-        let d = (cx.mission.goal - cx.nav.position).norm();
-        if d <= prm.arrival_radius_m {
+        let to_goal = cx.mission.goal - cx.nav.position;
+        let d = to_goal.norm();
+        let bow = Vec2::from_angle(cx.nav.heading);
+        let sin_theta = if bow.dot(to_goal) < 0.0 {
+            1.0
+        } else {
+            bow.cross(to_goal).abs() / max(d, 1e-6)
+        };
+        let turn = sqrt(prm.f_max * d / (2.0 * max(sin_theta, 1e-6)));
+        m.arrived = if m.arrived {
+            d <= ARRIVAL_RELEASE * prm.arrival_radius_m
+        } else {
+            d <= prm.arrival_radius_m
+        };
+        if m.arrived {
             0.0
         } else {
-            min(prm.v_max, sqrt(2.0 * prm.f_max * d))
+            min(min(prm.v_max, sqrt(2.0 * prm.f_max * d)), turn)
         }
     }
 
