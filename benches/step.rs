@@ -3,13 +3,16 @@
 //! `cargo bench --bench step` — obstacles 1, 8, 16, 32 (a mix of circles, rectangles, ellipses
 //! and hexagons), then full capacity: 32 obstacles + 8 agents in formation, n_γ = 16. Ghost
 //! goal-points add no cost per sample (only the top one attracts), so they are not varied.
+//! Then each strategy at full tables (32 obstacles, half of them moving, + 8 agents): the
+//! multipoint strategy chooses a new arc point only every r/u (10 periods at 1 m/s), so its
+//! mean is far below its worst period (the self-test on QEMU reports both).
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use std::hint::black_box;
 use vpf::field::Shape;
 use vpf::planner::Formation;
 use vpf::world::{MAX_AGENTS, MAX_OBSTACLES};
-use vpf::{Agent, Mission, NavState, Obstacle, Origin, Params, Planner, Vec2, World};
+use vpf::{Agent, Mission, NavState, Obstacle, Origin, Params, Planner, Strategy, Vec2, World};
 
 fn obstacle(i: usize) -> Obstacle {
     let c = Vec2::new(10.0 + 7.0 * (i % 8) as f32, -20.0 + 9.0 * (i / 8) as f32);
@@ -41,8 +44,12 @@ fn world(obstacles: usize, agents: usize) -> World {
     w
 }
 
-fn planner(formation: bool) -> Planner {
-    let mut p = Planner::new(Params::default()).unwrap();
+fn planner(formation: bool, strategy: Strategy) -> Planner {
+    let mut p = Planner::new(Params {
+        strategy,
+        ..Params::default()
+    })
+    .unwrap();
     p.set_mission(Mission {
         goal: Vec2::new(80.0, 0.0),
         formation: formation.then_some(Formation {
@@ -72,9 +79,30 @@ fn bench_step(c: &mut Criterion) {
     ];
     for (n_obs, n_agents) in cases {
         let w = world(n_obs, n_agents);
-        let mut p = planner(n_agents > 0);
+        let mut p = planner(n_agents > 0, Strategy::Vpf);
         let id = format!("{n_obs}obs_{n_agents}agents");
         group.bench_with_input(BenchmarkId::from_parameter(id), &w, |b, w| {
+            let mut t = 0u64;
+            b.iter(|| {
+                t += 100;
+                black_box(p.step(t, black_box(&nav), w).unwrap())
+            })
+        });
+    }
+    group.finish();
+
+    let mut group = c.benchmark_group("strategy_full_tables");
+    let mut w = World::new();
+    for i in 0..MAX_OBSTACLES {
+        let v = Vec2::new(0.0, if i % 2 == 0 { 0.5 } else { 0.0 });
+        w.upsert_obstacle(obstacle(i).moving(v).unwrap()).unwrap();
+    }
+    for a in world(0, MAX_AGENTS).agents() {
+        w.upsert_agent(*a).unwrap();
+    }
+    for s in [Strategy::Vpf, Strategy::Multipoint, Strategy::Navfn] {
+        let mut p = planner(false, s);
+        group.bench_with_input(BenchmarkId::from_parameter(s.name()), &w, |b, w| {
             let mut t = 0u64;
             b.iter(|| {
                 t += 100;

@@ -75,6 +75,8 @@ pub struct Firmware {
     decoder: Decoder,
     seq: u16,
     inbox: Vec<Reply>,
+    /// Outgoing bytes held back until the next receive (see [`Firmware::set_batching`]).
+    batch: Option<Vec<u8>>,
     /// What runs.
     pub target: Target,
 }
@@ -118,12 +120,16 @@ pub fn build(target: &Target) -> std::io::Result<PathBuf> {
         "--bin",
         "vpf-firmware",
     ]);
+    // Where cargo puts it: `CARGO_TARGET_DIR` if set (relative to the workspace), else target/.
+    let target_dir = std::env::var_os("CARGO_TARGET_DIR")
+        .filter(|d| !d.is_empty())
+        .map_or_else(|| root.join("target"), |d| root.join(d));
     let path = match target {
         Target::Qemu => {
             cmd.args(["--target", "thumbv7em-none-eabihf"]);
-            root.join("target/thumbv7em-none-eabihf/release/vpf-firmware")
+            target_dir.join("thumbv7em-none-eabihf/release/vpf-firmware")
         }
-        Target::Host | Target::Port(_) => root.join("target/release/vpf-firmware"),
+        Target::Host | Target::Port(_) => target_dir.join("release/vpf-firmware"),
     };
     if matches!(target, Target::Port(_)) {
         // A real board is flashed by the user; nothing to build here.
@@ -214,6 +220,7 @@ impl Firmware {
             decoder: Decoder::accepting(Direction::ToHost),
             seq: 0,
             inbox: Vec::new(),
+            batch: None,
             target,
         }
     }
@@ -274,6 +281,21 @@ impl Firmware {
         Ok(Self::new(Some(child), port, Target::Qemu))
     }
 
+    /// The host-process firmware speaking on its stdin/stdout, both one end of a Unix socket
+    /// pair whose other end is the link: no pty and no line discipline in between (the sweep's
+    /// link: a period's round trip is faster than through a pty, see `hil/sweeps/README.md`).
+    pub fn start_host_socket(bin: &Path) -> std::io::Result<Self> {
+        let (ours, theirs) = std::os::unix::net::UnixStream::pair()?;
+        let theirs_out = theirs.try_clone()?;
+        let child = Command::new(bin)
+            .stdin(Stdio::from(std::os::fd::OwnedFd::from(theirs)))
+            .stdout(Stdio::from(std::os::fd::OwnedFd::from(theirs_out)))
+            .stderr(Stdio::null())
+            .spawn()?;
+        let port = File::from(std::os::fd::OwnedFd::from(ours));
+        Ok(Self::new(Some(child), port, Target::Host))
+    }
+
     /// The host-process firmware on the slave side of a fresh pty.
     fn start_host(bin: &Path) -> std::io::Result<Self> {
         let (master, slave) = open_pty()?;
@@ -295,13 +317,37 @@ impl Firmware {
             .emit_frame(self.seq, &mut buf)
             .map_err(|e| std::io::Error::other(e.to_string()))?;
         if let Some(bytes) = tap.outgoing(&buf[..n]) {
-            self.port.write_all(&bytes)?;
+            match self.batch.as_mut() {
+                Some(b) => b.extend_from_slice(&bytes),
+                None => self.port.write_all(&bytes)?,
+            }
+        }
+        Ok(())
+    }
+
+    /// With batching on, [`Firmware::send`] holds frames back and the next receive writes them
+    /// in one go: one wake-up of the firmware per period instead of one per frame. Only for
+    /// lockstep, where nothing depends on when within a period the bytes arrive.
+    pub fn set_batching(&mut self, on: bool) -> std::io::Result<()> {
+        self.flush()?;
+        self.batch = on.then(Vec::new);
+        Ok(())
+    }
+
+    /// Writes the frames held back by batching.
+    fn flush(&mut self) -> std::io::Result<()> {
+        if let Some(b) = self.batch.as_mut() {
+            if !b.is_empty() {
+                self.port.write_all(b)?;
+                b.clear();
+            }
         }
         Ok(())
     }
 
     /// Sends raw bytes (line noise for tests), through the tap's log only.
     pub fn send_raw(&mut self, bytes: &[u8]) -> std::io::Result<()> {
+        self.flush()?;
         self.port.write_all(bytes)
     }
 
@@ -354,6 +400,7 @@ impl Firmware {
         tap: &mut dyn Tap,
         done: impl Fn(&[Reply]) -> bool,
     ) -> std::io::Result<Vec<Reply>> {
+        self.flush()?;
         let start = Instant::now();
         while !done(&self.inbox) {
             if start.elapsed() > timeout {

@@ -12,12 +12,16 @@
 //! - [`output`]: trajectory CSV, metrics JSON, SVG plots, the frame log;
 //! - [`firmware`]: building, starting and talking to a firmware (QEMU, host process, board);
 //! - [`faults`]: link faults (bit errors, dropped frames) and the frame-log tap;
-//! - [`runner`]: the lockstep / real-time loop that ties the rest together.
+//! - [`runner`]: the lockstep / real-time loop that ties the rest together;
+//! - [`compare`]: the same scenarios flown with each guidance strategy, side by side;
+//! - [`sweep`]: parameter tuning sweeps over scenario batches, and their recipes (seed 002).
 
+pub mod compare;
 pub mod faults;
 pub mod firmware;
 pub mod output;
 pub mod runner;
 pub mod scenario;
 pub mod sim;
+pub mod sweep;
 pub mod types;

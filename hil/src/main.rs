@@ -5,7 +5,12 @@
 //!         [--bit-error-rate X] [--drop-rate X] [--nav-delay-ms X]
 //!         [--nav-freeze FROM:TO] [--nav-loss FROM:TO] [--sonar-dropout FROM:TO]
 //! hil check SCENARIO.toml...
+//! hil sweep SPEC.toml [--out DIR] [--jobs N] [--shard K/N] [--quiet]
+//! hil merge DIR... [--out DIR]
+//! hil compare [SCENARIO.toml...] [--strategies vpf,multipoint,navfn] [--firmware host|qemu]
 //! ```
+//!
+//! `hil run` also takes `--params RECIPE.toml` (a `[planner]` table, as `hil sweep` writes).
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -17,12 +22,16 @@ use hil::scenario::{self, Scenario, Window};
 const USAGE: &str = "usage:
   hil run SCENARIO.toml [options]   run a scenario, write outputs to --out (default runs/NAME-TIME)
   hil check SCENARIO.toml...        validate scenario files
+  hil sweep SPEC.toml [options]     tune the planner's parameters over a scenario batch
+  hil merge DIR...                  combine a sweep's shards (hil sweep --help)
+  hil compare [SCENARIO.toml...]    fly scenarios with each strategy, print a table (hil compare --help)
 
 options for run:
   --out DIR                 output directory
   --firmware qemu|host      the emulated Cortex-M4 in QEMU (default), or the firmware as a host process
   --port /dev/ttyXXX        a real board on a serial adapter (flashed beforehand)
   --quiet                   no progress bar
+  --params RECIPE.toml      planner parameters from a recipe (replace the scenario's [planner])
   --bit-error-rate X        corrupt bytes sent to the firmware at this bit-error rate
   --drop-rate X             drop this fraction of the frames sent to the firmware
   --nav-delay-ms X          delay navigation by X ms
@@ -60,6 +69,7 @@ struct Args {
     target: Target,
     quiet: bool,
     faults: Vec<(String, String)>,
+    params: Option<PathBuf>,
 }
 
 fn parse_run(mut it: impl Iterator<Item = String>) -> Result<Args, String> {
@@ -69,6 +79,7 @@ fn parse_run(mut it: impl Iterator<Item = String>) -> Result<Args, String> {
         target: Target::Qemu,
         quiet: false,
         faults: Vec::new(),
+        params: None,
     };
     let mut scenario = None;
     while let Some(a) = it.next() {
@@ -84,6 +95,7 @@ fn parse_run(mut it: impl Iterator<Item = String>) -> Result<Args, String> {
             }
             "--port" => args.target = Target::Port(PathBuf::from(value()?)),
             "--quiet" => args.quiet = true,
+            "--params" => args.params = Some(PathBuf::from(value()?)),
             "--bit-error-rate" | "--drop-rate" | "--nav-delay-ms" | "--nav-freeze"
             | "--nav-loss" | "--sonar-dropout" => {
                 let v = value()?;
@@ -138,6 +150,28 @@ fn cmd_run(it: impl Iterator<Item = String>) -> ExitCode {
             return ExitCode::from(2);
         }
     };
+    if let Some(recipe) = &args.params {
+        let text = match std::fs::read_to_string(recipe) {
+            Ok(t) => t,
+            Err(e) => {
+                eprintln!("hil run: cannot read {}: {e}", recipe.display());
+                return ExitCode::from(2);
+            }
+        };
+        match scenario::parse_planner(&text, &recipe.display().to_string(), sc.dt_s) {
+            Ok(p) => {
+                sc.params = p;
+                eprintln!(
+                    "hil: planner parameters from {} (instead of the scenario's [planner])",
+                    recipe.display()
+                );
+            }
+            Err(e) => {
+                eprintln!("{e}");
+                return ExitCode::from(2);
+            }
+        }
+    }
     if let Err(e) = apply_faults(&mut sc, &args.faults) {
         eprintln!("hil run: {e}");
         return ExitCode::from(2);
@@ -223,6 +257,9 @@ fn main() -> ExitCode {
     match it.next().as_deref() {
         Some("run") => cmd_run(it),
         Some("check") => cmd_check(it),
+        Some("sweep") => hil::sweep::cli_sweep(it),
+        Some("merge") => hil::sweep::cli_merge(it),
+        Some("compare") => hil::compare::cli(it),
         Some("-h" | "--help") => {
             println!("{USAGE}");
             ExitCode::SUCCESS

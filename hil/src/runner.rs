@@ -34,11 +34,15 @@ pub const TICK_RETRY: Duration = Duration::from_millis(200);
 pub const TICK_ATTEMPTS: u32 = 200;
 
 /// Radius of a vehicle's hull for clearance and collisions, m (a kinematic vehicle is a
-/// point, as in seed 000; a VideoRay Pro III is about 0.36 m × 0.22 m).
+/// point, as in seed 000; a VideoRay Pro III is about 0.36 m × 0.22 m). The flat-fish AUV
+/// (4.5 m × 1.46 m) gets half its length, the circle that contains the hull at any heading:
+/// a contact is never missed, at the price of counting a pass abeam closer than ≈ 1.5 m to its
+/// side as one (the hull is a circle for the other vehicles' sonars and planners too).
 pub fn hull_radius(model: ModelKind) -> f64 {
     match model {
         ModelKind::Kinematic => 0.0,
         ModelKind::VideoRay => 0.2,
+        ModelKind::FlatFish => 0.5 * crate::sim::flatfish::FLATFISH_LENGTH_M,
     }
 }
 
@@ -110,18 +114,97 @@ pub struct RunResult {
     pub tick_retries: Vec<u32>,
 }
 
+/// How [`run_quiet`] runs a scenario: the many short runs of a parameter sweep.
+#[derive(Clone, Debug)]
+pub struct QuietRun {
+    /// Which firmware.
+    pub target: Target,
+    /// The firmware binary, built once by the caller ([`firmware::build`]).
+    pub binary: PathBuf,
+    /// End the run at the first period where a vehicle has collided (negative clearance) or
+    /// every vehicle is within `arrival_radius_m` of its goal, instead of at `duration_s`.
+    pub stop_early: bool,
+    /// The host-process firmware on a Unix socket pair instead of a pty
+    /// ([`Firmware::start_host_socket`]); other targets ignore it.
+    pub socket: bool,
+}
+
 /// Runs `sc` and writes its outputs to `cfg.out_dir`.
 pub fn run(sc: &Scenario, cfg: &RunConfig) -> Result<RunResult, RunError> {
     std::fs::create_dir_all(&cfg.out_dir).map_err(RunError::Output)?;
     let binary = firmware::build(&cfg.target).map_err(fw_err)?;
+    let how = How {
+        log_dir: Some(&cfg.out_dir),
+        progress: cfg.progress,
+        stop_early: false,
+        socket: false,
+    };
+    let sim = simulate(sc, &cfg.target, &binary, &how)?;
+    let summary = output::write_all(&cfg.out_dir, &sim.output).map_err(RunError::Output)?;
+    Ok(RunResult {
+        output: sim.output,
+        summary,
+        faults: sim.faults,
+        tick_retries: sim.tick_retries,
+    })
+}
+
+/// Runs `sc` without writing anything (no frame logs, no outputs, no progress bar) on a
+/// firmware built beforehand, and returns what was recorded; the metrics are
+/// [`Summary::of`] the result. The sweep's run mode (`hil sweep`).
+pub fn run_quiet(sc: &Scenario, q: &QuietRun) -> Result<RunOutput, RunError> {
+    let how = How {
+        log_dir: None,
+        progress: false,
+        stop_early: q.stop_early,
+        socket: q.socket,
+    };
+    simulate(sc, &q.target, &q.binary, &how).map(|s| s.output)
+}
+
+/// How [`simulate`] runs: frame logs into `log_dir` if given, a progress bar if `progress`,
+/// the end at arrival or collision if `stop_early`, the host firmware on a socket if `socket`.
+struct How<'a> {
+    log_dir: Option<&'a std::path::Path>,
+    progress: bool,
+    stop_early: bool,
+    socket: bool,
+}
+
+/// What [`simulate`] recorded.
+struct Simulated {
+    output: RunOutput,
+    faults: Vec<FaultCounts>,
+    tick_retries: Vec<u32>,
+}
+
+/// The run itself.
+fn simulate(
+    sc: &Scenario,
+    target: &Target,
+    binary: &std::path::Path,
+    how: &How<'_>,
+) -> Result<Simulated, RunError> {
     let mut params = sc.params;
     params.period_s = sc.dt_s as f32;
 
     let mut sims = Vec::new();
     for (i, v) in sc.vehicles.iter().enumerate() {
         let lockstep = sc.mode == RunMode::Lockstep;
-        let fw = Firmware::start(&cfg.target, &binary, lockstep).map_err(fw_err)?;
-        let log = FrameLog::create(&cfg.out_dir, &v.name).map_err(RunError::Output)?;
+        let mut fw = if how.socket && *target == Target::Host {
+            Firmware::start_host_socket(binary)
+        } else {
+            Firmware::start(target, binary, lockstep)
+        }
+        .map_err(fw_err)?;
+        if how.stop_early && lockstep {
+            // The sweep's runs: one write per period (see `Firmware::set_batching`).
+            fw.set_batching(true).map_err(fw_err)?;
+        }
+        let log = match how.log_dir {
+            Some(dir) => Some(FrameLog::create(dir, &v.name).map_err(RunError::Output)?),
+            None => None,
+        };
         let seed = sc.seed.wrapping_add(1000 * i as u64);
         let nav = NavSensor::new(NavConfig {
             position_sigma_m: sc.navigation.position_sigma_m,
@@ -151,7 +234,7 @@ pub fn run(sc: &Scenario, cfg: &RunConfig) -> Result<RunResult, RunError> {
                 sc.faults.bit_error_rate,
                 sc.faults.drop_rate,
                 seed.wrapping_add(13),
-                Some(log),
+                log,
             ),
             record: VehicleRecord {
                 name: v.name.clone(),
@@ -201,7 +284,7 @@ pub fn run(sc: &Scenario, cfg: &RunConfig) -> Result<RunResult, RunError> {
 
     let steps = (sc.duration_s / sc.dt_s).round().max(1.0) as u64;
     let started = Instant::now();
-    let show = cfg.progress && std::io::stderr().is_terminal();
+    let show = how.progress && std::io::stderr().is_terminal();
     let mut replies_checked = vec![false; sims.len()];
     for k in 0..steps {
         let t = k as f64 * sc.dt_s;
@@ -254,7 +337,10 @@ pub fn run(sc: &Scenario, cfg: &RunConfig) -> Result<RunResult, RunError> {
             s.model.step(sc.dt_s, &s.setpoints, sc.current.velocity);
         }
         if show && (k % 50 == 0 || k + 1 == steps) {
-            progress(k + 1, steps, t);
+            progress_bar(k + 1, steps, &format!("t = {t:7.1} s"));
+        }
+        if how.stop_early && finished(&sims, f64::from(params.arrival_radius_m)) {
+            break;
         }
     }
     if show {
@@ -269,17 +355,28 @@ pub fn run(sc: &Scenario, cfg: &RunConfig) -> Result<RunResult, RunError> {
         dt_s: sc.dt_s,
         obstacles: sc.obstacles.clone(),
         vehicles,
-        firmware: cfg.target.to_string(),
+        firmware: target.to_string(),
         arrival_radius_m: f64::from(params.arrival_radius_m),
         params,
     };
-    let summary = output::write_all(&cfg.out_dir, &output).map_err(RunError::Output)?;
-    Ok(RunResult {
+    Ok(Simulated {
         output,
-        summary,
         faults,
         tick_retries,
     })
+}
+
+/// Whether a run can end early: a vehicle has collided at the last sample, or every vehicle's
+/// last sample is within `arrival_radius_m` of its goal.
+fn finished(sims: &[Sim], arrival_radius_m: f64) -> bool {
+    let last = |s: &Sim| s.record.samples.last().cloned();
+    let collided = sims
+        .iter()
+        .any(|s| last(s).is_some_and(|x| x.nearest_m < 0.0));
+    let arrived = sims.iter().all(|s| {
+        last(s).is_some_and(|x| x.state.position.sub(s.record.goal).norm() <= arrival_radius_m)
+    });
+    collided || arrived
 }
 
 /// Sends this period's navigation and sonar, with the scenario's sensor faults.
@@ -451,13 +548,15 @@ fn nearest(
     obstacles.chain(vehicles).fold(f64::INFINITY, f64::min)
 }
 
-fn progress(done: u64, total: u64, t: f64) {
+/// The progress bar on stderr (`\r[####    ]  42%  {what}`), redrawn in place; the caller
+/// ends the line when done. Shared by `hil run` and `hil sweep`.
+pub fn progress_bar(done: u64, total: u64, what: &str) {
     let width = 40;
-    let filled = (done * width / total.max(1)) as usize;
+    let filled = (done.min(total) * width / total.max(1)) as usize;
     eprint!(
-        "\r[{}{}] {:3}%  t = {t:7.1} s",
+        "\r[{}{}] {:3}%  {what}",
         "#".repeat(filled),
         " ".repeat(width as usize - filled),
-        done * 100 / total.max(1)
+        done.min(total) * 100 / total.max(1)
     );
 }

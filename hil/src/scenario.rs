@@ -21,6 +21,8 @@ use vpf::field::{Shape, MAX_POLYGON_VERTICES};
 use vpf::planner::Formation;
 use vpf::{Bounding, Params};
 
+pub use vpf::params::Strategy;
+
 pub use crate::sim::vehicle::ModelKind;
 use crate::types::{SimObstacle, SimShape, P2};
 
@@ -47,10 +49,8 @@ pub struct Scenario {
     pub seed: u64,
     /// Lock-step (as fast as possible, deterministic) or real time.
     pub mode: RunMode,
-    /// Which planner the firmware runs.
-    pub strategy: Strategy,
     /// The planner's parameters: `Params::default()` with the `[planner]` overrides and
-    /// `period_s = dt_s`, validated.
+    /// `period_s = dt_s`, validated. The strategy the firmware runs is `params.strategy`.
     pub params: Params,
     /// The vehicles, in file order (at least one, at most [`MAX_VEHICLES`]).
     pub vehicles: Vec<Vehicle>,
@@ -74,14 +74,6 @@ pub enum RunMode {
     Lockstep,
     /// One step per `dt_s` of wall-clock time.
     Realtime,
-}
-
-/// The guidance strategy the firmware runs. Only the VPF planner exists today.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum Strategy {
-    /// Virtual potential fields (seeds 000/001).
-    #[default]
-    Vpf,
 }
 
 /// How a vehicle's firmware learns about obstacles.
@@ -282,6 +274,24 @@ pub fn parse(text: &str, file: &str) -> Result<Scenario, ScenarioError> {
     let doc = DeTable::parse(text).map_err(|e| src.syntax(&e))?;
     let root = Table::new(src, String::new(), 0..0, doc.get_ref());
     build(&root)
+}
+
+/// Parses a parameter file — a document holding only a `[planner]` table, with the keys and
+/// checks of a scenario's `[planner]` (the recipes `hil sweep` writes) — into the parameters
+/// it gives (`Params::default()` with its overrides) at planner period `dt_s`. Errors name
+/// `file`, the line and the key, as for a scenario.
+pub fn parse_planner(text: &str, file: &str, dt_s: f64) -> Result<Params, ScenarioError> {
+    let src = Src { file, text };
+    let doc = DeTable::parse(text).map_err(|e| src.syntax(&e))?;
+    let root = Table::new(src, String::new(), 0..0, doc.get_ref());
+    root.allow(&["planner"], "a parameter file (only a [planner] table)")?;
+    let dt = Got {
+        v: dt_s,
+        span: 0..0,
+        key: "dt_s".into(),
+        src,
+    };
+    planner(&root, &dt)
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -752,7 +762,7 @@ fn build(root: &Table<'_>) -> Result<Scenario, ScenarioError> {
         None => RunMode::Lockstep,
     };
 
-    let (strategy, params) = planner(root, &dt)?;
+    let params = planner(root, &dt)?;
     let sonar = sonar(root)?;
     let navigation = navigation(root, dt_s)?;
     let current = current(root)?;
@@ -796,7 +806,6 @@ fn build(root: &Table<'_>) -> Result<Scenario, ScenarioError> {
         dt_s,
         seed: seed_v,
         mode,
-        strategy,
         params,
         vehicles,
         obstacles,
@@ -829,6 +838,14 @@ const PARAM_F32: &[(&str, &str)] = &[
     ("stall_speed", "0 ..= v_max m/s"),
     ("stall_time_s", "0.1 ..= 600 s"),
     ("ghost_timeout_s", "1 ..= 3600 s"),
+    ("horizon_s", "0 ..= 120 s"),
+    ("mp_arc_m", "0.1 ..= 100 m"),
+    ("mp_turn_rad", "0.05 ..= 3.14159 rad"),
+    ("mp_xi", "0.001 ..= 10000"),
+    ("mp_eta", "0 ..= 1000000"),
+    ("mp_influence_m", "0.1 ..= 1000 m"),
+    ("nf_kappa", "0 (auto) or 1 ..= 64"),
+    ("nf_workspace_m", "1 ..= 100000 m"),
 ];
 
 fn param_f32<'p>(p: &'p mut Params, name: &str) -> Option<&'p mut f32> {
@@ -851,6 +868,14 @@ fn param_f32<'p>(p: &'p mut Params, name: &str) -> Option<&'p mut f32> {
         "stall_speed" => &mut p.stall_speed,
         "stall_time_s" => &mut p.stall_time_s,
         "ghost_timeout_s" => &mut p.ghost_timeout_s,
+        "horizon_s" => &mut p.horizon_s,
+        "mp_arc_m" => &mut p.mp_arc_m,
+        "mp_turn_rad" => &mut p.mp_turn_rad,
+        "mp_xi" => &mut p.mp_xi,
+        "mp_eta" => &mut p.mp_eta,
+        "mp_influence_m" => &mut p.mp_influence_m,
+        "nf_kappa" => &mut p.nf_kappa,
+        "nf_workspace_m" => &mut p.nf_workspace_m,
         _ => return None,
     })
 }
@@ -860,6 +885,8 @@ fn param_range(name: &str) -> String {
         "period_s" => "0.02 ..= 1 s".into(),
         "n_gamma" => format!("4 ..= {}", vpf::params::N_GAMMA_MAX),
         "max_ghosts" => format!("0 ..= {}", vpf::planner::MAX_GHOSTS),
+        "mp_points" => format!("3 ..= {}", vpf::planner::multipoint::MAX_ARC_POINTS),
+        "mp_periphery" => format!("2 ..= {}", vpf::planner::multipoint::MAX_PERIPHERY_POINTS),
         _ => PARAM_F32
             .iter()
             .find(|(n, _)| *n == name)
@@ -872,11 +899,13 @@ fn param_value(p: &Params, name: &str) -> String {
     match name {
         "n_gamma" => p.n_gamma.to_string(),
         "max_ghosts" => p.max_ghosts.to_string(),
+        "mp_points" => p.mp_points.to_string(),
+        "mp_periphery" => p.mp_periphery.to_string(),
         _ => param_f32(&mut p, name).map_or_else(String::new, |v| v.to_string()),
     }
 }
 
-fn planner(root: &Table<'_>, dt: &Got<'_, f64>) -> Result<(Strategy, Params), ScenarioError> {
+fn planner(root: &Table<'_>, dt: &Got<'_, f64>) -> Result<Params, ScenarioError> {
     let mut params = Params {
         period_s: dt.v as f32,
         ..Params::default()
@@ -892,31 +921,23 @@ fn planner(root: &Table<'_>, dt: &Got<'_, f64>) -> Result<(Strategy, Params), Sc
                 ),
             )
         })?;
-        return Ok((Strategy::Vpf, params));
+        return Ok(params);
     };
-    let mut allowed: Vec<&str> = vpf::link::PARAM_NAMES.to_vec();
-    allowed.push("strategy");
-    t.allow(&allowed, "[planner] (the names of vpf::Params' fields)")?;
+    t.allow(
+        &vpf::link::PARAM_NAMES,
+        "[planner] (the names of vpf::Params' fields)",
+    )?;
 
-    let mut strategy = Strategy::Vpf;
     for &(name, _, _) in &t.entries {
         match name {
             "strategy" => {
                 let s = t.req_string(name)?;
-                strategy = match s.v {
-                    "vpf" => Strategy::Vpf,
-                    "multipoint" | "navfn" => {
-                        return Err(s.fail(format!(
-                            "strategy \"{}\" is not implemented yet (only \"vpf\" is)",
-                            s.v
-                        )))
-                    }
-                    other => {
-                        return Err(
-                            s.fail(format!("unknown strategy \"{other}\" (expected \"vpf\")"))
-                        )
-                    }
-                };
+                params.strategy = Strategy::from_name(s.v).ok_or_else(|| {
+                    s.fail(format!(
+                        "unknown strategy \"{}\" (expected \"vpf\", \"multipoint\" or \"navfn\")",
+                        s.v
+                    ))
+                })?;
             }
             "period_s" => {
                 return Err(t.src.err(
@@ -933,16 +954,17 @@ fn planner(root: &Table<'_>, dt: &Got<'_, f64>) -> Result<(Strategy, Params), Sc
                     "bounding",
                 )?;
             }
-            "n_gamma" | "max_ghosts" => {
+            "n_gamma" | "max_ghosts" | "mp_points" | "mp_periphery" => {
                 let i = t.integer(name)?.ok_or_else(|| t.missing(name))?;
                 let v = u8::try_from(i.v).map_err(|_| {
                     i.fail(format!("must be in {}, got {}", param_range(name), i.v))
                 })?;
-                if name == "n_gamma" {
-                    params.n_gamma = v;
-                } else {
-                    params.max_ghosts = v;
-                }
+                *match name {
+                    "n_gamma" => &mut params.n_gamma,
+                    "max_ghosts" => &mut params.max_ghosts,
+                    "mp_points" => &mut params.mp_points,
+                    _ => &mut params.mp_periphery,
+                } = v;
             }
             "seed" => {
                 let i = t.integer(name)?.ok_or_else(|| t.missing(name))?;
@@ -982,7 +1004,7 @@ fn planner(root: &Table<'_>, dt: &Got<'_, f64>) -> Result<(Strategy, Params), Sc
             )
         }
     })?;
-    Ok((strategy, params))
+    Ok(params)
 }
 
 // --- [sonar], [navigation], [current], [faults] ----------------------------------------------
@@ -1303,6 +1325,9 @@ fn vehicle(
         &[
             ("kinematic", ModelKind::Kinematic),
             ("videoray", ModelKind::VideoRay),
+            ("flatfish", ModelKind::FlatFish),
+            ("flat-fish", ModelKind::FlatFish),
+            ("flat_fish", ModelKind::FlatFish),
         ],
         "model",
     )?;

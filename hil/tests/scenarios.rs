@@ -42,7 +42,7 @@ fn clearance(s: &Scenario, p: P2) -> f32 {
         .fold(f32::INFINITY, f32::min)
 }
 
-const SHIPPED: [&str; 10] = [
+const SHIPPED: [&str; 13] = [
     "seed000_fig2_no_friction.toml",
     "seed000_fig3_friction.toml",
     "seed000_fig4_clutter_plain.toml",
@@ -53,6 +53,9 @@ const SHIPPED: [&str; 10] = [
     "u_trap.toml",
     "narrow_gap.toml",
     "random_clutter.toml",
+    "seed003_case1_static.toml",
+    "seed003_case2_moving.toml",
+    "crossing_traffic.toml",
 ];
 
 #[test]
@@ -162,7 +165,7 @@ fn videoray_scenarios_sense_as_their_headers_say() {
         ("random_clutter.toml", Sensing::Sonar),
     ] {
         let s = shipped(name);
-        assert_eq!(s.strategy, Strategy::Vpf);
+        assert_eq!(s.params.strategy, Strategy::Vpf);
         assert_eq!(s.mode, RunMode::Lockstep);
         for v in &s.vehicles {
             assert_eq!(v.model, ModelKind::VideoRay, "{name}");
@@ -187,8 +190,20 @@ fn narrow_gap_is_about_three_metres_wide_on_the_track() {
 
 /// Breadth-first search on a grid over the free space inflated by `margin`.
 fn path_exists(s: &Scenario, from: P2, to: P2, margin: f32) -> bool {
-    let h = 0.25;
-    let (x0, y0, nx, ny) = (-10.0, -30.0, 440usize, 240usize);
+    path_exists_in(s, from, to, margin, P2::new(-10.0, -30.0), (440, 240), 0.25)
+}
+
+/// [`path_exists`] on the `nx` × `ny` grid of cell `h` m whose corner is `lo`.
+fn path_exists_in(
+    s: &Scenario,
+    from: P2,
+    to: P2,
+    margin: f32,
+    lo: P2,
+    (nx, ny): (usize, usize),
+    h: f64,
+) -> bool {
+    let (x0, y0) = (lo.x, lo.y);
     let cell = |p: P2| {
         (
             ((p.x - x0) / h).round() as usize,
@@ -242,6 +257,158 @@ fn random_clutter_blocks_the_straight_line_but_leaves_a_clear_path() {
         velocity: P2::default(),
     });
     assert!(!path_exists(&walled, v.start, v.goal, 1.5));
+}
+
+/// Where the track of obstacle `o` (a circle) crosses the straight line from `a` to `b`: the
+/// time t and the distance along the line, if its centre crosses the segment.
+fn crossing(o: &hil::types::SimObstacle, a: P2, b: P2) -> Option<(f64, f64)> {
+    let SimShape::Circle { center, .. } = o.shape else {
+        return None;
+    };
+    let len = b.sub(a).norm();
+    let d = b.sub(a).scale(1.0 / len);
+    let n = P2::new(-d.y, d.x);
+    let across = |p: P2| p.sub(a).x * n.x + p.sub(a).y * n.y;
+    let rate = o.velocity.x * n.x + o.velocity.y * n.y;
+    if rate == 0.0 {
+        return None;
+    }
+    let t = -across(center) / rate;
+    let at = center.add(o.velocity.scale(t)).sub(a);
+    let s = at.x * d.x + at.y * d.y;
+    (t >= 0.0 && (0.0..=len).contains(&s)).then_some((t, s))
+}
+
+#[test]
+fn seed_003_scenarios_fly_the_flat_fish_through_circles() {
+    let hull = hil::runner::hull_radius(ModelKind::FlatFish);
+    assert_eq!(hull, 2.25);
+    let case1 = shipped("seed003_case1_static.toml");
+    let case2 = shipped("seed003_case2_moving.toml");
+    for s in [&case1, &case2] {
+        assert_eq!(s.vehicles.len(), 1);
+        let v = &s.vehicles[0];
+        assert_eq!(v.model, ModelKind::FlatFish);
+        assert_eq!(v.sensing, Sensing::Contacts);
+        assert_eq!(
+            (v.start, v.goal),
+            (P2::new(30.0, 20.0), P2::new(170.0, 170.0))
+        );
+        assert_eq!(s.params.strategy, Strategy::Multipoint);
+        assert_eq!(s.params.v_max, 1.0, "the paper's 1 m/s");
+        assert!((300.0..=600.0).contains(&s.duration_s));
+        for o in &s.obstacles {
+            let SimShape::Circle { radius, .. } = o.shape else {
+                panic!("seed 003 has circles only: {o:?}");
+            };
+            assert!((4.0..=10.0).contains(&radius), "{o:?}");
+        }
+        // A route exists for the hull, on a 1 m grid over the theatre (static circles).
+        let statics = Scenario {
+            obstacles: s
+                .obstacles
+                .iter()
+                .filter(|o| o.velocity == P2::default())
+                .cloned()
+                .collect(),
+            ..s.clone()
+        };
+        let theatre = (P2::new(0.0, 0.0), (201, 201), 1.0);
+        assert!(path_exists_in(
+            &statics,
+            v.start,
+            v.goal,
+            hull as f32,
+            theatre.0,
+            theatre.1,
+            theatre.2
+        ));
+    }
+
+    // Case 1: 6-10 static circles, at least two blocking the straight line for the hull.
+    assert!((6..=10).contains(&case1.obstacles.len()));
+    assert!(case1.obstacles.iter().all(|o| o.velocity == P2::default()));
+    let (a, b) = (P2::new(30.0, 20.0), P2::new(170.0, 170.0));
+    let on_line = |s: &Scenario, t: f64| {
+        s.obstacles
+            .iter()
+            .filter(|o| {
+                (0..=2000).any(|k| {
+                    let p = a.add(b.sub(a).scale(f64::from(k) / 2000.0));
+                    o.signed_distance(t, p) < hull
+                })
+            })
+            .count()
+    };
+    assert!(on_line(&case1, 0.0) >= 2, "the straight line is too easy");
+
+    // Case 2: static circles too, and movers slower than the vehicle that cross the straight
+    // line during the run, without ever overlapping a static circle.
+    let (movers, statics): (Vec<_>, Vec<_>) = case2
+        .obstacles
+        .iter()
+        .partition(|o| o.velocity != P2::default());
+    assert!(statics.len() >= 2 && (2..=5).contains(&movers.len()));
+    assert!(on_line(&case2, 0.0) >= 2);
+    for m in &movers {
+        let speed = m.velocity.norm();
+        // 0.3-0.8 m/s, to the three decimals of the file's components.
+        assert!((0.299..=0.801).contains(&speed), "{m:?}");
+        let (t, _) = crossing(m, a, b).unwrap_or_else(|| panic!("never crosses: {m:?}"));
+        assert!(t < 250.0, "crosses too late: {t} s");
+        let SimShape::Circle { radius, .. } = m.shape else {
+            unreachable!()
+        };
+        for st in &statics {
+            let closest = (0..=4000)
+                .map(|k| {
+                    let t = f64::from(k) * 0.1;
+                    st.signed_distance(t, m.shape_at(t).center()) - radius
+                })
+                .fold(f64::INFINITY, f64::min);
+            assert!(closest > 0.0, "{m:?} runs through {st:?}");
+        }
+    }
+}
+
+#[test]
+fn crossing_traffic_puts_the_videoray_on_collision_courses() {
+    let s = shipped("crossing_traffic.toml");
+    assert_eq!(s.params.strategy, Strategy::Vpf);
+    let v = &s.vehicles[0];
+    assert_eq!(
+        (v.model, v.sensing),
+        (ModelKind::VideoRay, Sensing::Contacts)
+    );
+    assert!((2..=3).contains(&s.obstacles.len()));
+    for o in &s.obstacles {
+        let speed = o.velocity.norm();
+        assert!(
+            speed > 0.0 && speed <= f64::from(s.params.v_max) + 1e-9,
+            "{o:?}"
+        );
+        // It reaches the track within 5 s of when a vehicle at v_max, 1.3 s late off the
+        // start, would be at the same place.
+        let (t, along) = crossing(o, v.start, v.goal).expect("crosses the track");
+        let there = along / f64::from(s.params.v_max) + 1.3;
+        assert!(
+            (t - there).abs() < 5.0,
+            "{o:?}: crosses at {t} s, vehicle there at {there} s"
+        );
+    }
+    // At least one crosses at the vehicle's full speed.
+    assert!(s.obstacles.iter().any(|o| o.velocity.norm() >= 0.99));
+}
+
+#[test]
+fn flat_fish_model_spellings_parse() {
+    for name in ["flatfish", "flat-fish", "flat_fish"] {
+        let text = BASE.replace("\"kinematic\"", &format!("\"{name}\""));
+        let s = scenario::parse(&text, "ff.toml").unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(s.vehicles[0].model, ModelKind::FlatFish, "{name}");
+    }
+    let e = refused(&BASE.replace("\"kinematic\"", "\"flat fish\""));
+    assert!(e.message.contains("\"flatfish\""), "{e}");
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -581,10 +748,15 @@ fn planner_parameters_are_checked_by_the_library() {
     let text = with("\n[planner]\nperiod_s = 0.2\n");
     assert_refused(&text, "planner.period_s", "period_s", "top-level `dt_s`");
 
-    let text = with("\n[planner]\nstrategy = \"navfn\"\n");
-    assert_refused(&text, "planner.strategy", "strategy", "not implemented yet");
-    let text = with("\n[planner]\nstrategy = \"multipoint\"\n");
-    assert_refused(&text, "planner.strategy", "strategy", "not implemented yet");
+    let text = with("\n[planner]\nstrategy = \"astar\"\n");
+    assert_refused(&text, "planner.strategy", "strategy", "unknown strategy");
+    for (name, s) in [
+        ("navfn", vpf::Strategy::Navfn),
+        ("multipoint", vpf::Strategy::Multipoint),
+    ] {
+        let text = with(&format!("\n[planner]\nstrategy = \"{name}\"\n"));
+        assert_eq!(scenario::parse(&text, "t.toml").unwrap().params.strategy, s);
+    }
 
     let text = BASE.replace("dt_s = 0.1", "dt_s = 2.0");
     assert_refused(&text, "dt_s", "dt_s", "must be in 0.02 ..= 1 s, got 2");

@@ -12,6 +12,13 @@
 //!   ends one).
 //! - **energy_proxy**: ∫|thrust| dt ≈ Σ|thrustᵢ|·dt with the run's period (N·s for the
 //!   dynamic model's thrust).
+//! - **arrival_error**, **final_error**: the vehicle's error at the first sample within the
+//!   arrival radius (so its `t_s` is `time_to_goal_s`, the arrival time) and at the last
+//!   sample with a finite position and heading — the errors seed 003 §5 reports at the goal: the
+//!   goal's offset from the vehicle in the body frame (`surge_m` forward, `sway_m` to port;
+//!   goal − position, rotated by −ψ) and the yaw error, heading set-point of that sample (the
+//!   last one the firmware sent) minus heading, wrapped to (−180°, 180°] (null if the set-point
+//!   is not finite). Null when there is no such sample.
 //! - **step_cost**: maximum and mean of the firmware's reported step costs, with their unit.
 //! - **counters**: the last telemetry's counters, by name.
 //!
@@ -22,7 +29,8 @@ use std::fmt;
 use serde::Serialize;
 
 use super::RunOutput;
-use crate::types::{VehicleRecord, P2};
+use crate::sim::vehicle::wrap_pi;
+use crate::types::{Sample, VehicleRecord, P2};
 use vpf::link::TelemetryCounters;
 
 /// Everything `metrics.json` holds; its `Display` is the end-of-run summary.
@@ -73,6 +81,11 @@ pub struct VehicleMetrics {
     pub final_distance_m: Option<f64>,
     /// Closest approach to the goal, m.
     pub min_goal_distance_m: Option<f64>,
+    /// The error on arrival (first sample within the arrival radius; its `t_s` is the arrival
+    /// time), null if it never arrived.
+    pub arrival_error: Option<GoalError>,
+    /// The error at the last sample with a finite position and heading.
+    pub final_error: Option<GoalError>,
     /// ∫|thrust| dt.
     pub energy_proxy: f64,
     /// Deepest ghost goal-point stack seen.
@@ -85,6 +98,58 @@ pub struct VehicleMetrics {
     pub step_cost: StepCost,
     /// The last telemetry's counters (null if no telemetry arrived).
     pub counters: Option<TelemetryCounters>,
+}
+
+/// A vehicle's error against its goal and its heading set-point at one sample, in its body
+/// frame (x forward, y to port): what seed 003 §5 reports at the goal ("position errors in surge
+/// and sway axes of 0.05 m, −0.1 m respectively and a yaw error of 3°").
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct GoalError {
+    /// Time of the sample, s.
+    pub t_s: f64,
+    /// Goal offset along the body x axis, m: positive while the goal is ahead.
+    pub surge_m: f64,
+    /// Goal offset along the body y axis, m: positive while the goal is to port.
+    pub sway_m: f64,
+    /// Heading set-point minus heading, wrapped to (−180, 180], deg (null if the set-point is
+    /// not finite).
+    pub yaw_deg: Option<f64>,
+}
+
+impl GoalError {
+    /// The error of sample `s` against `goal`; `None` unless its position, heading and the
+    /// goal are finite.
+    pub fn of(s: &Sample, goal: P2) -> Option<GoalError> {
+        let st = &s.state;
+        if !(finite(st.position) && finite(goal) && st.heading.is_finite()) {
+            return None;
+        }
+        let d = goal.sub(st.position);
+        let (sn, cs) = st.heading.sin_cos();
+        Some(GoalError {
+            t_s: s.t,
+            surge_m: d.x * cs + d.y * sn,
+            sway_m: -d.x * sn + d.y * cs,
+            yaw_deg: s
+                .psi_cmd
+                .is_finite()
+                .then(|| wrap_pi(s.psi_cmd - st.heading).to_degrees()),
+        })
+    }
+}
+
+impl fmt::Display for GoalError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "(t = {:.1} s) surge {:+.2} m, sway {:+.2} m, yaw ",
+            self.t_s, self.surge_m, self.sway_m
+        )?;
+        match self.yaw_deg {
+            Some(y) => write!(f, "{y:+.1}°"),
+            None => f.write_str("n/a"),
+        }
+    }
 }
 
 /// Statistics of the firmware's reported planner step costs.
@@ -165,6 +230,7 @@ impl VehicleMetrics {
     pub fn of(v: &VehicleRecord, arrival_radius_m: f64, dt_s: f64) -> VehicleMetrics {
         let dist = |p: P2| p.sub(v.goal).norm();
         let mut time_to_goal = None;
+        let mut arrival_error = None;
         let mut path = 0.0;
         let mut last_pos: Option<P2> = None;
         let mut min_clear = None;
@@ -186,6 +252,7 @@ impl VehicleMetrics {
                 // NaN radius compares false: never reached.
                 if time_to_goal.is_none() && d <= arrival_radius_m && s.t.is_finite() {
                     time_to_goal = Some(s.t);
+                    arrival_error = GoalError::of(s, v.goal);
                 }
             }
             let c = s.nearest_m;
@@ -235,6 +302,12 @@ impl VehicleMetrics {
             collisions,
             final_distance_m: final_distance,
             min_goal_distance_m: min_goal,
+            arrival_error,
+            final_error: v
+                .samples
+                .iter()
+                .rev()
+                .find_map(|s| GoalError::of(s, v.goal)),
             energy_proxy: energy,
             max_ghost_depth: max_ghost,
             ghost_goal_points: v.ghosts.len(),
@@ -294,6 +367,12 @@ impl fmt::Display for VehicleMetrics {
             0 => f.write_str("no collisions")?,
             1 => f.write_str("1 COLLISION")?,
             n => write!(f, "{n} COLLISIONS")?,
+        }
+        if let Some(e) = &self.arrival_error {
+            write!(f, "; error on arrival {e}")?;
+        }
+        if let Some(e) = &self.final_error {
+            write!(f, "; final error {e}")?;
         }
         write!(f, "; energy proxy {:.1}", self.energy_proxy)?;
         if self.max_ghost_depth > 0 || self.ghost_goal_points > 0 {
@@ -437,12 +516,72 @@ mod tests {
     }
 
     #[test]
+    fn goal_errors_are_in_the_body_frame_on_arrival_and_at_the_end() {
+        use std::f64::consts::{FRAC_PI_2, PI};
+        let at = |t: f64, x: f64, y: f64, heading: f64, psi_cmd: f64| {
+            let mut s = sample(t, x, y, 1.0);
+            s.state.heading = heading;
+            s.psi_cmd = psi_cmd;
+            s
+        };
+        let three = 3f64.to_radians();
+        let mut v = VehicleRecord {
+            goal: P2::new(10.0, 5.0),
+            samples: vec![
+                at(0.0, 0.0, 0.0, 0.0, 0.0),
+                // Arrives heading north (+y), 0.5 m west of and 0.2 m short of the goal: the
+                // goal is 0.2 m ahead and 0.5 m to starboard.
+                at(1.0, 9.5, 4.8, FRAC_PI_2, FRAC_PI_2 + three),
+                // Ends heading west (ψ = π), 5 cm east and 10 cm north of the goal: it is 5 cm
+                // ahead and 10 cm to port. The set-point, −177°, is 3° to port across ±180°.
+                at(2.0, 10.05, 5.1, PI, -PI + three),
+            ],
+            ..VehicleRecord::default()
+        };
+        let m = VehicleMetrics::of(&v, 1.0, 1.0);
+        assert_eq!(m.time_to_goal_s, Some(1.0));
+        let close = |a: f64, b: f64| (a - b).abs() < 1e-9;
+        let a = m.arrival_error.expect("arrived");
+        assert_eq!(a.t_s, 1.0);
+        assert!(close(a.surge_m, 0.2) && close(a.sway_m, -0.5), "{a:?}");
+        assert!(close(a.yaw_deg.unwrap(), 3.0), "{a:?}");
+        let e = m.final_error.expect("has samples");
+        assert_eq!(e.t_s, 2.0);
+        assert!(close(e.surge_m, 0.05) && close(e.sway_m, 0.1), "{e:?}");
+        assert!(close(e.yaw_deg.unwrap(), 3.0), "{e:?}");
+        let text = m.to_string();
+        assert!(
+            text.contains(
+                "error on arrival (t = 1.0 s) surge +0.20 m, sway -0.50 m, yaw +3.0°; final error \
+                 (t = 2.0 s) surge +0.05 m, sway +0.10 m, yaw +3.0°"
+            ),
+            "{text}"
+        );
+        let json = serde_json::to_value(&m).unwrap();
+        assert_eq!(json["final_error"]["t_s"], 2.0);
+        assert!((json["arrival_error"]["sway_m"].as_f64().unwrap() + 0.5).abs() < 1e-9);
+
+        // A last sample without a heading is skipped; a set-point that is not finite has no yaw
+        // error; a vehicle that never comes within the radius has no arrival error.
+        v.samples[2].psi_cmd = f64::NAN;
+        v.samples.push(at(3.0, 12.0, 5.0, f64::NAN, 0.0));
+        let m = VehicleMetrics::of(&v, 0.1, 1.0);
+        assert!(m.time_to_goal_s.is_none() && m.arrival_error.is_none());
+        let e = m.final_error.unwrap();
+        assert_eq!((e.t_s, e.yaw_deg), (2.0, None));
+        assert!(m.to_string().contains("yaw n/a"), "{m}");
+        let json = serde_json::to_value(&m).unwrap();
+        assert!(json["arrival_error"].is_null() && json["final_error"]["yaw_deg"].is_null());
+    }
+
+    #[test]
     fn empty_record() {
         let m = VehicleMetrics::of(&VehicleRecord::default(), 1.0, 0.1);
         assert_eq!(m.samples, 0);
         assert!(!m.reached_goal);
         assert_eq!(m.path_length_m, 0.0);
         assert!(m.min_clearance_m.is_none() && m.final_distance_m.is_none());
+        assert!(m.arrival_error.is_none() && m.final_error.is_none());
         assert!(m.step_cost.max.is_none() && m.step_cost.mean.is_none());
         assert!(
             m.to_string().starts_with("(unnamed): no samples recorded;"),

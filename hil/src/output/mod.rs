@@ -14,7 +14,7 @@ pub mod commands;
 pub mod frames;
 pub mod metrics;
 pub mod plot;
-mod svg;
+pub(crate) mod svg;
 pub mod trajectory;
 
 use std::collections::HashSet;

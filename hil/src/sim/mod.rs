@@ -3,9 +3,12 @@
 //! - [`geometry`]: ground truth of the obstacles — position at time t (moving obstacles
 //!   translate with their velocity), signed distance, ray casting, and the firmware's `f32`
 //!   [`Shape`](vpf::field::Shape);
-//! - [`vehicle`]: the [`VehicleModel`] trait and its two models, chosen by [`ModelKind`]: the
-//!   kinematic vehicle of seed 000 (eq. 8) and a 3-DOF VideoRay Pro III (Wang's identified
-//!   coefficients) with PI-D surge-speed and heading autopilots;
+//! - [`vehicle`]: the [`VehicleModel`] trait and its models, chosen by [`ModelKind`]: the
+//!   kinematic vehicle of seed 000 (eq. 8) and the 3-DOF twin-thruster model with PI-D
+//!   surge-speed and heading autopilots ([`TwinThruster`]), as a VideoRay Pro III (Wang's
+//!   identified coefficients);
+//! - [`flatfish`]: the same twin-thruster model as seed 003's 4.5 m flat-fish AUV (its mass and
+//!   inertia, estimated hydrodynamics);
 //! - [`current`]: the ocean current the models drift in;
 //! - [`nav`]: the navigation sensor — the firmware's `NavState` from the truth, with seeded
 //!   Gaussian noise at a fixed rate, sample-and-hold;
@@ -39,6 +42,7 @@
 //! ```
 
 pub mod current;
+pub mod flatfish;
 pub mod geometry;
 pub mod nav;
 pub mod rng;
@@ -46,12 +50,13 @@ pub mod sonar;
 pub mod vehicle;
 
 pub use current::Current;
+pub use flatfish::{FlatFish, FLATFISH, FLATFISH_GAINS};
 pub use nav::{NavConfig, NavSensor};
 pub use rng::Rng;
 pub use sonar::{
     contacts, relative_bearing, OtherVehicle, Ping, Sector, Sonar, SonarConfig, SonarConfigError,
 };
 pub use vehicle::{
-    new_model, wrap_pi, AutopilotGains, Kinematic, ModelKind, PidGains, UnknownModel, VehicleModel,
-    VideoRay, VideoRayParams, VIDEORAY_PRO3, VIDEORAY_PRO3_GAINS,
+    new_model, wrap_pi, AutopilotGains, HullParams, Kinematic, ModelKind, PidGains, TwinThruster,
+    UnknownModel, VehicleModel, VideoRay, VideoRayParams, VIDEORAY_PRO3, VIDEORAY_PRO3_GAINS,
 };

@@ -1,7 +1,9 @@
-//! Vehicle models: the kinematic vehicle of seed 000 and a 3-DOF VideoRay Pro III with its
-//! low-level surge-speed and heading autopilots.
+//! Vehicle models: the kinematic vehicle of seed 000, and two 3-DOF twin-thruster vehicles with
+//! their low-level surge-speed and heading autopilots ([`TwinThruster`]): a VideoRay Pro III
+//! ([`VideoRay`]) and the 4.5 m flat-fish AUV of seed 003 ([`FlatFish`](super::flatfish::FlatFish),
+//! in [`super::flatfish`]).
 //!
-//! Both advance with [`VehicleModel::step`]`(dt, set-points, current)` and report the true
+//! All advance with [`VehicleModel::step`]`(dt, set-points, current)` and report the true
 //! [`VehicleState`] in the Earth-fixed frame (x, y; heading ψ counter-clockwise from +x, wrapped
 //! to (−π, π]; body frame x forward, y to port). The ocean current is an Earth-frame velocity,
 //! held constant over one step.
@@ -21,8 +23,8 @@ use std::fmt;
 pub const MAX_STEP_S: f64 = 3600.0;
 /// Largest commanded speed (or velocity magnitude) accepted, m/s; larger ones are clamped.
 pub const MAX_COMMAND_SPEED: f64 = 20.0;
-/// Largest internal integration (and autopilot) step of the VideoRay model, s.
-pub const VIDEORAY_SUBSTEP_S: f64 = 0.01;
+/// Largest internal integration (and autopilot) step of the dynamic ([`TwinThruster`]) models, s.
+pub const DYNAMIC_SUBSTEP_S: f64 = 0.01;
 
 /// `a` wrapped to (−π, π]; a non-finite angle gives 0.
 pub fn wrap_pi(a: f64) -> f64 {
@@ -72,14 +74,18 @@ pub enum ModelKind {
     Kinematic,
     /// The VideoRay Pro III 3-DOF dynamic model with surge and heading autopilots.
     VideoRay,
+    /// The 4.5 m flat-fish AUV of seed 003 §2, 3-DOF, with surge and heading autopilots.
+    #[serde(alias = "flat-fish", alias = "flat_fish")]
+    FlatFish,
 }
 
 impl ModelKind {
-    /// The scenario spelling: `"kinematic"` or `"videoray"`.
+    /// The scenario spelling: `"kinematic"`, `"videoray"` or `"flatfish"`.
     pub fn name(self) -> &'static str {
         match self {
             ModelKind::Kinematic => "kinematic",
             ModelKind::VideoRay => "videoray",
+            ModelKind::FlatFish => "flatfish",
         }
     }
 }
@@ -90,7 +96,7 @@ impl fmt::Display for ModelKind {
     }
 }
 
-/// A model name that is neither `kinematic` nor `videoray`.
+/// A model name that is none of `kinematic`, `videoray`, `flatfish`.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct UnknownModel(pub String);
 
@@ -98,7 +104,7 @@ impl fmt::Display for UnknownModel {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(
             f,
-            "unknown vehicle model `{}` (expected `kinematic` or `videoray`)",
+            "unknown vehicle model `{}` (expected `kinematic`, `videoray` or `flatfish`)",
             self.0
         )
     }
@@ -108,11 +114,13 @@ impl std::error::Error for UnknownModel {}
 
 impl std::str::FromStr for ModelKind {
     type Err = UnknownModel;
-    /// Case-insensitive; `video_ray`, `video-ray` and `videoray_pro3` are accepted too.
+    /// Case-insensitive; `video_ray`, `video-ray`, `videoray_pro3`, `flat-fish` and `flat_fish`
+    /// are accepted too.
     fn from_str(s: &str) -> Result<Self, Self::Err> {
         match s.trim().to_ascii_lowercase().as_str() {
             "kinematic" => Ok(ModelKind::Kinematic),
             "videoray" | "video_ray" | "video-ray" | "videoray_pro3" => Ok(ModelKind::VideoRay),
+            "flatfish" | "flat-fish" | "flat_fish" => Ok(ModelKind::FlatFish),
             _ => Err(UnknownModel(s.to_string())),
         }
     }
@@ -135,6 +143,7 @@ pub fn new_model(kind: ModelKind, start: P2, heading: f64) -> Box<dyn VehicleMod
     match kind {
         ModelKind::Kinematic => Box::new(Kinematic::new(start, heading)),
         ModelKind::VideoRay => Box::new(VideoRay::new(start, heading)),
+        ModelKind::FlatFish => Box::new(super::flatfish::FlatFish::new(start, heading)),
     }
 }
 
@@ -217,14 +226,15 @@ impl VehicleModel for Kinematic {
 }
 
 // ---------------------------------------------------------------------------------------------
-// VideoRay Pro III
+// Twin-thruster 3-DOF vehicles: the VideoRay Pro III and the flat-fish AUV
 
-/// Physical parameters of the 3-DOF (surge u, sway v, yaw r) model.
+/// Physical parameters of a 3-DOF (surge u, sway v, yaw r) vehicle driven by two horizontal
+/// thrusters in differential ([`TwinThruster`]).
 ///
 /// Hydrodynamic coefficients follow Fossen's notation and the signs of the source (added-mass
 /// terms as positive magnitudes, damping as negative derivatives).
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct VideoRayParams {
+pub struct HullParams {
     /// Dry mass m, kg.
     pub mass: f64,
     /// Rigid-body yaw inertia I_z, kg·m².
@@ -251,7 +261,15 @@ pub struct VideoRayParams {
     pub thrust_max: f64,
     /// Lateral distance of each horizontal thruster from the centre line, m.
     pub arm: f64,
+    /// Fraction of the thrusters' largest yaw moment, 2·arm·thrust_max, that the heading
+    /// autopilot may command, `(0, 1]`. 1 lets a turn take all the thrust (the vehicle slows
+    /// down in hard turns); below 1 keeps `2·thrust_max·(1 − yaw_share)` of surge force for the
+    /// speed loop whatever the heading error (a "rudder limit").
+    pub yaw_share: f64,
 }
+
+/// The former name of [`HullParams`], from when the VideoRay was the only dynamic model.
+pub type VideoRayParams = HullParams;
 
 /// The VideoRay Pro III.
 ///
@@ -274,7 +292,8 @@ pub struct VideoRayParams {
 /// - **arm = 0.10 m**: assumption — the two horizontal thrusters sit about 0.2 m apart at the
 ///   rear corners of the ≈ 0.29 m wide frame. The largest yaw moment is then 2·5.3·0.1 ≈
 ///   1.06 N·m, a top turn rate of ≈ 1.5 rad/s (≈ 85 °/s) against N_r|r|.
-pub const VIDEORAY_PRO3: VideoRayParams = VideoRayParams {
+/// - **yaw_share = 1**: an ROV turns on the spot; the heading loop may use all the thrust.
+pub const VIDEORAY_PRO3: HullParams = HullParams {
     mass: 3.6,
     iz: 0.066,
     x_udot: 1.94,
@@ -288,6 +307,7 @@ pub const VIDEORAY_PRO3: VideoRayParams = VideoRayParams {
     n_rr: -0.45,
     thrust_max: 5.3,
     arm: 0.10,
+    yaw_share: 1.0,
 };
 
 /// Gains of one PI-D loop: `out = kp·e + ki·∫e dt − kd·ẏ`, the derivative on the measurement
@@ -368,9 +388,11 @@ impl Pid {
     }
 }
 
-/// The VideoRay Pro III in the horizontal plane: a Fossen-style 3-DOF model with diagonal
-/// inertia (rigid body + added mass), linear and quadratic damping, two horizontal thrusters
-/// in differential, and PI-D surge-speed and heading autopilots.
+/// A vehicle in the horizontal plane driven by two horizontal thrusters in differential: a
+/// Fossen-style 3-DOF model with diagonal inertia (rigid body + added mass), linear and
+/// quadratic damping, and PI-D surge-speed and heading autopilots. [`VideoRay`] and
+/// [`FlatFish`](super::flatfish::FlatFish) are this model with their own [`HullParams`] and
+/// [`AutopilotGains`].
 ///
 /// With ν = (u, v, r) the velocity relative to the water, m₁₁ = m + X_u̇, m₂₂ = m + Y_v̇,
 /// m₃₃ = I_z + N_ṙ:
@@ -384,21 +406,21 @@ impl Pid {
 ///
 /// The surge–sway terms are Fossen's rigid-body and added-mass Coriolis–centripetal forces
 /// (they make the vehicle skid outward in a turn); the yaw equation is decoupled, as in Wang's
-/// identified model — the Munk moment (m₁₁ − m₂₂)uv of slender-body theory is left out because
-/// Wang's yaw identification has no such term and it is poorly predicted for a bluff box
-/// hull. The hydrodynamics act on the water-relative velocity: for a current that is constant
-/// in the Earth frame (irrotational), the equations in ν_r hold exactly (Fossen, *Handbook of
-/// Marine Craft Hydrodynamics and Motion Control*, 2011, Property 10.1), and the ground velocity
-/// is `R(ψ)ν_r + c`. So `u`, `v` in [`VehicleState`] are water-relative, as its docs say.
+/// identified VideoRay model — the Munk moment (m₁₁ − m₂₂)uv of slender-body theory and the
+/// sway–yaw cross derivatives N_v, Y_r are left out (each model's docs say why for its hull).
+/// The hydrodynamics act on the water-relative velocity: for a current that is constant in the
+/// Earth frame (irrotational), the equations in ν_r hold exactly (Fossen, *Handbook of Marine
+/// Craft Hydrodynamics and Motion Control*, 2011, Property 10.1), and the ground velocity is
+/// `R(ψ)ν_r + c`. So `u`, `v` in [`VehicleState`] are water-relative, as its docs say.
 ///
 /// **Thrusters.** Starboard and port thrust `T_s`, `T_p`, each within ±`thrust_max`, give
-/// `X = T_s + T_p` and `N = arm·(T_s − T_p)`. Yaw has priority: N is saturated to
-/// ±2·arm·thrust_max first, and the surge force to what the thrusters have left,
-/// ±(2·thrust_max − |N|/arm). Thruster dynamics and the weaker reverse thrust of real
-/// propellers are neglected (assumption: they are fast next to the vehicle's ≈ 0.4 s surge time
-/// constant).
+/// `X = T_s + T_p` and `N = arm·(T_s − T_p)`. Yaw has priority: the heading autopilot's N is
+/// limited to ±`yaw_share`·2·arm·thrust_max, and the surge force to what the thrusters have
+/// left, ±(2·thrust_max − |N|/arm). Thruster dynamics and the weaker reverse thrust of real
+/// propellers are neglected (assumption: they are fast next to the vehicles' surge time
+/// constants, ≈ 0.4 s for the VideoRay and several seconds for the flat-fish).
 ///
-/// **Autopilots** run every integration substep (≤ [`VIDEORAY_SUBSTEP_S`], i.e. ≥ 100 Hz): a
+/// **Autopilots** run every integration substep (≤ [`DYNAMIC_SUBSTEP_S`], i.e. ≥ 100 Hz): a
 /// PI-D surge loop tracking `sp.speed` with the water-relative surge u, and a PI-D heading loop
 /// tracking `sp.psi` with the error wrapped to (−π, π] and the gyro rate r as derivative. Both
 /// use conditional-integration anti-windup. Between autopilot updates the thrust is held, and
@@ -408,8 +430,9 @@ impl Pid {
 /// the two thrusters (for the energy proxy ∫|thrust| dt). In pure surge it equals |X|; in a
 /// pure turn, |N|/arm.
 #[derive(Clone, Debug)]
-pub struct VideoRay {
-    params: VideoRayParams,
+pub struct TwinThruster {
+    kind: ModelKind,
+    params: HullParams,
     gains: AutopilotGains,
     /// `[x, y, ψ, u, v, r]`: position, heading (wrapped every substep), water-relative velocity.
     x: [f64; 6],
@@ -419,18 +442,14 @@ pub struct VideoRay {
     state: VehicleState,
 }
 
-impl VideoRay {
-    /// The Pro III ([`VIDEORAY_PRO3`], [`VIDEORAY_PRO3_GAINS`]) at rest at `start`.
-    pub fn new(start: P2, heading: f64) -> Self {
-        VideoRay::with_params(VIDEORAY_PRO3, VIDEORAY_PRO3_GAINS, start, heading)
-    }
-
-    /// A vehicle with other parameters or gains (experiments; the defaults are the Pro III).
-    /// Masses, inertias, thrust and arm below 1e-6 are raised to 1e-6 and damping
-    /// coefficients are used with a negative sign whatever sign is given, so the model stays
-    /// well posed.
-    pub fn with_params(
-        params: VideoRayParams,
+impl TwinThruster {
+    /// A vehicle reporting itself as `kind`, with these parameters and gains, at rest at
+    /// `start`. Masses, inertias, thrust and arm below 1e-6 are raised to 1e-6, damping
+    /// coefficients are used with a negative sign whatever sign is given, and `yaw_share` is
+    /// clamped to `[1e-6, 1]` (non-finite: 1), so the model stays well posed.
+    pub fn new(
+        kind: ModelKind,
+        params: HullParams,
         gains: AutopilotGains,
         start: P2,
         heading: f64,
@@ -443,7 +462,7 @@ impl VideoRay {
             }
         };
         let neg = |x: f64| -finite_or_zero(x).abs();
-        let p = VideoRayParams {
+        let p = HullParams {
             mass: pos(params.mass),
             iz: pos(params.iz),
             x_udot: finite_or_zero(params.x_udot).abs(),
@@ -457,6 +476,11 @@ impl VideoRay {
             n_rr: neg(params.n_rr),
             thrust_max: pos(params.thrust_max),
             arm: pos(params.arm),
+            yaw_share: if params.yaw_share.is_finite() {
+                params.yaw_share.clamp(1e-6, 1.0)
+            } else {
+                1.0
+            },
         };
         let g = |k: PidGains| PidGains {
             kp: finite_or_zero(k.kp),
@@ -464,7 +488,8 @@ impl VideoRay {
             kd: finite_or_zero(k.kd),
         };
         let state = rest_state(start, heading);
-        VideoRay {
+        TwinThruster {
+            kind,
             params: p,
             gains: AutopilotGains {
                 surge: g(gains.surge),
@@ -485,9 +510,14 @@ impl VideoRay {
         }
     }
 
-    /// Its parameters.
-    pub fn params(&self) -> &VideoRayParams {
+    /// Its parameters (as sanitised by [`TwinThruster::new`]).
+    pub fn params(&self) -> &HullParams {
         &self.params
+    }
+
+    /// Its autopilot gains.
+    pub fn gains(&self) -> &AutopilotGains {
+        &self.gains
     }
 
     /// Thruster allocation with yaw priority: the applied `(X, N)` and `|T_s| + |T_p|`.
@@ -538,9 +568,9 @@ impl VideoRay {
     }
 }
 
-impl VehicleModel for VideoRay {
+impl VehicleModel for TwinThruster {
     fn kind(&self) -> ModelKind {
-        ModelKind::VideoRay
+        self.kind
     }
 
     fn state(&self) -> VehicleState {
@@ -554,10 +584,11 @@ impl VehicleModel for VideoRay {
         let c = bounded(sanitize(current), MAX_COMMAND_SPEED);
         let speed_ref = finite_or_zero(sp.speed).clamp(-MAX_COMMAND_SPEED, MAX_COMMAND_SPEED);
         // The epsilon keeps 0.1 / 0.01 at 10 substeps despite rounding.
-        let n = (dt / VIDEORAY_SUBSTEP_S - 1e-9).ceil().max(1.0);
+        let n = (dt / DYNAMIC_SUBSTEP_S - 1e-9).ceil().max(1.0);
         let h = dt / n;
         let p = self.params;
-        let (n_lim, x_lim) = (2.0 * p.arm * p.thrust_max, 2.0 * p.thrust_max);
+        let n_lim = p.yaw_share * (2.0 * p.arm * p.thrust_max);
+        let x_lim = 2.0 * p.thrust_max;
         let mut effort = 0.0;
         for _ in 0..(n as u64) {
             let (psi, u, r) = (self.x[2], self.x[3], self.x[5]);
@@ -604,6 +635,51 @@ impl VehicleModel for VideoRay {
             thrust: effort / n,
         };
         self.state
+    }
+}
+
+/// The VideoRay Pro III in the horizontal plane: a [`TwinThruster`] with [`VIDEORAY_PRO3`] and
+/// [`VIDEORAY_PRO3_GAINS`]. Its yaw equation is decoupled as in Wang's identified model: the
+/// Munk moment is left out because Wang's yaw identification has no such term and it is poorly
+/// predicted for a bluff box hull.
+#[derive(Clone, Debug)]
+pub struct VideoRay(TwinThruster);
+
+impl VideoRay {
+    /// The Pro III ([`VIDEORAY_PRO3`], [`VIDEORAY_PRO3_GAINS`]) at rest at `start`.
+    pub fn new(start: P2, heading: f64) -> Self {
+        VideoRay::with_params(VIDEORAY_PRO3, VIDEORAY_PRO3_GAINS, start, heading)
+    }
+
+    /// A vehicle with other parameters or gains (experiments; the defaults are the Pro III),
+    /// sanitised as [`TwinThruster::new`] says.
+    pub fn with_params(params: HullParams, gains: AutopilotGains, start: P2, heading: f64) -> Self {
+        VideoRay(TwinThruster::new(
+            ModelKind::VideoRay,
+            params,
+            gains,
+            start,
+            heading,
+        ))
+    }
+
+    /// Its parameters.
+    pub fn params(&self) -> &HullParams {
+        self.0.params()
+    }
+}
+
+impl VehicleModel for VideoRay {
+    fn kind(&self) -> ModelKind {
+        self.0.kind()
+    }
+
+    fn state(&self) -> VehicleState {
+        self.0.state()
+    }
+
+    fn step(&mut self, dt: f64, sp: &SetPoints, current: P2) -> VehicleState {
+        self.0.step(dt, sp, current)
     }
 }
 
@@ -680,7 +756,11 @@ mod tests {
 
     #[test]
     fn bad_inputs_change_nothing_or_are_clamped() {
-        for kind in [ModelKind::Kinematic, ModelKind::VideoRay] {
+        for kind in [
+            ModelKind::Kinematic,
+            ModelKind::VideoRay,
+            ModelKind::FlatFish,
+        ] {
             let mut m = new_model(kind, P2::new(f64::NAN, 1.0), f64::INFINITY);
             let s0 = m.state();
             assert_eq!(s0.position, P2::new(0.0, 1.0));

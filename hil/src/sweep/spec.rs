@@ -1,0 +1,1054 @@
+//! The sweep file (`hil/sweeps/*.toml`): which parameters to vary and how, over which
+//! scenarios, for which craft, and the criterion's weights. Parsed and validated into a
+//! [`Spec`]; every refusal is a [`ScenarioError`] naming the file, the line and the key path,
+//! exactly as the scenario parser does (`videoray.toml:14: key `sweep.params.a_plus`: ...`).
+//!
+//! The fixed `[planner]` table and every parameter set are checked by the scenario parser's own
+//! `[planner]` rules ([`scenario::parse_planner`]), so a sweep accepts exactly the keys and
+//! values a scenario does. The format is documented in `hil/sweeps/README.md`.
+
+use std::fmt::Write as _;
+use std::ops::Range;
+
+use toml::de::{DeTable, DeValue};
+use toml::Spanned;
+
+use crate::scenario::{self, ModelKind, ScenarioError, Sensing};
+use crate::sim::Rng;
+
+type Val<'a> = Spanned<DeValue<'a>>;
+
+/// The planner period the parameter sets are checked at, s (every generated scenario uses it;
+/// a scenario file's own `dt_s` replaces it at run time).
+pub const CHECK_DT_S: f64 = 0.1;
+
+/// Most parameter sets a sweep may have (a guard against a grid that multiplies out by
+/// mistake).
+pub const MAX_SETS: usize = 100_000;
+
+/// A `[planner]` value as written: integer, float or string.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Value {
+    /// An integer (`n_gamma = 16`).
+    Int(i64),
+    /// A float (`a_plus = 2.5`).
+    Float(f64),
+    /// A string (`bounding = "split"`).
+    Str(String),
+}
+
+impl Value {
+    /// TOML spelling: floats always with a decimal point or exponent, strings quoted.
+    pub fn toml(&self) -> String {
+        match self {
+            Value::Int(i) => i.to_string(),
+            Value::Float(f) => {
+                let s = f.to_string();
+                if s.contains(['.', 'e', 'E']) || !f.is_finite() {
+                    s
+                } else {
+                    format!("{s}.0")
+                }
+            }
+            Value::Str(s) => toml::Value::String(s.clone()).to_string(),
+        }
+    }
+
+    /// CSV / table spelling: numbers as in TOML, strings bare.
+    pub fn plain(&self) -> String {
+        match self {
+            Value::Str(s) => s.clone(),
+            v => v.toml(),
+        }
+    }
+
+    /// The number, if it is one (for heat-map axes and ordering).
+    pub fn number(&self) -> Option<f64> {
+        match self {
+            Value::Int(i) => Some(*i as f64),
+            Value::Float(f) => Some(*f),
+            Value::Str(_) => None,
+        }
+    }
+
+    /// Reads a CSV cell back as the same kind of value as `like`.
+    pub fn parse_like(s: &str, like: &Value) -> Option<Value> {
+        match like {
+            Value::Int(_) => s.parse().ok().map(Value::Int),
+            Value::Float(_) => s.parse().ok().map(Value::Float),
+            Value::Str(_) => Some(Value::Str(s.to_string())),
+        }
+    }
+}
+
+/// Grid or random sampling of the parameter space.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Mode {
+    /// Every combination of the listed values (the last parameter varies fastest).
+    Grid,
+    /// `samples` parameter sets drawn from the ranges with the spec's seed.
+    Random {
+        /// Number of sets.
+        samples: usize,
+    },
+}
+
+/// How one parameter varies.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Axis {
+    /// These values (grid; random mode draws one of them uniformly).
+    List(Vec<Value>),
+    /// Random mode only: uniform in `[min, max]` (log-uniform if `log`), rounded to 3
+    /// significant digits; an integer range draws integers.
+    Range {
+        /// Lower bound.
+        min: f64,
+        /// Upper bound.
+        max: f64,
+        /// Log-uniform.
+        log: bool,
+        /// Integers (both bounds were written as integers).
+        integer: bool,
+    },
+}
+
+/// One swept parameter.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Param {
+    /// Its `[planner]` key.
+    pub name: String,
+    /// How it varies.
+    pub axis: Axis,
+    /// Line of its key in the spec (for errors found later).
+    pub line: usize,
+}
+
+/// The craft the recipe is for.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Craft {
+    /// The model every vehicle of every scenario flies.
+    pub model: ModelKind,
+    /// The clearance margin the criterion asks for, m (the craft's size: a hull radius plus a
+    /// safety distance).
+    pub margin_m: f64,
+    /// A human name for the recipe's header.
+    pub label: String,
+}
+
+/// The scenario batch.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Scenarios {
+    /// Scenario files, as written (relative to the spec's directory).
+    pub files: Vec<String>,
+    /// Generated cluttered fields.
+    pub clutter: usize,
+    /// Generated narrow passages.
+    pub passage: usize,
+    /// Generated U-traps.
+    pub utrap: usize,
+    /// Start–goal distance of generated scenarios, m: `[min, max]`.
+    pub length_m: (f64, f64),
+    /// How the generated scenarios' vehicles sense obstacles.
+    pub sensing: Sensing,
+    /// Nominal cruise speed for the generated scenarios' durations, m/s.
+    pub speed_mps: f64,
+    /// A generated scenario lasts `time_factor × length / speed`, s.
+    pub time_factor: f64,
+    /// Scenario files run at most this long, s.
+    pub duration_cap_s: Option<f64>,
+    /// Clutter: free gap kept between obstacles' bounding circles, m.
+    pub min_gap_m: f64,
+    /// Clutter: obstacles per 100 m² of the field (`[min, max]`).
+    pub density: (f64, f64),
+    /// Passage: the opening's width, m (`[min, max]`).
+    pub passage_gap_m: (f64, f64),
+    /// U-trap: inner width, m (`[min, max]`).
+    pub utrap_width_m: (f64, f64),
+    /// U-trap: depth, m (`[min, max]`).
+    pub utrap_depth_m: (f64, f64),
+    /// Generated scenarios: a uniform current of up to this speed, random direction, m/s.
+    pub current_mps: f64,
+    /// Generated scenarios: navigation position noise, m (1 σ).
+    pub nav_sigma_m: f64,
+    /// Generated scenarios: the generator's own sizes (obstacles, walls, free room round the
+    /// start and goal) times this, for a larger craft.
+    pub scale: f64,
+}
+
+impl Default for Scenarios {
+    fn default() -> Self {
+        Scenarios {
+            files: Vec::new(),
+            clutter: 0,
+            passage: 0,
+            utrap: 0,
+            length_m: (40.0, 80.0),
+            sensing: Sensing::Contacts,
+            speed_mps: 1.0,
+            time_factor: 4.0,
+            duration_cap_s: None,
+            min_gap_m: 3.0,
+            density: (1.0, 1.6),
+            passage_gap_m: (2.5, 5.0),
+            utrap_width_m: (6.0, 12.0),
+            utrap_depth_m: (4.0, 8.0),
+            current_mps: 0.0,
+            nav_sigma_m: 0.0,
+            scale: 1.0,
+        }
+    }
+}
+
+/// The criterion's weights (see `criterion.rs` for the criterion itself).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Weights {
+    /// Weight of the time to the goal relative to the best set's on the same scenario.
+    pub time: f64,
+    /// Weight of the energy proxy relative to the best set's on the same scenario.
+    pub energy: f64,
+    /// Weight per heading reversal per 100 m.
+    pub oscillation: f64,
+    /// Yaw-rate deadband of a heading reversal, rad/s.
+    pub deadband: f64,
+}
+
+impl Default for Weights {
+    fn default() -> Self {
+        Weights {
+            time: 1.0,
+            energy: 1.0,
+            oscillation: 0.05,
+            deadband: 3f64.to_radians(),
+        }
+    }
+}
+
+/// A validated sweep file.
+#[derive(Clone, Debug)]
+pub struct Spec {
+    /// The file name as given (errors, reports).
+    pub file: String,
+    /// The file's text (hashed; copied next to the results).
+    pub text: String,
+    /// Name, for the default output directory and the reports.
+    pub name: String,
+    /// Free text for the recipe's header.
+    pub description: String,
+    /// Seed of the random sampling and of the generated scenarios.
+    pub seed: u64,
+    /// The craft.
+    pub craft: Craft,
+    /// The fixed `[planner]` keys, in file order.
+    pub base: Vec<(String, Value)>,
+    /// Grid or random.
+    pub mode: Mode,
+    /// The swept parameters, in file order.
+    pub params: Vec<Param>,
+    /// The heat maps' axes, if the file names them.
+    pub heatmap: Option<(String, String)>,
+    /// The scenario batch.
+    pub scenarios: Scenarios,
+    /// The criterion's weights.
+    pub weights: Weights,
+    /// The parameter sets: the swept parameters' values, in `params` order.
+    pub sets: Vec<Vec<Value>>,
+}
+
+impl Spec {
+    /// The full `[planner]` entries of set `i`: the fixed keys, then the swept ones.
+    pub fn entries(&self, i: usize) -> Vec<(String, Value)> {
+        let mut e = self.base.clone();
+        for (p, v) in self.params.iter().zip(&self.sets[i]) {
+            e.push((p.name.clone(), v.clone()));
+        }
+        e
+    }
+
+    /// Set `i`'s parameters at planner period `dt_s`, checked by the scenario parser.
+    pub fn params_of(&self, i: usize, dt_s: f64) -> Result<vpf::Params, ScenarioError> {
+        let text = planner_text(&self.entries(i));
+        scenario::parse_planner(&text, &format!("{} (parameter set {i})", self.file), dt_s)
+    }
+}
+
+/// A `[planner]` table holding `entries`.
+pub fn planner_text(entries: &[(String, Value)]) -> String {
+    let mut s = String::from("[planner]\n");
+    for (k, v) in entries {
+        let _ = writeln!(s, "{k} = {}", v.toml());
+    }
+    s
+}
+
+/// Reads and validates the sweep file at `path`.
+pub fn load(path: &std::path::Path) -> Result<Spec, ScenarioError> {
+    let file = path.display().to_string();
+    match std::fs::read_to_string(path) {
+        Ok(text) => parse(&text, &file),
+        Err(e) => Err(ScenarioError {
+            file,
+            line: 0,
+            column: None,
+            key: String::new(),
+            message: format!("cannot read the sweep file: {e}"),
+        }),
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// A small span-aware reader (the scenario parser's conventions: file order, unknown keys
+// refused, key paths with dots).
+
+#[derive(Clone, Copy)]
+struct Src<'a> {
+    file: &'a str,
+    text: &'a str,
+}
+
+impl Src<'_> {
+    fn line_of(&self, offset: usize) -> usize {
+        let end = offset.min(self.text.len());
+        1 + self.text.as_bytes()[..end]
+            .iter()
+            .filter(|&&b| b == b'\n')
+            .count()
+    }
+
+    fn err(&self, span: &Range<usize>, key: &str, message: impl Into<String>) -> ScenarioError {
+        ScenarioError {
+            file: self.file.to_string(),
+            line: self.line_of(span.start),
+            column: None,
+            key: key.to_string(),
+            message: message.into(),
+        }
+    }
+}
+
+fn type_name(v: &DeValue<'_>) -> &'static str {
+    match v {
+        DeValue::String(_) => "a string",
+        DeValue::Integer(_) => "an integer",
+        DeValue::Float(_) => "a float",
+        DeValue::Boolean(_) => "a boolean",
+        DeValue::Datetime(_) => "a date-time",
+        DeValue::Array(_) => "an array",
+        DeValue::Table(_) => "a table",
+    }
+}
+
+struct Table<'a> {
+    src: Src<'a>,
+    path: String,
+    span: Range<usize>,
+    entries: Vec<(&'a str, Range<usize>, &'a Val<'a>)>,
+}
+
+impl<'a> Table<'a> {
+    fn new(src: Src<'a>, path: String, span: Range<usize>, t: &'a DeTable<'a>) -> Self {
+        let mut entries: Vec<_> = t
+            .iter()
+            .map(|(k, v)| (k.get_ref().as_ref(), k.span(), v))
+            .collect();
+        entries.sort_by_key(|e| e.1.start);
+        Table {
+            src,
+            path,
+            span,
+            entries,
+        }
+    }
+
+    fn key(&self, k: &str) -> String {
+        if self.path.is_empty() {
+            k.to_string()
+        } else {
+            format!("{}.{k}", self.path)
+        }
+    }
+
+    fn get(&self, k: &str) -> Option<&'a Val<'a>> {
+        self.entries.iter().find(|e| e.0 == k).map(|e| e.2)
+    }
+
+    fn allow(&self, allowed: &[&str], what: &str) -> Result<(), ScenarioError> {
+        for (k, span, _) in &self.entries {
+            if !allowed.contains(k) {
+                return Err(self.src.err(
+                    span,
+                    &self.key(k),
+                    format!(
+                        "unknown key in {what} (expected one of: {})",
+                        allowed.join(", ")
+                    ),
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    fn missing(&self, k: &str) -> ScenarioError {
+        self.src
+            .err(&self.span, &self.key(k), "missing required key")
+    }
+
+    fn fail(&self, v: &Val<'_>, k: &str, message: impl Into<String>) -> ScenarioError {
+        self.src.err(&v.span(), &self.key(k), message)
+    }
+
+    fn table(&self, k: &str) -> Result<Option<Table<'a>>, ScenarioError> {
+        let Some(v) = self.get(k) else {
+            return Ok(None);
+        };
+        match v.get_ref() {
+            DeValue::Table(t) => Ok(Some(Table::new(self.src, self.key(k), v.span(), t))),
+            other => Err(self.fail(v, k, format!("expected a table, got {}", type_name(other)))),
+        }
+    }
+
+    fn string(&self, k: &str) -> Result<Option<&'a str>, ScenarioError> {
+        let Some(v) = self.get(k) else {
+            return Ok(None);
+        };
+        match v.get_ref() {
+            DeValue::String(s) => Ok(Some(s.as_ref())),
+            other => Err(self.fail(v, k, format!("expected a string, got {}", type_name(other)))),
+        }
+    }
+
+    fn integer(&self, k: &str, lo: i64, hi: i64) -> Result<Option<i64>, ScenarioError> {
+        let Some(v) = self.get(k) else {
+            return Ok(None);
+        };
+        let i = value_integer(self.src, &self.key(k), v)?;
+        if !(lo..=hi).contains(&i) {
+            return Err(self.fail(v, k, format!("must be in {lo} ..= {hi}, got {i}")));
+        }
+        Ok(Some(i))
+    }
+
+    fn number(&self, k: &str, lo: f64, hi: f64) -> Result<Option<f64>, ScenarioError> {
+        let Some(v) = self.get(k) else {
+            return Ok(None);
+        };
+        let x = value_number(self.src, &self.key(k), v)?;
+        if !(lo..=hi).contains(&x) {
+            return Err(self.fail(v, k, format!("must be in {lo} ..= {hi}, got {x}")));
+        }
+        Ok(Some(x))
+    }
+
+    /// `[min, max]` with `lo <= min <= max <= hi`.
+    fn range(&self, k: &str, lo: f64, hi: f64) -> Result<Option<(f64, f64)>, ScenarioError> {
+        let Some(v) = self.get(k) else {
+            return Ok(None);
+        };
+        let key = self.key(k);
+        let DeValue::Array(a) = v.get_ref() else {
+            return Err(self.fail(
+                v,
+                k,
+                format!("expected [min, max], got {}", type_name(v.get_ref())),
+            ));
+        };
+        if a.len() != 2 {
+            return Err(self.fail(v, k, format!("expected [min, max], got {} items", a.len())));
+        }
+        let x = value_number(self.src, &format!("{key}[0]"), &a[0])?;
+        let y = value_number(self.src, &format!("{key}[1]"), &a[1])?;
+        if !(lo <= x && x <= y && y <= hi) {
+            return Err(self.fail(
+                v,
+                k,
+                format!("must be [min, max] with {lo} <= min <= max <= {hi}, got [{x}, {y}]"),
+            ));
+        }
+        Ok(Some((x, y)))
+    }
+}
+
+fn value_integer(src: Src<'_>, key: &str, v: &Val<'_>) -> Result<i64, ScenarioError> {
+    match v.get_ref() {
+        DeValue::Integer(i) => i64::from_str_radix(i.as_str(), i.radix())
+            .map_err(|_| src.err(&v.span(), key, format!("integer {i} is too large"))),
+        other => Err(src.err(
+            &v.span(),
+            key,
+            format!("expected an integer, got {}", type_name(other)),
+        )),
+    }
+}
+
+fn value_number(src: Src<'_>, key: &str, v: &Val<'_>) -> Result<f64, ScenarioError> {
+    let x = match v.get_ref() {
+        DeValue::Integer(_) => value_integer(src, key, v)? as f64,
+        DeValue::Float(f) => f
+            .as_str()
+            .parse::<f64>()
+            .map_err(|_| src.err(&v.span(), key, format!("cannot read number `{f}`")))?,
+        other => {
+            return Err(src.err(
+                &v.span(),
+                key,
+                format!("expected a number, got {}", type_name(other)),
+            ))
+        }
+    };
+    if x.is_finite() {
+        Ok(x)
+    } else {
+        Err(src.err(&v.span(), key, format!("must be a finite number, got {x}")))
+    }
+}
+
+/// A `[planner]` value: integer, finite float or string.
+fn value_any(src: Src<'_>, key: &str, v: &Val<'_>) -> Result<Value, ScenarioError> {
+    match v.get_ref() {
+        DeValue::Integer(_) => value_integer(src, key, v).map(Value::Int),
+        DeValue::Float(_) => value_number(src, key, v).map(Value::Float),
+        DeValue::String(s) => Ok(Value::Str(s.to_string())),
+        other => Err(src.err(
+            &v.span(),
+            key,
+            format!("expected a number or a string, got {}", type_name(other)),
+        )),
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// The schema.
+
+/// Parses and validates sweep `text`; `file` names it in errors.
+pub fn parse(text: &str, file: &str) -> Result<Spec, ScenarioError> {
+    let src = Src { file, text };
+    let doc = DeTable::parse(text).map_err(|e| {
+        let at = e.span().map_or(0, |s| s.start);
+        ScenarioError {
+            file: file.to_string(),
+            line: src.line_of(at),
+            column: None,
+            key: String::new(),
+            message: format!("TOML syntax error: {}", e.message()),
+        }
+    })?;
+    let root = Table::new(src, String::new(), 0..0, doc.get_ref());
+    root.allow(
+        &[
+            "name",
+            "description",
+            "seed",
+            "craft",
+            "planner",
+            "sweep",
+            "scenarios",
+            "criterion",
+        ],
+        "the sweep file",
+    )?;
+    let name = root.string("name")?.ok_or_else(|| root.missing("name"))?;
+    if name.trim().is_empty() {
+        let v = root.get("name").map_or(0..0, |v| v.span());
+        return Err(src.err(&v, "name", "must not be empty"));
+    }
+    let description = root.string("description")?.unwrap_or_default().to_string();
+    let seed = root
+        .integer("seed", 0, i64::MAX)?
+        .ok_or_else(|| root.missing("seed"))? as u64;
+
+    let craft = craft(&root)?;
+    let base = base_planner(&root, src)?;
+    let (mode, params, heatmap) = sweep(&root, &base)?;
+    let scenarios = scenarios(&root)?;
+    let weights = criterion(&root)?;
+
+    let mut spec = Spec {
+        file: file.to_string(),
+        text: text.to_string(),
+        name: name.to_string(),
+        description,
+        seed,
+        craft,
+        base,
+        mode,
+        params,
+        heatmap,
+        scenarios,
+        weights,
+        sets: Vec::new(),
+    };
+    spec.sets = expand(&spec, &root)?;
+    check_sets(&spec)?;
+    Ok(spec)
+}
+
+fn craft(root: &Table<'_>) -> Result<Craft, ScenarioError> {
+    let t = root.table("craft")?.ok_or_else(|| root.missing("craft"))?;
+    t.allow(&["model", "margin_m", "label"], "[craft]")?;
+    let m = t.string("model")?.ok_or_else(|| t.missing("model"))?;
+    let model = m.parse::<ModelKind>().map_err(|e| {
+        let v = t.get("model").map_or(0..0, |v| v.span());
+        t.src.err(&v, &t.key("model"), e.to_string())
+    })?;
+    let margin_m = t
+        .number("margin_m", 0.0, 100.0)?
+        .ok_or_else(|| t.missing("margin_m"))?;
+    let label = t.string("label")?.unwrap_or(model.name()).to_string();
+    Ok(Craft {
+        model,
+        margin_m,
+        label,
+    })
+}
+
+/// The fixed `[planner]` keys, checked by the scenario parser on the spec's own text with every
+/// line outside the table blanked (so its errors carry the spec's line numbers).
+fn base_planner(root: &Table<'_>, src: Src<'_>) -> Result<Vec<(String, Value)>, ScenarioError> {
+    let Some(t) = root.table("planner")? else {
+        return Ok(Vec::new());
+    };
+    let mut out = Vec::new();
+    let mut last = t.span.end;
+    for (k, _, v) in &t.entries {
+        out.push((k.to_string(), value_any(src, &t.key(k), v)?));
+        last = last.max(v.span().end);
+    }
+    let (first_line, last_line) = (src.line_of(t.span.start), src.line_of(last));
+    let kept: String = src
+        .text
+        .lines()
+        .enumerate()
+        .map(|(i, l)| {
+            if (first_line..=last_line).contains(&(i + 1)) {
+                format!("{l}\n")
+            } else {
+                "\n".to_string()
+            }
+        })
+        .collect();
+    scenario::parse_planner(&kept, src.file, CHECK_DT_S)?;
+    Ok(out)
+}
+
+type SweepPart = (Mode, Vec<Param>, Option<(String, String)>);
+
+fn sweep(root: &Table<'_>, base: &[(String, Value)]) -> Result<SweepPart, ScenarioError> {
+    let t = root.table("sweep")?.ok_or_else(|| root.missing("sweep"))?;
+    t.allow(&["mode", "samples", "heatmap", "params"], "[sweep]")?;
+    let mode = match t.string("mode")?.unwrap_or("grid") {
+        "grid" => {
+            if let Some(v) = t.get("samples") {
+                return Err(t.fail(v, "samples", "only for mode = \"random\""));
+            }
+            Mode::Grid
+        }
+        "random" => Mode::Random {
+            samples: t
+                .integer("samples", 1, MAX_SETS as i64)?
+                .ok_or_else(|| t.missing("samples"))? as usize,
+        },
+        other => {
+            let v = t.get("mode").map_or(0..0, |v| v.span());
+            return Err(t.src.err(
+                &v,
+                &t.key("mode"),
+                format!("unknown mode \"{other}\" (expected \"grid\" or \"random\")"),
+            ));
+        }
+    };
+    let p = t.table("params")?.ok_or_else(|| t.missing("params"))?;
+    if p.entries.is_empty() {
+        return Err(t.src.err(&p.span, &p.path, "no parameter to sweep"));
+    }
+    let names: Vec<&str> = vpf::link::PARAM_NAMES
+        .iter()
+        .copied()
+        .filter(|n| *n != "period_s")
+        .collect();
+    let mut params = Vec::new();
+    for (k, kspan, v) in &p.entries {
+        if !names.contains(k) {
+            return Err(p.src.err(
+                kspan,
+                &p.key(k),
+                format!(
+                    "not a [planner] parameter (expected one of: {})",
+                    names.join(", ")
+                ),
+            ));
+        }
+        if base.iter().any(|(b, _)| b == k) {
+            return Err(p.src.err(
+                kspan,
+                &p.key(k),
+                "is also fixed in [planner]: a parameter is either fixed or swept",
+            ));
+        }
+        let axis = axis(&p, k, v, mode)?;
+        params.push(Param {
+            name: k.to_string(),
+            axis,
+            line: p.src.line_of(kspan.start),
+        });
+    }
+    let heatmap = match t.get("heatmap") {
+        None => None,
+        Some(v) => {
+            let bad = || {
+                t.fail(
+                    v,
+                    "heatmap",
+                    "expected two swept parameters, [\"x\", \"y\"]",
+                )
+            };
+            let DeValue::Array(a) = v.get_ref() else {
+                return Err(bad());
+            };
+            let names: Vec<&str> = a
+                .iter()
+                .filter_map(|x| match x.get_ref() {
+                    DeValue::String(s) => Some(s.as_ref()),
+                    _ => None,
+                })
+                .collect();
+            if names.len() != 2 || a.len() != 2 || names[0] == names[1] {
+                return Err(bad());
+            }
+            for n in &names {
+                if !params.iter().any(|q| q.name == *n) {
+                    return Err(t.fail(v, "heatmap", format!("`{n}` is not a swept parameter")));
+                }
+            }
+            Some((names[0].to_string(), names[1].to_string()))
+        }
+    };
+    Ok((mode, params, heatmap))
+}
+
+fn axis(p: &Table<'_>, k: &str, v: &Val<'_>, mode: Mode) -> Result<Axis, ScenarioError> {
+    let key = p.key(k);
+    match v.get_ref() {
+        DeValue::Array(a) => {
+            if a.is_empty() {
+                return Err(p.fail(v, k, "needs at least one value"));
+            }
+            let mut values = Vec::new();
+            for (i, item) in a.iter().enumerate() {
+                let x = value_any(p.src, &format!("{key}[{i}]"), item)?;
+                if values.contains(&x) {
+                    return Err(p.src.err(
+                        &item.span(),
+                        &format!("{key}[{i}]"),
+                        format!("value {} is listed twice", x.toml()),
+                    ));
+                }
+                values.push(x);
+            }
+            Ok(Axis::List(values))
+        }
+        DeValue::Table(t) => {
+            let t = Table::new(p.src, key.clone(), v.span(), t);
+            if mode == Mode::Grid {
+                return Err(p.fail(
+                    v,
+                    k,
+                    "a range { min, max } needs mode = \"random\"; a grid lists its values",
+                ));
+            }
+            t.allow(&["min", "max", "log"], "a parameter range")?;
+            let min_v = t.get("min").ok_or_else(|| t.missing("min"))?;
+            let max_v = t.get("max").ok_or_else(|| t.missing("max"))?;
+            let min = value_number(t.src, &t.key("min"), min_v)?;
+            let max = value_number(t.src, &t.key("max"), max_v)?;
+            let integer = matches!(min_v.get_ref(), DeValue::Integer(_))
+                && matches!(max_v.get_ref(), DeValue::Integer(_));
+            let log = match t.get("log") {
+                None => false,
+                Some(l) => match l.get_ref() {
+                    DeValue::Boolean(b) => *b,
+                    other => {
+                        return Err(t.fail(
+                            l,
+                            "log",
+                            format!("expected a boolean, got {}", type_name(other)),
+                        ))
+                    }
+                },
+            };
+            if min > max {
+                return Err(t.fail(max_v, "max", format!("must be >= min ({min}), got {max}")));
+            }
+            if log && min <= 0.0 {
+                return Err(t.fail(
+                    min_v,
+                    "min",
+                    format!("a log range needs min > 0, got {min}"),
+                ));
+            }
+            Ok(Axis::Range {
+                min,
+                max,
+                log,
+                integer,
+            })
+        }
+        other => Err(p.fail(
+            v,
+            k,
+            format!(
+                "expected a list of values or a range {{ min, max }}, got {}",
+                type_name(other)
+            ),
+        )),
+    }
+}
+
+fn scenarios(root: &Table<'_>) -> Result<Scenarios, ScenarioError> {
+    let mut s = Scenarios::default();
+    let t = root
+        .table("scenarios")?
+        .ok_or_else(|| root.missing("scenarios"))?;
+    t.allow(
+        &[
+            "files",
+            "clutter",
+            "passage",
+            "utrap",
+            "length_m",
+            "sensing",
+            "speed_mps",
+            "time_factor",
+            "duration_cap_s",
+            "min_gap_m",
+            "density",
+            "passage_gap_m",
+            "utrap_width_m",
+            "utrap_depth_m",
+            "current_mps",
+            "nav_sigma_m",
+            "scale",
+        ],
+        "[scenarios]",
+    )?;
+    if let Some(v) = t.get("files") {
+        let DeValue::Array(a) = v.get_ref() else {
+            return Err(t.fail(v, "files", "expected a list of scenario file paths"));
+        };
+        for (i, item) in a.iter().enumerate() {
+            match item.get_ref() {
+                DeValue::String(f) => s.files.push(f.to_string()),
+                other => {
+                    return Err(t.src.err(
+                        &item.span(),
+                        &format!("{}[{i}]", t.key("files")),
+                        format!("expected a path (string), got {}", type_name(other)),
+                    ))
+                }
+            }
+        }
+    }
+    let count = |k: &str| t.integer(k, 0, 100_000).map(|x| x.unwrap_or(0) as usize);
+    s.clutter = count("clutter")?;
+    s.passage = count("passage")?;
+    s.utrap = count("utrap")?;
+    if s.files.is_empty() && s.clutter + s.passage + s.utrap == 0 {
+        return Err(t.src.err(
+            &t.span,
+            &t.path,
+            "no scenario: list `files` or ask for generated `clutter`, `passage` or `utrap`",
+        ));
+    }
+    if let Some(r) = t.range("length_m", 15.0, 1000.0)? {
+        s.length_m = r;
+    }
+    if let Some(x) = t.string("sensing")? {
+        s.sensing = match x {
+            "contacts" => Sensing::Contacts,
+            "sonar" => Sensing::Sonar,
+            other => {
+                let v = t.get("sensing").map_or(0..0, |v| v.span());
+                return Err(t.src.err(
+                    &v,
+                    &t.key("sensing"),
+                    format!("unknown sensing \"{other}\" (expected \"contacts\" or \"sonar\")"),
+                ));
+            }
+        };
+    }
+    if let Some(x) = t.number("speed_mps", 0.05, 20.0)? {
+        s.speed_mps = x;
+    }
+    if let Some(x) = t.number("time_factor", 1.0, 100.0)? {
+        s.time_factor = x;
+    }
+    s.duration_cap_s = t.number("duration_cap_s", 1.0, 86_400.0)?;
+    if let Some(x) = t.number("min_gap_m", 0.5, 100.0)? {
+        s.min_gap_m = x;
+    }
+    if let Some(r) = t.range("density", 0.0, 10.0)? {
+        s.density = r;
+    }
+    if let Some(r) = t.range("passage_gap_m", 0.5, 50.0)? {
+        s.passage_gap_m = r;
+    }
+    if let Some(r) = t.range("utrap_width_m", 2.0, 100.0)? {
+        s.utrap_width_m = r;
+    }
+    if let Some(r) = t.range("utrap_depth_m", 1.0, 100.0)? {
+        s.utrap_depth_m = r;
+    }
+    if let Some(x) = t.number("current_mps", 0.0, 5.0)? {
+        s.current_mps = x;
+    }
+    if let Some(x) = t.number("nav_sigma_m", 0.0, 100.0)? {
+        s.nav_sigma_m = x;
+    }
+    if let Some(x) = t.number("scale", 0.1, 100.0)? {
+        s.scale = x;
+    }
+    Ok(s)
+}
+
+fn criterion(root: &Table<'_>) -> Result<Weights, ScenarioError> {
+    let mut w = Weights::default();
+    let Some(t) = root.table("criterion")? else {
+        return Ok(w);
+    };
+    t.allow(
+        &["time", "energy", "oscillation", "deadband_deg_s"],
+        "[criterion]",
+    )?;
+    if let Some(x) = t.number("time", 0.0, 1000.0)? {
+        w.time = x;
+    }
+    if let Some(x) = t.number("energy", 0.0, 1000.0)? {
+        w.energy = x;
+    }
+    if let Some(x) = t.number("oscillation", 0.0, 1000.0)? {
+        w.oscillation = x;
+    }
+    if let Some(x) = t.number("deadband_deg_s", 0.0, 360.0)? {
+        w.deadband = x.to_radians();
+    }
+    Ok(w)
+}
+
+/// 3 significant digits (random draws stay readable, and the CSV, the recipe and the firmware
+/// see the same number).
+fn round3(x: f64) -> f64 {
+    if x == 0.0 || !x.is_finite() {
+        return x;
+    }
+    let mag = 10f64.powi(x.abs().log10().floor() as i32 - 2);
+    let r = (x / mag).round() * mag;
+    // Print-stable: through the shortest decimal spelling.
+    format!("{r:.12}").parse::<f64>().unwrap_or(r)
+}
+
+/// The parameter sets: the grid's combinations, or the random draws.
+fn expand(spec: &Spec, root: &Table<'_>) -> Result<Vec<Vec<Value>>, ScenarioError> {
+    match spec.mode {
+        Mode::Grid => {
+            let lists: Vec<&Vec<Value>> = spec
+                .params
+                .iter()
+                .filter_map(|p| match &p.axis {
+                    Axis::List(v) => Some(v),
+                    Axis::Range { .. } => None,
+                })
+                .collect();
+            let total = lists
+                .iter()
+                .try_fold(1usize, |acc, l| acc.checked_mul(l.len()))
+                .filter(|n| *n <= MAX_SETS);
+            let Some(total) = total else {
+                return Err(root.src.err(
+                    &root.span_of_key("sweep"),
+                    "sweep.params",
+                    format!("the grid has more than {MAX_SETS} parameter sets"),
+                ));
+            };
+            let mut sets = Vec::with_capacity(total);
+            for mut i in 0..total {
+                let mut set = vec![Value::Int(0); lists.len()];
+                for (j, l) in lists.iter().enumerate().rev() {
+                    set[j] = l[i % l.len()].clone();
+                    i /= l.len();
+                }
+                sets.push(set);
+            }
+            Ok(sets)
+        }
+        Mode::Random { samples } => Ok((0..samples)
+            .map(|i| {
+                let mut rng = Rng::stream(spec.seed, 0x5E75 + i as u64);
+                spec.params
+                    .iter()
+                    .map(|p| match &p.axis {
+                        Axis::List(v) => {
+                            let k = ((rng.uniform() * v.len() as f64) as usize).min(v.len() - 1);
+                            v[k].clone()
+                        }
+                        Axis::Range {
+                            min,
+                            max,
+                            log,
+                            integer,
+                        } => {
+                            let u = rng.uniform();
+                            if *integer {
+                                let span = (max - min + 1.0).max(1.0);
+                                Value::Int((min + (u * span).floor()).min(*max) as i64)
+                            } else if *log {
+                                Value::Float(round3((min.ln() + u * (max.ln() - min.ln())).exp()))
+                            } else {
+                                Value::Float(round3(min + u * (max - min)))
+                            }
+                        }
+                    })
+                    .collect()
+            })
+            .collect()),
+    }
+}
+
+impl Table<'_> {
+    fn span_of_key(&self, k: &str) -> Range<usize> {
+        self.entries
+            .iter()
+            .find(|e| e.0 == k)
+            .map_or(self.span.clone(), |e| e.1.clone())
+    }
+}
+
+/// Every set must pass the scenario parser's `[planner]` checks; a refusal is reported at the
+/// swept parameter it names (or at the first swept parameter), with the set's values.
+fn check_sets(spec: &Spec) -> Result<(), ScenarioError> {
+    for i in 0..spec.sets.len() {
+        if let Err(e) = spec.params_of(i, CHECK_DT_S) {
+            let named = e.key.strip_prefix("planner.").unwrap_or(&e.key);
+            let p = spec
+                .params
+                .iter()
+                .find(|p| p.name == named)
+                .unwrap_or(&spec.params[0]);
+            let values: Vec<String> = spec
+                .params
+                .iter()
+                .zip(&spec.sets[i])
+                .map(|(p, v)| format!("{} = {}", p.name, v.toml()))
+                .collect();
+            return Err(ScenarioError {
+                file: spec.file.clone(),
+                line: p.line,
+                column: None,
+                key: format!("sweep.params.{}", p.name),
+                message: format!(
+                    "parameter set {i} ({}) is refused: {}",
+                    values.join(", "),
+                    e.message
+                ),
+            });
+        }
+    }
+    Ok(())
+}
