@@ -33,7 +33,7 @@ fn sonar_features_of_a_crossing_target_are_tracked_with_its_velocity() {
     // A vehicle holding station at the origin, heading +x.
     let vehicle = VehicleState::default();
     let sonar_cfg = SonarConfig::default();
-    let mut sonar = Sonar::new(sonar_cfg.clone());
+    let mut sonar = Sonar::new(sonar_cfg);
     let mut extractor = Extractor::new(ExtractorConfig::default()).unwrap();
     let mut world = World::new();
     let mut tracks = Tracks::default();
