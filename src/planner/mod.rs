@@ -1,6 +1,11 @@
-//! The VPF trajectory planner (seeds 000 and 001): one [`Planner::step`] per period.
+//! The trajectory planner: one [`Planner::step`] per period, by the strategy in
+//! `Params::strategy` — the VPF of seeds 000 and 001 (`vpf.rs`), or the multipoint potential
+//! field (seed 003, [`multipoint`]) or a navigation function (seed 004, [`navfn`]), whose glue is
+//! `strategy.rs`. Each strategy yields the force F of step 3; steps 4–6 are shared. Every
+//! strategy plans against moving obstacles at their predicted positions
+//! ([`Obstacle::predicted_shift`](crate::world::Obstacle::predicted_shift)).
 //!
-//! Per step, for the vehicle at p with measured velocity v and planned velocity v_c(k−1):
+//! The VPF step, for the vehicle at p with measured velocity v and planned velocity v_c(k−1):
 //! 1. E = obstacles' stator + rotor PDFs + other vehicles' circles + the active goal-point (the
 //!    mission goal or the top ghost) + the formation's virtual leader ([`gradient::Field`]);
 //! 2. F_nf = sampled gradient on the ε circle (000 eq. 2–4);

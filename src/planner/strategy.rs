@@ -5,7 +5,9 @@
 //! Both see moving obstacles at their predicted positions ([`Context::predicted_shapes`]) and
 //! other vehicles as circles of radius `agent_radius_m`. Neither uses ghost goal-points: those
 //! are the VPF's escape (seed 000 §III); seed 003 leaves local minima to future work, and a
-//! navigation function has none in a valid sphere world.
+//! navigation function has none in a valid sphere world. Nor do they keep formation: a
+//! mission's formation (001 §3.2) is the VPF's virtual leader; the alternatives fly to the
+//! mission goal and give other vehicles a wide berth.
 
 use super::multipoint::{self, ArcConfig};
 use super::navfn::{self, NavfnError, SphereWorld};
