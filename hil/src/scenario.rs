@@ -297,14 +297,16 @@ pub fn parse_planner(text: &str, file: &str, dt_s: f64) -> Result<Params, Scenar
 // ---------------------------------------------------------------------------------------------
 // Source positions.
 
+/// A TOML text and its file name, for errors that name file, line and key (shared with the
+/// sweep spec parser, `crate::sweep::spec`).
 #[derive(Clone, Copy)]
-struct Src<'a> {
-    file: &'a str,
-    text: &'a str,
+pub(crate) struct Src<'a> {
+    pub(crate) file: &'a str,
+    pub(crate) text: &'a str,
 }
 
 impl Src<'_> {
-    fn line_of(&self, offset: usize) -> usize {
+    pub(crate) fn line_of(&self, offset: usize) -> usize {
         let end = offset.min(self.text.len());
         1 + self.text.as_bytes()[..end]
             .iter()
@@ -323,7 +325,12 @@ impl Src<'_> {
             .count()
     }
 
-    fn err(&self, span: &Range<usize>, key: &str, message: impl Into<String>) -> ScenarioError {
+    pub(crate) fn err(
+        &self,
+        span: &Range<usize>,
+        key: &str,
+        message: impl Into<String>,
+    ) -> ScenarioError {
         ScenarioError {
             file: self.file.to_string(),
             line: self.line_of(span.start),
@@ -333,7 +340,7 @@ impl Src<'_> {
         }
     }
 
-    fn syntax(&self, e: &toml::de::Error) -> ScenarioError {
+    pub(crate) fn syntax(&self, e: &toml::de::Error) -> ScenarioError {
         let at = e.span().map_or(0, |s| s.start);
         ScenarioError {
             file: self.file.to_string(),
@@ -348,7 +355,7 @@ impl Src<'_> {
 // ---------------------------------------------------------------------------------------------
 // Typed access to the spanned document.
 
-type Val<'a> = Spanned<DeValue<'a>>;
+pub(crate) type Val<'a> = Spanned<DeValue<'a>>;
 
 /// One value with its key path and span, for checks that report it.
 struct Got<'a, T> {
@@ -395,7 +402,7 @@ fn unit_suffix(unit: &str) -> String {
     }
 }
 
-fn type_name(v: &DeValue<'_>) -> &'static str {
+pub(crate) fn type_name(v: &DeValue<'_>) -> &'static str {
     match v {
         DeValue::String(_) => "a string",
         DeValue::Integer(_) => "an integer",
@@ -611,7 +618,7 @@ fn as_table<'a>(src: Src<'a>, path: String, v: &'a Val<'a>) -> Result<Table<'a>,
     }
 }
 
-fn value_integer(src: Src<'_>, key: &str, v: &Val<'_>) -> Result<i64, ScenarioError> {
+pub(crate) fn value_integer(src: Src<'_>, key: &str, v: &Val<'_>) -> Result<i64, ScenarioError> {
     match v.get_ref() {
         DeValue::Integer(i) => i64::from_str_radix(i.as_str(), i.radix())
             .map_err(|_| src.err(&v.span(), key, format!("integer {i} is too large"))),
@@ -624,7 +631,7 @@ fn value_integer(src: Src<'_>, key: &str, v: &Val<'_>) -> Result<i64, ScenarioEr
 }
 
 /// A finite number; integers are accepted where numbers are expected.
-fn value_number(src: Src<'_>, key: &str, v: &Val<'_>) -> Result<f64, ScenarioError> {
+pub(crate) fn value_number(src: Src<'_>, key: &str, v: &Val<'_>) -> Result<f64, ScenarioError> {
     let x = match v.get_ref() {
         DeValue::Integer(_) => value_integer(src, key, v)? as f64,
         DeValue::Float(f) => f

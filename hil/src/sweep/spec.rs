@@ -11,12 +11,11 @@ use std::fmt::Write as _;
 use std::ops::Range;
 
 use toml::de::{DeTable, DeValue};
-use toml::Spanned;
 
-use crate::scenario::{self, ModelKind, ScenarioError, Sensing};
+use crate::scenario::{
+    self, type_name, value_integer, value_number, ModelKind, ScenarioError, Sensing, Src, Val,
+};
 use crate::sim::Rng;
-
-type Val<'a> = Spanned<DeValue<'a>>;
 
 /// The planner period the parameter sets are checked at, s (every generated scenario uses it;
 /// a scenario file's own `dt_s` replaces it at run time).
@@ -299,44 +298,6 @@ pub fn load(path: &std::path::Path) -> Result<Spec, ScenarioError> {
 // A small span-aware reader (the scenario parser's conventions: file order, unknown keys
 // refused, key paths with dots).
 
-#[derive(Clone, Copy)]
-struct Src<'a> {
-    file: &'a str,
-    text: &'a str,
-}
-
-impl Src<'_> {
-    fn line_of(&self, offset: usize) -> usize {
-        let end = offset.min(self.text.len());
-        1 + self.text.as_bytes()[..end]
-            .iter()
-            .filter(|&&b| b == b'\n')
-            .count()
-    }
-
-    fn err(&self, span: &Range<usize>, key: &str, message: impl Into<String>) -> ScenarioError {
-        ScenarioError {
-            file: self.file.to_string(),
-            line: self.line_of(span.start),
-            column: None,
-            key: key.to_string(),
-            message: message.into(),
-        }
-    }
-}
-
-fn type_name(v: &DeValue<'_>) -> &'static str {
-    match v {
-        DeValue::String(_) => "a string",
-        DeValue::Integer(_) => "an integer",
-        DeValue::Float(_) => "a float",
-        DeValue::Boolean(_) => "a boolean",
-        DeValue::Datetime(_) => "a date-time",
-        DeValue::Array(_) => "an array",
-        DeValue::Table(_) => "a table",
-    }
-}
-
 struct Table<'a> {
     src: Src<'a>,
     path: String,
@@ -467,40 +428,6 @@ impl<'a> Table<'a> {
     }
 }
 
-fn value_integer(src: Src<'_>, key: &str, v: &Val<'_>) -> Result<i64, ScenarioError> {
-    match v.get_ref() {
-        DeValue::Integer(i) => i64::from_str_radix(i.as_str(), i.radix())
-            .map_err(|_| src.err(&v.span(), key, format!("integer {i} is too large"))),
-        other => Err(src.err(
-            &v.span(),
-            key,
-            format!("expected an integer, got {}", type_name(other)),
-        )),
-    }
-}
-
-fn value_number(src: Src<'_>, key: &str, v: &Val<'_>) -> Result<f64, ScenarioError> {
-    let x = match v.get_ref() {
-        DeValue::Integer(_) => value_integer(src, key, v)? as f64,
-        DeValue::Float(f) => f
-            .as_str()
-            .parse::<f64>()
-            .map_err(|_| src.err(&v.span(), key, format!("cannot read number `{f}`")))?,
-        other => {
-            return Err(src.err(
-                &v.span(),
-                key,
-                format!("expected a number, got {}", type_name(other)),
-            ))
-        }
-    };
-    if x.is_finite() {
-        Ok(x)
-    } else {
-        Err(src.err(&v.span(), key, format!("must be a finite number, got {x}")))
-    }
-}
-
 /// A `[planner]` value: integer, finite float or string.
 fn value_any(src: Src<'_>, key: &str, v: &Val<'_>) -> Result<Value, ScenarioError> {
     match v.get_ref() {
@@ -521,16 +448,7 @@ fn value_any(src: Src<'_>, key: &str, v: &Val<'_>) -> Result<Value, ScenarioErro
 /// Parses and validates sweep `text`; `file` names it in errors.
 pub fn parse(text: &str, file: &str) -> Result<Spec, ScenarioError> {
     let src = Src { file, text };
-    let doc = DeTable::parse(text).map_err(|e| {
-        let at = e.span().map_or(0, |s| s.start);
-        ScenarioError {
-            file: file.to_string(),
-            line: src.line_of(at),
-            column: None,
-            key: String::new(),
-            message: format!("TOML syntax error: {}", e.message()),
-        }
-    })?;
+    let doc = DeTable::parse(text).map_err(|e| src.syntax(&e))?;
     let root = Table::new(src, String::new(), 0..0, doc.get_ref());
     root.allow(
         &[
