@@ -422,17 +422,18 @@ fn join(path: &str, key: &str) -> String {
     }
 }
 
-/// A table of the document with its key path and the span of its header.
-struct Table<'a> {
-    src: Src<'a>,
-    path: String,
-    span: Range<usize>,
+/// A table of the document with its key path and the span of its header (shared with the
+/// sweep spec parser, which adds its own range-checked readers).
+pub(crate) struct Table<'a> {
+    pub(crate) src: Src<'a>,
+    pub(crate) path: String,
+    pub(crate) span: Range<usize>,
     /// (key, key span, value), in file order.
-    entries: Vec<(&'a str, Range<usize>, &'a Val<'a>)>,
+    pub(crate) entries: Vec<(&'a str, Range<usize>, &'a Val<'a>)>,
 }
 
 impl<'a> Table<'a> {
-    fn new(src: Src<'a>, path: String, span: Range<usize>, t: &'a DeTable<'a>) -> Self {
+    pub(crate) fn new(src: Src<'a>, path: String, span: Range<usize>, t: &'a DeTable<'a>) -> Self {
         let mut entries: Vec<_> = t
             .iter()
             .map(|(k, v)| (k.get_ref().as_ref(), k.span(), v))
@@ -447,15 +448,15 @@ impl<'a> Table<'a> {
         }
     }
 
-    fn key(&self, key: &str) -> String {
+    pub(crate) fn key(&self, key: &str) -> String {
         join(&self.path, key)
     }
 
-    fn get(&self, key: &str) -> Option<&'a Val<'a>> {
+    pub(crate) fn get(&self, key: &str) -> Option<&'a Val<'a>> {
         self.entries.iter().find(|e| e.0 == key).map(|e| e.2)
     }
 
-    fn span_of(&self, key: &str) -> Range<usize> {
+    pub(crate) fn span_of(&self, key: &str) -> Range<usize> {
         self.entries
             .iter()
             .find(|e| e.0 == key)
@@ -467,7 +468,7 @@ impl<'a> Table<'a> {
     }
 
     /// Refuses any key not in `allowed`; `what` names the table in the message.
-    fn allow(&self, allowed: &[&str], what: &str) -> Result<(), ScenarioError> {
+    pub(crate) fn allow(&self, allowed: &[&str], what: &str) -> Result<(), ScenarioError> {
         for (k, span, _) in &self.entries {
             if allowed.contains(k) {
                 continue;
@@ -483,7 +484,7 @@ impl<'a> Table<'a> {
         Ok(())
     }
 
-    fn missing(&self, key: &str) -> ScenarioError {
+    pub(crate) fn missing(&self, key: &str) -> ScenarioError {
         self.src
             .err(&self.span, &self.key(key), "missing required key")
     }
@@ -578,7 +579,7 @@ impl<'a> Table<'a> {
         Ok(Some(Window { from_s, to_s }))
     }
 
-    fn table(&self, key: &str) -> Result<Option<Table<'a>>, ScenarioError> {
+    pub(crate) fn table(&self, key: &str) -> Result<Option<Table<'a>>, ScenarioError> {
         self.get(key)
             .map(|v| as_table(self.src, self.key(key), v))
             .transpose()

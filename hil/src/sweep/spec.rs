@@ -8,12 +8,12 @@
 //! values a scenario does. The format is documented in `hil/sweeps/README.md`.
 
 use std::fmt::Write as _;
-use std::ops::Range;
 
 use toml::de::{DeTable, DeValue};
 
 use crate::scenario::{
-    self, type_name, value_integer, value_number, ModelKind, ScenarioError, Sensing, Src, Val,
+    self, type_name, value_integer, value_number, ModelKind, ScenarioError, Sensing, Src, Table,
+    Val,
 };
 use crate::sim::Rng;
 
@@ -295,79 +295,24 @@ pub fn load(path: &std::path::Path) -> Result<Spec, ScenarioError> {
 }
 
 // ---------------------------------------------------------------------------------------------
-// A small span-aware reader (the scenario parser's conventions: file order, unknown keys
-// refused, key paths with dots).
+// Reading: the scenario parser's span-aware `Table` (file order, unknown keys refused, key
+// paths with dots), plus range-checked readers of our own.
 
-struct Table<'a> {
-    src: Src<'a>,
-    path: String,
-    span: Range<usize>,
-    entries: Vec<(&'a str, Range<usize>, &'a Val<'a>)>,
+/// The sweep spec's range-checked readers, on the scenario parser's [`Table`].
+trait SpecReads<'a> {
+    fn fail(&self, v: &Val<'_>, k: &str, message: impl Into<String>) -> ScenarioError;
+    fn text(&self, k: &str) -> Result<Option<&'a str>, ScenarioError>;
+    fn int_in(&self, k: &str, lo: i64, hi: i64) -> Result<Option<i64>, ScenarioError>;
+    fn num_in(&self, k: &str, lo: f64, hi: f64) -> Result<Option<f64>, ScenarioError>;
+    fn range_in(&self, k: &str, lo: f64, hi: f64) -> Result<Option<(f64, f64)>, ScenarioError>;
 }
 
-impl<'a> Table<'a> {
-    fn new(src: Src<'a>, path: String, span: Range<usize>, t: &'a DeTable<'a>) -> Self {
-        let mut entries: Vec<_> = t
-            .iter()
-            .map(|(k, v)| (k.get_ref().as_ref(), k.span(), v))
-            .collect();
-        entries.sort_by_key(|e| e.1.start);
-        Table {
-            src,
-            path,
-            span,
-            entries,
-        }
-    }
-
-    fn key(&self, k: &str) -> String {
-        if self.path.is_empty() {
-            k.to_string()
-        } else {
-            format!("{}.{k}", self.path)
-        }
-    }
-
-    fn get(&self, k: &str) -> Option<&'a Val<'a>> {
-        self.entries.iter().find(|e| e.0 == k).map(|e| e.2)
-    }
-
-    fn allow(&self, allowed: &[&str], what: &str) -> Result<(), ScenarioError> {
-        for (k, span, _) in &self.entries {
-            if !allowed.contains(k) {
-                return Err(self.src.err(
-                    span,
-                    &self.key(k),
-                    format!(
-                        "unknown key in {what} (expected one of: {})",
-                        allowed.join(", ")
-                    ),
-                ));
-            }
-        }
-        Ok(())
-    }
-
-    fn missing(&self, k: &str) -> ScenarioError {
-        self.src
-            .err(&self.span, &self.key(k), "missing required key")
-    }
-
+impl<'a> SpecReads<'a> for Table<'a> {
     fn fail(&self, v: &Val<'_>, k: &str, message: impl Into<String>) -> ScenarioError {
         self.src.err(&v.span(), &self.key(k), message)
     }
 
-    fn table(&self, k: &str) -> Result<Option<Table<'a>>, ScenarioError> {
-        let Some(v) = self.get(k) else {
-            return Ok(None);
-        };
-        match v.get_ref() {
-            DeValue::Table(t) => Ok(Some(Table::new(self.src, self.key(k), v.span(), t))),
-            other => Err(self.fail(v, k, format!("expected a table, got {}", type_name(other)))),
-        }
-    }
-
-    fn string(&self, k: &str) -> Result<Option<&'a str>, ScenarioError> {
+    fn text(&self, k: &str) -> Result<Option<&'a str>, ScenarioError> {
         let Some(v) = self.get(k) else {
             return Ok(None);
         };
@@ -377,7 +322,7 @@ impl<'a> Table<'a> {
         }
     }
 
-    fn integer(&self, k: &str, lo: i64, hi: i64) -> Result<Option<i64>, ScenarioError> {
+    fn int_in(&self, k: &str, lo: i64, hi: i64) -> Result<Option<i64>, ScenarioError> {
         let Some(v) = self.get(k) else {
             return Ok(None);
         };
@@ -388,7 +333,7 @@ impl<'a> Table<'a> {
         Ok(Some(i))
     }
 
-    fn number(&self, k: &str, lo: f64, hi: f64) -> Result<Option<f64>, ScenarioError> {
+    fn num_in(&self, k: &str, lo: f64, hi: f64) -> Result<Option<f64>, ScenarioError> {
         let Some(v) = self.get(k) else {
             return Ok(None);
         };
@@ -400,7 +345,7 @@ impl<'a> Table<'a> {
     }
 
     /// `[min, max]` with `lo <= min <= max <= hi`.
-    fn range(&self, k: &str, lo: f64, hi: f64) -> Result<Option<(f64, f64)>, ScenarioError> {
+    fn range_in(&self, k: &str, lo: f64, hi: f64) -> Result<Option<(f64, f64)>, ScenarioError> {
         let Some(v) = self.get(k) else {
             return Ok(None);
         };
@@ -463,14 +408,14 @@ pub fn parse(text: &str, file: &str) -> Result<Spec, ScenarioError> {
         ],
         "the sweep file",
     )?;
-    let name = root.string("name")?.ok_or_else(|| root.missing("name"))?;
+    let name = root.text("name")?.ok_or_else(|| root.missing("name"))?;
     if name.trim().is_empty() {
         let v = root.get("name").map_or(0..0, |v| v.span());
         return Err(src.err(&v, "name", "must not be empty"));
     }
-    let description = root.string("description")?.unwrap_or_default().to_string();
+    let description = root.text("description")?.unwrap_or_default().to_string();
     let seed = root
-        .integer("seed", 0, i64::MAX)?
+        .int_in("seed", 0, i64::MAX)?
         .ok_or_else(|| root.missing("seed"))? as u64;
 
     let craft = craft(&root)?;
@@ -502,15 +447,15 @@ pub fn parse(text: &str, file: &str) -> Result<Spec, ScenarioError> {
 fn craft(root: &Table<'_>) -> Result<Craft, ScenarioError> {
     let t = root.table("craft")?.ok_or_else(|| root.missing("craft"))?;
     t.allow(&["model", "margin_m", "label"], "[craft]")?;
-    let m = t.string("model")?.ok_or_else(|| t.missing("model"))?;
+    let m = t.text("model")?.ok_or_else(|| t.missing("model"))?;
     let model = m.parse::<ModelKind>().map_err(|e| {
         let v = t.get("model").map_or(0..0, |v| v.span());
         t.src.err(&v, &t.key("model"), e.to_string())
     })?;
     let margin_m = t
-        .number("margin_m", 0.0, 100.0)?
+        .num_in("margin_m", 0.0, 100.0)?
         .ok_or_else(|| t.missing("margin_m"))?;
-    let label = t.string("label")?.unwrap_or(model.name()).to_string();
+    let label = t.text("label")?.unwrap_or(model.name()).to_string();
     Ok(Craft {
         model,
         margin_m,
@@ -552,7 +497,7 @@ type SweepPart = (Mode, Vec<Param>, Option<(String, String)>);
 fn sweep(root: &Table<'_>, base: &[(String, Value)]) -> Result<SweepPart, ScenarioError> {
     let t = root.table("sweep")?.ok_or_else(|| root.missing("sweep"))?;
     t.allow(&["mode", "samples", "heatmap", "params"], "[sweep]")?;
-    let mode = match t.string("mode")?.unwrap_or("grid") {
+    let mode = match t.text("mode")?.unwrap_or("grid") {
         "grid" => {
             if let Some(v) = t.get("samples") {
                 return Err(t.fail(v, "samples", "only for mode = \"random\""));
@@ -561,7 +506,7 @@ fn sweep(root: &Table<'_>, base: &[(String, Value)]) -> Result<SweepPart, Scenar
         }
         "random" => Mode::Random {
             samples: t
-                .integer("samples", 1, MAX_SETS as i64)?
+                .int_in("samples", 1, MAX_SETS as i64)?
                 .ok_or_else(|| t.missing("samples"))? as usize,
         },
         other => {
@@ -764,7 +709,7 @@ fn scenarios(root: &Table<'_>) -> Result<Scenarios, ScenarioError> {
             }
         }
     }
-    let count = |k: &str| t.integer(k, 0, 100_000).map(|x| x.unwrap_or(0) as usize);
+    let count = |k: &str| t.int_in(k, 0, 100_000).map(|x| x.unwrap_or(0) as usize);
     s.clutter = count("clutter")?;
     s.passage = count("passage")?;
     s.utrap = count("utrap")?;
@@ -775,10 +720,10 @@ fn scenarios(root: &Table<'_>) -> Result<Scenarios, ScenarioError> {
             "no scenario: list `files` or ask for generated `clutter`, `passage` or `utrap`",
         ));
     }
-    if let Some(r) = t.range("length_m", 15.0, 1000.0)? {
+    if let Some(r) = t.range_in("length_m", 15.0, 1000.0)? {
         s.length_m = r;
     }
-    if let Some(x) = t.string("sensing")? {
+    if let Some(x) = t.text("sensing")? {
         s.sensing = match x {
             "contacts" => Sensing::Contacts,
             "sonar" => Sensing::Sonar,
@@ -792,35 +737,35 @@ fn scenarios(root: &Table<'_>) -> Result<Scenarios, ScenarioError> {
             }
         };
     }
-    if let Some(x) = t.number("speed_mps", 0.05, 20.0)? {
+    if let Some(x) = t.num_in("speed_mps", 0.05, 20.0)? {
         s.speed_mps = x;
     }
-    if let Some(x) = t.number("time_factor", 1.0, 100.0)? {
+    if let Some(x) = t.num_in("time_factor", 1.0, 100.0)? {
         s.time_factor = x;
     }
-    s.duration_cap_s = t.number("duration_cap_s", 1.0, 86_400.0)?;
-    if let Some(x) = t.number("min_gap_m", 0.5, 100.0)? {
+    s.duration_cap_s = t.num_in("duration_cap_s", 1.0, 86_400.0)?;
+    if let Some(x) = t.num_in("min_gap_m", 0.5, 100.0)? {
         s.min_gap_m = x;
     }
-    if let Some(r) = t.range("density", 0.0, 10.0)? {
+    if let Some(r) = t.range_in("density", 0.0, 10.0)? {
         s.density = r;
     }
-    if let Some(r) = t.range("passage_gap_m", 0.5, 50.0)? {
+    if let Some(r) = t.range_in("passage_gap_m", 0.5, 50.0)? {
         s.passage_gap_m = r;
     }
-    if let Some(r) = t.range("utrap_width_m", 2.0, 100.0)? {
+    if let Some(r) = t.range_in("utrap_width_m", 2.0, 100.0)? {
         s.utrap_width_m = r;
     }
-    if let Some(r) = t.range("utrap_depth_m", 1.0, 100.0)? {
+    if let Some(r) = t.range_in("utrap_depth_m", 1.0, 100.0)? {
         s.utrap_depth_m = r;
     }
-    if let Some(x) = t.number("current_mps", 0.0, 5.0)? {
+    if let Some(x) = t.num_in("current_mps", 0.0, 5.0)? {
         s.current_mps = x;
     }
-    if let Some(x) = t.number("nav_sigma_m", 0.0, 100.0)? {
+    if let Some(x) = t.num_in("nav_sigma_m", 0.0, 100.0)? {
         s.nav_sigma_m = x;
     }
-    if let Some(x) = t.number("scale", 0.1, 100.0)? {
+    if let Some(x) = t.num_in("scale", 0.1, 100.0)? {
         s.scale = x;
     }
     Ok(s)
@@ -835,16 +780,16 @@ fn criterion(root: &Table<'_>) -> Result<Weights, ScenarioError> {
         &["time", "energy", "oscillation", "deadband_deg_s"],
         "[criterion]",
     )?;
-    if let Some(x) = t.number("time", 0.0, 1000.0)? {
+    if let Some(x) = t.num_in("time", 0.0, 1000.0)? {
         w.time = x;
     }
-    if let Some(x) = t.number("energy", 0.0, 1000.0)? {
+    if let Some(x) = t.num_in("energy", 0.0, 1000.0)? {
         w.energy = x;
     }
-    if let Some(x) = t.number("oscillation", 0.0, 1000.0)? {
+    if let Some(x) = t.num_in("oscillation", 0.0, 1000.0)? {
         w.oscillation = x;
     }
-    if let Some(x) = t.number("deadband_deg_s", 0.0, 360.0)? {
+    if let Some(x) = t.num_in("deadband_deg_s", 0.0, 360.0)? {
         w.deadband = x.to_radians();
     }
     Ok(w)
@@ -880,7 +825,7 @@ fn expand(spec: &Spec, root: &Table<'_>) -> Result<Vec<Vec<Value>>, ScenarioErro
                 .filter(|n| *n <= MAX_SETS);
             let Some(total) = total else {
                 return Err(root.src.err(
-                    &root.span_of_key("sweep"),
+                    &root.span_of("sweep"),
                     "sweep.params",
                     format!("the grid has more than {MAX_SETS} parameter sets"),
                 ));
@@ -926,15 +871,6 @@ fn expand(spec: &Spec, root: &Table<'_>) -> Result<Vec<Vec<Value>>, ScenarioErro
                     .collect()
             })
             .collect()),
-    }
-}
-
-impl Table<'_> {
-    fn span_of_key(&self, k: &str) -> Range<usize> {
-        self.entries
-            .iter()
-            .find(|e| e.0 == k)
-            .map_or(self.span.clone(), |e| e.1.clone())
     }
 }
 
