@@ -23,6 +23,9 @@ pub const MAX_OBSTACLES: usize = 32;
 pub const MAX_AGENTS: usize = 8;
 /// Fastest an obstacle or agent may be said to move, m/s (beyond any AUV, a unit error).
 pub const MAX_OBJECT_SPEED: f32 = 20.0;
+/// Most believed evidence-map cells the planner takes per step, the nearest ones
+/// ([`World::set_map`]).
+pub const MAX_MAP_CELLS: usize = 32;
 
 /// Where an obstacle came from, which decides its ageing and eviction.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -30,8 +33,13 @@ pub const MAX_OBJECT_SPEED: f32 = 20.0;
 pub enum Origin {
     /// From the mission or a chart: kept until removed, never evicted.
     Charted,
-    /// From the sonar: ages out, may be evicted by a nearer one when the table is full.
+    /// From the host's perception (contacts): ages out, may be evicted by a nearer one when
+    /// the table is full.
     Sensed,
+    /// From this firmware's own sonar feature extraction: as `Sensed`; and while an evidence
+    /// map is in use ([`World::set_map`]) a still one is left to the map, which holds the same
+    /// echoes without the fitted shape's gaps (a moving one stays: the map cannot predict it).
+    Sonar,
 }
 
 /// An obstacle: its geometry, its stator PDF and bookkeeping.
@@ -205,13 +213,23 @@ pub struct WorldCounters {
     pub expired: u32,
 }
 
-/// The obstacle and agent tables.
+/// The obstacle and agent tables, and this period's view of the evidence map.
 #[derive(Clone, Debug, Default)]
 pub struct World {
     obstacles: Vec<Obstacle, MAX_OBSTACLES>,
     agents: Vec<Agent, MAX_AGENTS>,
+    map: MapCells,
     /// Boundary counters.
     pub counters: WorldCounters,
+}
+
+/// The believed-occupied evidence-map cells nearest the vehicle (`crate::sonar::evidence`), as
+/// discs of radius `radius` about their centres. Refreshed every period by the runtime.
+#[derive(Clone, Debug, Default)]
+pub struct MapCells {
+    centers: Vec<Vec2, MAX_MAP_CELLS>,
+    radius: f32,
+    in_use: bool,
 }
 
 impl World {
@@ -220,6 +238,11 @@ impl World {
         World {
             obstacles: Vec::new(),
             agents: Vec::new(),
+            map: MapCells {
+                centers: Vec::new(),
+                radius: 0.0,
+                in_use: false,
+            },
             counters: WorldCounters {
                 rejected_full: 0,
                 evicted: 0,
@@ -266,7 +289,7 @@ impl World {
         let farthest = self
             .obstacles
             .iter_mut()
-            .filter(|x| x.origin == Origin::Sensed)
+            .filter(|x| x.origin != Origin::Charted)
             .max_by(|a, b| dist(a).total_cmp(&dist(b)));
         match farthest {
             Some(slot) if dist(slot) > new_d => {
@@ -326,16 +349,77 @@ impl World {
         self.agents.clear();
     }
 
-    /// Signed distance from `p` to the nearest obstacle surface or agent circle of radius
-    /// `agent_radius`, metres (`f32::INFINITY` for an empty world). Negative means inside.
+    /// Signed distance from `p` to the nearest obstacle surface, agent circle of radius
+    /// `agent_radius` or believed map cell, metres (`f32::INFINITY` for an empty world).
+    /// Negative means inside.
     pub fn clearance(&self, p: Vec2, agent_radius: f32) -> f32 {
-        let obstacles = self.obstacles.iter().map(|o| o.shape.signed_distance(p));
+        let obstacles = self
+            .obstacles
+            .iter()
+            .filter(|o| !self.left_to_map(o))
+            .map(|o| o.shape.signed_distance(p));
         let agents = self
             .agents
             .iter()
             .map(|a| (p - a.position).norm() - agent_radius);
-        obstacles.chain(agents).fold(f32::INFINITY, f32::min)
+        obstacles.chain(agents).fold(self.map_distance(p), f32::min)
     }
+
+    /// Replaces this period's map cells: `centers` (the nearest first; those beyond
+    /// [`MAX_MAP_CELLS`] are ignored), each a disc of `radius` m. From now on still
+    /// [`Origin::Sonar`] obstacles are left to the map ([`World::left_to_map`]).
+    pub fn set_map(&mut self, centers: impl Iterator<Item = Vec2>, radius: f32) {
+        self.map.centers.clear();
+        for c in centers.filter(|c| c.is_finite()) {
+            if self.map.centers.push(c).is_err() {
+                break;
+            }
+        }
+        self.map.radius = if radius.is_finite() {
+            radius.max(0.0)
+        } else {
+            0.0
+        };
+        self.map.in_use = true;
+    }
+
+    /// This period's believed map cells (centres), nearest first.
+    pub fn map_cells(&self) -> &[Vec2] {
+        &self.map.centers
+    }
+
+    /// Radius of a map cell's disc, m.
+    pub fn map_radius(&self) -> f32 {
+        self.map.radius
+    }
+
+    /// Whether an evidence map feeds this world.
+    pub fn map_in_use(&self) -> bool {
+        self.map.in_use
+    }
+
+    /// Signed distance from `x` to the nearest map cell's disc, m (`INFINITY` with none).
+    pub fn map_distance(&self, x: Vec2) -> f32 {
+        nearest_cell(&self.map.centers, x).map_or(f32::INFINITY, |(_, d)| d - self.map.radius)
+    }
+
+    /// Whether obstacle `o` is represented by the map instead of its own PDF: a still
+    /// obstacle from the firmware's own sonar while a map is in use (see [`Origin::Sonar`]).
+    pub fn left_to_map(&self, o: &Obstacle) -> bool {
+        self.map.in_use && o.origin == Origin::Sonar && o.velocity == Vec2::ZERO
+    }
+}
+
+/// The centre nearest `x` among `centers` and its distance, m.
+pub fn nearest_cell(centers: &[Vec2], x: Vec2) -> Option<(Vec2, f32)> {
+    let mut best: Option<(Vec2, f32)> = None;
+    for &c in centers {
+        let d2 = (c - x).norm2();
+        if best.is_none_or(|(_, b)| d2 < b) {
+            best = Some((c, d2));
+        }
+    }
+    best.map(|(c, d2)| (c, crate::math::sqrt(d2)))
 }
 
 #[cfg(test)]

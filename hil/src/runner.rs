@@ -220,6 +220,8 @@ fn simulate(
             // The sonar's background is exponential with this mean; past ~30 it floods every bin.
             noise_level: sc.sonar.noise * 30.0,
             speckle_prob: sc.sonar.speckle,
+            rays_per_beam: sc.sonar.beam_rays,
+            false_echo_prob: sc.sonar.false_echoes,
             seed: seed.wrapping_add(7),
             ..SonarConfig::default()
         });

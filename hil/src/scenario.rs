@@ -127,10 +127,15 @@ pub struct Sonar {
     pub bins: u16,
     /// Head step, rad (default 1.8°).
     pub step: f64,
-    /// Background noise level, 0 ..= 1; default 0.
+    /// Background noise level, 0 ..= 1; default 0.2 (a mean of 6 on the 0–255 scale).
     pub noise: f64,
-    /// Speckle (spurious echo) probability per bin, 0 ..= 1; default 0.
+    /// Speckle (one-bin spike) probability per bin, 0 ..= 1; default 0.002.
     pub speckle: f64,
+    /// Rays across the 3° beam, 1 ..= 32; default 5 (1 is an ideal pencil beam).
+    pub beam_rays: usize,
+    /// Probability per ping of a spurious target echo (fish, a side lobe), 0 ..= 1; default
+    /// 0.03.
+    pub false_echoes: f64,
 }
 
 impl Default for Sonar {
@@ -140,8 +145,10 @@ impl Default for Sonar {
             range_m: 30.0,
             bins: 300,
             step: 1.8f64.to_radians(),
-            noise: 0.0,
-            speckle: 0.0,
+            noise: 0.2,
+            speckle: 0.002,
+            beam_rays: 5,
+            false_echoes: 0.03,
         }
     }
 }
@@ -1023,7 +1030,16 @@ fn sonar(root: &Table<'_>) -> Result<Sonar, ScenarioError> {
         return Ok(s);
     };
     t.allow(
-        &["mode", "range_m", "bins", "step_deg", "noise", "speckle"],
+        &[
+            "mode",
+            "range_m",
+            "bins",
+            "step_deg",
+            "noise",
+            "speckle",
+            "beam_rays",
+            "false_echoes",
+        ],
         "[sonar]",
     )?;
     if let Some(m) = t.string("mode")? {
@@ -1062,6 +1078,15 @@ fn sonar(root: &Table<'_>) -> Result<Sonar, ScenarioError> {
     }
     if let Some(n) = t.number("speckle")? {
         s.speckle = n.within(0.0, 1.0, "")?;
+    }
+    if let Some(b) = t.integer("beam_rays")? {
+        if !(1..=32).contains(&b.v) {
+            return Err(b.fail(format!("must be in 1 ..= 32, got {}", b.v)));
+        }
+        s.beam_rays = b.v as usize;
+    }
+    if let Some(n) = t.number("false_echoes")? {
+        s.false_echoes = n.within(0.0, 1.0, "")?;
     }
     Ok(s)
 }

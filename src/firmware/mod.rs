@@ -34,7 +34,7 @@ use vpf::guidance::{
 };
 use vpf::link::RxCounters;
 use vpf::params::Params;
-use vpf::sonar::ExtractorConfig;
+use vpf::sonar::{EvidenceMap, ExtractorConfig};
 
 use crate::board::active as board;
 
@@ -80,6 +80,9 @@ static NOW_MS: Mutex<Cell<u64>> = Mutex::new(Cell::new(0));
 /// Lockstep: `(active, pending tick time)`.
 static LOCKSTEP: Mutex<Cell<(bool, Option<u64>)>> = Mutex::new(Cell::new((false, None)));
 static RX_DROPPED: AtomicU32 = AtomicU32::new(0);
+/// The evidence map: written by the background, read by the periodic task (atomic cells and a
+/// sequence-counted window: `crate::sonar::evidence`), so it needs no lock and no `unsafe`.
+static EVIDENCE: EvidenceMap = EvidenceMap::empty();
 
 /// The periodic task's state, handed to SysTick once.
 pub struct PeriodicCtx {
@@ -297,8 +300,13 @@ pub fn on_systick(ctx: &mut PeriodicCtx) {
         }
         frame.iter().all(|&b| tx.enqueue(b).is_ok())
     };
-    ctx.periodic
-        .on_tick(now, &mut inputs, &mut board::cost_now, &mut send);
+    ctx.periodic.on_tick(
+        now,
+        &mut inputs,
+        Some(&EVIDENCE),
+        &mut board::cost_now,
+        &mut send,
+    );
     board::kick_tx();
     board::feed_watchdog();
 
@@ -400,7 +408,9 @@ impl Idle {
         };
         while !rest.is_empty() {
             let now = critical_section::with(|cs| NOW_MS.borrow(cs).get());
-            rest = self.background.on_bytes(rest, now, &mut self.sink);
+            rest = self
+                .background
+                .on_bytes(rest, now, &mut self.sink, Some(&EVIDENCE));
             let ticked = critical_section::with(|cs| LOCKSTEP.borrow(cs).get().1.is_some());
             if ticked {
                 // Run the requested period now, before later bytes are decoded.
@@ -427,7 +437,9 @@ impl Idle {
         let now = critical_section::with(|cs| NOW_MS.borrow(cs).get());
         let mut rest = bytes;
         while !rest.is_empty() {
-            rest = self.background.on_bytes(rest, now, &mut self.sink);
+            rest = self
+                .background
+                .on_bytes(rest, now, &mut self.sink, Some(&EVIDENCE));
         }
     }
 }

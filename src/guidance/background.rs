@@ -7,7 +7,7 @@
 //! leaves through a [`Sink`], which the board implements with lock-free queues.
 
 use crate::link::{Decoder, Direction, Message, Outcome, ReplyRepr, RxCounters};
-use crate::sonar::{Extractor, ExtractorConfig, Pose};
+use crate::sonar::{EvidenceMap, Extractor, ExtractorConfig, Pose};
 
 use super::{Control, NavSample, Sighting};
 
@@ -80,7 +80,16 @@ impl Background {
 
     /// Feeds received bytes at firmware time `now_ms`. Stops right after a `Tick` frame (so
     /// the caller runs that period before later bytes land) and returns the bytes not yet fed.
-    pub fn on_bytes<'b>(&mut self, bytes: &'b [u8], now_ms: u64, sink: &mut impl Sink) -> &'b [u8] {
+    ///
+    /// Scanlines also go into `map`, the evidence map shared with the periodic task (this is
+    /// its only writer), when one is given.
+    pub fn on_bytes<'b>(
+        &mut self,
+        bytes: &'b [u8],
+        now_ms: u64,
+        sink: &mut impl Sink,
+        map: Option<&EvidenceMap>,
+    ) -> &'b [u8] {
         let mut rest = bytes;
         while !rest.is_empty() {
             let (outcome, tail) = self.decoder.feed(rest);
@@ -99,6 +108,7 @@ impl Background {
                         &mut self.counters,
                         self.contact_a_plus,
                         sink,
+                        map,
                     );
                     if tick {
                         return rest;
@@ -143,6 +153,7 @@ fn dispatch(
     counters: &mut BackgroundCounters,
     contact_a_plus: f32,
     sink: &mut impl Sink,
+    map: Option<&EvidenceMap>,
 ) {
     let mut queue_control = |c: Control, counters: &mut BackgroundCounters| {
         let ok = sink.control(c);
@@ -167,7 +178,7 @@ fn dispatch(
             };
             let mut emitted = 0u32;
             let mut dropped = 0u32;
-            let result = extractor.push_scanline(&scan, p, &mut |f| {
+            let result = extractor.push_scanline_mapped(&scan, p, map, &mut |f| {
                 emitted = emitted.saturating_add(1);
                 let ok = sink.sighting(Sighting::Feature(f));
                 count_if(!ok, &mut dropped);

@@ -24,12 +24,14 @@
 
 pub mod background;
 pub mod failsafe;
+pub mod guard;
 pub mod periodic;
 pub mod single;
 pub mod tracks;
 
 pub use background::{Background, BackgroundCounters, Sink};
 pub use failsafe::FailsafeConfig;
+pub use guard::{GuardConfig, Verdict};
 pub use periodic::{Inputs, Periodic, RuntimeConfig};
 pub use single::SingleContext;
 pub use tracks::TrackConfig;

@@ -15,9 +15,12 @@ use crate::planner::{Command, Planner};
 use crate::world::World;
 
 use super::failsafe::{self, FailsafeConfig, Situation};
+use super::guard::{self, GuardConfig, Verdict};
 use super::tracks::{TrackConfig, Tracks};
 use super::{BackgroundCounters, Control, NavSample, Sighting, SIGHTINGS_PER_PERIOD};
 use crate::link::RxCounters;
+use crate::sonar::{EvidenceMap, Near};
+use crate::world::MAX_MAP_CELLS;
 
 /// The runtime's own settings (the planner's are [`Params`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -29,6 +32,12 @@ pub struct RuntimeConfig {
     pub tracks: TrackConfig,
     /// Sensed obstacles and agents not seen for this long are dropped, ms.
     pub max_age_ms: u64,
+    /// The last-line check of every command against what is believed.
+    pub guard: GuardConfig,
+    /// Evidence-map cells within this distance of the vehicle enter the planner's world each
+    /// period (the nearest [`MAX_MAP_CELLS`]), m. Beyond about 8 m seed 000's stator
+    /// (A⁺ = 2.5) pushes less than 1 % of the goal's pull.
+    pub map_reach_m: f32,
 }
 
 impl Default for RuntimeConfig {
@@ -37,6 +46,8 @@ impl Default for RuntimeConfig {
             failsafe: FailsafeConfig::default(),
             tracks: TrackConfig::default(),
             max_age_ms: 30_000,
+            guard: GuardConfig::default(),
+            map_reach_m: 8.0,
         }
     }
 }
@@ -69,6 +80,8 @@ pub struct Periodic {
     /// second planner step, so lockstep runs do not depend on timing.
     last: Option<(u64, Command)>,
     counters: TelemetryCounters,
+    /// Periods whose command the guard changed.
+    guard_count: u32,
 }
 
 impl Periodic {
@@ -89,6 +102,7 @@ impl Periodic {
             last_heading: 0.0,
             last: None,
             counters: TelemetryCounters::default(),
+            guard_count: 0,
         })
     }
 
@@ -117,18 +131,25 @@ impl Periodic {
         &self.counters
     }
 
+    /// Periods whose command the guard turned, slowed or stopped.
+    pub fn guard_count(&self) -> u32 {
+        self.guard_count
+    }
+
     /// Counts a missed deadline (the board detects it).
     pub fn count_overrun(&mut self) {
         self.counters.deadline_overruns = self.counters.deadline_overruns.saturating_add(1);
     }
 
-    /// One period at firmware time `now_ms`. `cost` reads the board's monotonic counter (for
-    /// the step cost); `tx` queues one whole frame and returns `false` when it does not fit.
+    /// One period at firmware time `now_ms`. `map` is the evidence map the background builds
+    /// from the sonar (read only here). `cost` reads the board's monotonic counter (for the
+    /// step cost); `tx` queues one whole frame and returns `false` when it does not fit.
     /// Returns the command sent.
     pub fn on_tick(
         &mut self,
         now_ms: u64,
         inputs: &mut impl Inputs,
+        map: Option<&EvidenceMap>,
         cost: &mut impl FnMut() -> u32,
         tx: &mut impl FnMut(&[u8]) -> bool,
     ) -> Command {
@@ -151,6 +172,13 @@ impl Periodic {
             self.admit(s, position);
         }
         self.world.expire(now_ms, self.config.max_age_ms);
+        if let (Some(m), Some(n)) = (map, nav) {
+            let mut near: heapless::Vec<Near, MAX_MAP_CELLS> = heapless::Vec::new();
+            m.nearest(n.nav.position, self.config.map_reach_m, &mut near);
+            // Cells as discs of half their side: neighbours touch, so a wall has no seams.
+            self.world
+                .set_map(near.iter().map(|c| c.center), 0.5 * m.cell_m());
+        }
 
         let cmd = self.plan(now_ms, nav, cost);
         self.last = Some((now_ms, cmd));
@@ -207,7 +235,17 @@ impl Periodic {
         let result = self.planner.step(now_ms, &n.nav, &self.world);
         self.last_cost = cost().wrapping_sub(start);
         match result {
-            Ok(c) => c,
+            Ok(c) => {
+                let (c, verdict) =
+                    guard::check(&self.config.guard, &params, &n.nav, &self.world, c);
+                if verdict != Verdict::Clear {
+                    // The planner continues from the motion that was sent, so a vehicle the
+                    // guard holds back is seen as stalled and escapes (ghost goal-points).
+                    self.planner.override_velocity(c.velocity);
+                    self.guard_count = self.guard_count.saturating_add(1);
+                }
+                c
+            }
             // Refused input (counted by the planner): hold, with the last heading.
             Err(_) => Command::hold(crate::planner::HoldReason::StaleNav, self.last_heading),
         }

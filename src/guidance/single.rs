@@ -10,7 +10,7 @@ use heapless::Deque;
 use crate::link::{CostUnit, RxCounters};
 use crate::params::Params;
 use crate::planner::Command;
-use crate::sonar::ExtractorConfig;
+use crate::sonar::{EvidenceMap, ExtractorConfig};
 
 use super::{
     Background, BackgroundCounters, Control, Inputs, NavSample, Periodic, RuntimeConfig, Sighting,
@@ -62,6 +62,7 @@ pub struct SingleContext {
     background: Background,
     periodic: Periodic,
     queues: Queues,
+    map: EvidenceMap,
     now_ms: u64,
 }
 
@@ -91,6 +92,7 @@ impl SingleContext {
                 rx: RxCounters::default(),
                 bg: BackgroundCounters::default(),
             },
+            map: EvidenceMap::empty(),
             now_ms: 0,
         })
     }
@@ -98,6 +100,11 @@ impl SingleContext {
     /// The periodic half (planner, world, counters).
     pub fn periodic(&self) -> &Periodic {
         &self.periodic
+    }
+
+    /// The evidence map the sonar builds.
+    pub fn map(&self) -> &EvidenceMap {
+        &self.map
     }
 
     /// Whether the host drives time with `Tick` messages (lockstep).
@@ -123,7 +130,7 @@ impl SingleContext {
         while !rest.is_empty() {
             rest = self
                 .background
-                .on_bytes(rest, self.now_ms, &mut self.queues);
+                .on_bytes(rest, self.now_ms, &mut self.queues, Some(&self.map));
             if let Some(t) = self.queues.tick.take() {
                 // More than 4 ticks in one call: the later commands are still sent, not returned.
                 let _ = ran.push(self.on_tick(t, cost, tx));
@@ -142,6 +149,7 @@ impl SingleContext {
         self.now_ms = now_ms;
         self.queues.rx = *self.background.rx_counters();
         self.queues.bg = self.background.counters;
-        self.periodic.on_tick(now_ms, &mut self.queues, cost, tx)
+        self.periodic
+            .on_tick(now_ms, &mut self.queues, Some(&self.map), cost, tx)
     }
 }

@@ -251,7 +251,7 @@ impl Tracks {
             id,
             shape.translated(center - f.center),
             a_plus,
-            Origin::Sensed,
+            Origin::Sonar,
             f.time_ms,
         )
         .and_then(|o| o.moving(velocity));

@@ -29,6 +29,7 @@ pub const fn mode_codes(mode: Mode) -> (u8, u8) {
         Mode::Transit => (1, 0),
         Mode::Escape => (2, 0),
         Mode::Arrived => (3, 0),
+        Mode::Guarded => (4, 0),
     }
 }
 
@@ -46,6 +47,7 @@ fn mode_from_codes(mode: u8, reason: u8, mode_row: u8) -> Result<Mode, Error> {
         1 => Mode::Transit,
         2 => Mode::Escape,
         3 => Mode::Arrived,
+        4 => Mode::Guarded,
         _ => return refuse(mode_row, Problem::UnknownCode),
     };
     if mode != 0 && reason != 0 {
@@ -942,6 +944,7 @@ pub(crate) mod tests {
             Just(Mode::Transit),
             Just(Mode::Escape),
             Just(Mode::Arrived),
+            Just(Mode::Guarded),
             Just(Mode::Hold(HoldReason::NoMission)),
             Just(Mode::Hold(HoldReason::StaleNav)),
             Just(Mode::Hold(HoldReason::InsideObstacle)),

@@ -19,7 +19,7 @@
 use crate::field::{GoalPdf, Stator};
 use crate::math::{Vec2, TAU};
 use crate::params::N_GAMMA_MAX;
-use crate::world::{Agent, Obstacle};
+use crate::world::{nearest_cell, Agent, Obstacle, Origin};
 
 /// The n_γ sample offsets ε·(cos 2πi/n_γ, sin 2πi/n_γ) (000 eq. 3–4).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -88,6 +88,17 @@ pub struct Field<'a> {
     pub rotor_gradient: Vec2,
     /// The vehicle's position, where the rotor potential is zero.
     pub origin: Vec2,
+    /// Believed evidence-map cells near the vehicle (centres), each a disc of `map_radius`.
+    /// Together they are one obstacle: E gains f(r) of [`Field::map_stator`] with r the
+    /// distance to the nearest disc (see `crate::sonar::evidence` for why one, not a sum).
+    pub map: &'a [Vec2],
+    /// Radius of a map cell's disc, m.
+    pub map_radius: f32,
+    /// Stator of the map (A_s⁺, as sensed obstacles get).
+    pub map_stator: Stator,
+    /// Leave still sonar-extracted obstacles out: the map holds their echoes
+    /// ([`crate::world::World::left_to_map`]).
+    pub leave_to_map: bool,
 }
 
 /// The terms of E at one point, kept apart: (obstacles and goal-point, other vehicles, leader).
@@ -108,7 +119,13 @@ impl Field<'_> {
     fn terms(&self, x: Vec2) -> Terms {
         let mut fixed = (x - self.origin).dot(self.rotor_gradient) + self.goal.potential(x);
         for (o, &shift) in self.obstacles.iter().zip(self.shifts) {
+            if self.leave_to_map && o.origin == Origin::Sonar && o.velocity == Vec2::ZERO {
+                continue;
+            }
             fixed += o.stator().potential(o.shape.signed_distance(x - shift));
+        }
+        if let Some((_, d)) = nearest_cell(self.map, x) {
+            fixed += self.map_stator.potential(d - self.map_radius);
         }
         let mut vehicles = 0.0;
         for a in self.agents {
@@ -154,7 +171,25 @@ impl Field<'_> {
 mod tests {
     use super::*;
     use crate::field::Shape;
-    use crate::world::Origin;
+
+    /// A field with nothing, for `..no_map()` in the tests.
+    fn no_map() -> Field<'static> {
+        Field {
+            obstacles: &[],
+            shifts: &[],
+            agents: &[],
+            agent_radius: 0.5,
+            agent_stator: Stator::new(2.5),
+            goal: GoalPdf::new(Vec2::ZERO, 1.0, 1.0),
+            leader: None,
+            rotor_gradient: Vec2::ZERO,
+            origin: Vec2::ZERO,
+            map: &[],
+            map_radius: 0.0,
+            map_stator: Stator::new(2.5),
+            leave_to_map: false,
+        }
+    }
 
     #[test]
     fn force_points_at_the_goal_with_the_potential_drop_as_modulus() {
@@ -168,6 +203,7 @@ mod tests {
             leader: None,
             rotor_gradient: Vec2::ZERO,
             origin: Vec2::ZERO,
+            ..no_map()
         };
         let c = SampleCircle::new(0.25, 16);
         let force = f.sampled_forces(&c).full;
@@ -191,6 +227,7 @@ mod tests {
                 leader: None,
                 rotor_gradient: Vec2::ZERO,
                 origin,
+                ..no_map()
             };
             let force = f.sampled_forces(&SampleCircle::new(0.25, 16)).full;
             assert!(force.x > 0.0 && force.y.abs() < 1e-3 * force.x, "{force:?}");
@@ -209,6 +246,7 @@ mod tests {
             leader: None,
             rotor_gradient: Vec2::ZERO,
             origin: Vec2::new(0.01, 0.0),
+            ..no_map()
         };
         assert_eq!(
             f.sampled_forces(&SampleCircle::new(0.25, 16)).full,
@@ -230,6 +268,7 @@ mod tests {
             leader: Some(GoalPdf::new(Vec2::new(-3.0, 0.0), 50.0, 1.0)),
             rotor_gradient: Vec2::ZERO,
             origin: Vec2::ZERO,
+            ..no_map()
         };
         let forces = f.sampled_forces(&SampleCircle::new(0.25, 16));
         assert!(forces.full.x < 0.0, "the leader pulls back: {forces:?}");

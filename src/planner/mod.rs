@@ -106,6 +106,9 @@ pub enum Mode {
     Escape,
     /// Within the arrival radius of the goal (the field keeps station).
     Arrived,
+    /// The planner's command was turned, slowed or stopped by the guard, because it would have
+    /// driven into something believed (`crate::guidance::guard`).
+    Guarded,
 }
 
 /// One period's output: set-points for the autopilots, and what produced them.
@@ -283,6 +286,8 @@ pub struct Planner {
     params: Params,
     circle: SampleCircle,
     agent_stator: Stator,
+    /// Stator of the evidence map (A_s⁺ = `params.a_plus`, as sensed obstacles).
+    map_stator: Stator,
     mission: Option<Mission>,
     motion: Motion,
     /// Refused-input counters.
@@ -316,6 +321,7 @@ impl Planner {
             params,
             circle: SampleCircle::new(params.epsilon_m, params.n_gamma),
             agent_stator: Stator::new(params.agent_a_plus),
+            map_stator: Stator::new(params.a_plus),
             mission: None,
             motion: Motion::new(params.seed),
             counters: PlannerCounters::default(),
@@ -336,6 +342,7 @@ impl Planner {
         }
         self.circle = SampleCircle::new(params.epsilon_m, params.n_gamma);
         self.agent_stator = Stator::new(params.agent_a_plus);
+        self.map_stator = Stator::new(params.a_plus);
         self.params = params;
         Ok(())
     }
@@ -383,6 +390,18 @@ impl Planner {
         self.motion.arrived = false;
     }
 
+    /// Makes the planned velocity v̄ what was actually commanded (the runtime's guard changed
+    /// it), so the next step integrates from there (000 eq. 5) and a vehicle held back shows
+    /// as stalled to the local-minimum test.
+    pub fn override_velocity(&mut self, velocity: Vec2) {
+        if velocity.is_finite() {
+            self.motion.integrator = Integrator {
+                force: Vec2::ZERO,
+                velocity,
+            };
+        }
+    }
+
     /// The ghost goal-points, bottom first.
     pub fn ghosts(&self) -> &[GhostGoal] {
         self.motion.escape.ghosts()
@@ -416,9 +435,11 @@ impl Planner {
         };
         let p = nav.position;
         let mut shifts = Shifts::new();
-        let mut clearance = f32::INFINITY;
+        let mut clearance = world.map_distance(p);
         for o in world.obstacles() {
-            clearance = clearance.min(o.shape.signed_distance(p));
+            if !world.left_to_map(o) {
+                clearance = clearance.min(o.shape.signed_distance(p));
+            }
             let shift = o.predicted_shift(now_ms, p, nav.velocity, self.params.horizon_s);
             // Same capacity as the obstacle table: never full.
             let _ = shifts.push(shift);

@@ -15,6 +15,9 @@ use crate::math::Vec2;
 use crate::planner::Command;
 use crate::world::MAX_OBSTACLES;
 
+/// One rotor normal per obstacle, and one for the evidence map.
+const MAX_NORMALS: usize = MAX_OBSTACLES + 1;
+
 /// Step of the central differences for obstacle normals, m.
 const NORMAL_STEP_M: f32 = 0.01;
 
@@ -39,15 +42,27 @@ impl Planner {
         });
 
         // The rotor terms: one normal per obstacle, one sense per encounter.
-        let mut normals: Vec<(Vec2, f32), MAX_OBSTACLES> = Vec::new();
+        let mut normals: Vec<(Vec2, f32), MAX_NORMALS> = Vec::new();
         if prm.a_rotor > 0.0 {
             for (o, &shift) in world.obstacles().iter().zip(cx.shifts) {
+                if world.left_to_map(o) {
+                    continue;
+                }
                 let x = p - shift;
                 let r = o.shape.signed_distance(x);
                 let _ = normals.push((
                     o.shape.outward_normal(x, r, NORMAL_STEP_M),
                     o.stator().reach(r),
                 ));
+            }
+        }
+        // The map is one obstacle: its normal points away from the nearest believed cell.
+        if prm.a_rotor > 0.0 {
+            if let Some((c, d)) = crate::world::nearest_cell(world.map_cells(), p) {
+                if let Some(n) = (p - c).normalized(1e-6) {
+                    let r = d - world.map_radius();
+                    let _ = normals.push((n, self.map_stator.reach(r)));
+                }
             }
         }
         let strongest = normals.iter().copied().max_by(|a, b| a.1.total_cmp(&b.1));
@@ -67,6 +82,10 @@ impl Planner {
             leader: leader.map(|(_, pdf)| pdf),
             rotor_gradient,
             origin: p,
+            map: world.map_cells(),
+            map_radius: world.map_radius(),
+            map_stator: self.map_stator,
+            leave_to_map: world.map_in_use(),
         };
         let forces = field.sampled_forces(&self.circle);
         let f = forces.full - m.integrator.velocity * prm.mu;

@@ -19,6 +19,7 @@ use crate::math::{cos, sin, wrap_angle, Vec2};
 
 use super::cluster::{Assign, Cluster, Table};
 use super::detect::detect;
+use super::evidence::{Beam, EvidenceMap};
 use super::fit::Hit;
 use super::{
     ConfigError, Counters, ExtractorConfig, Feature, Pose, ScanError, Scanline, MAX_RUNS_PER_BEAM,
@@ -87,6 +88,18 @@ impl Extractor {
         pose: Pose,
         out: &mut impl FnMut(Feature) -> bool,
     ) -> Result<usize, ScanError> {
+        self.push_scanline_mapped(scan, pose, None, out)
+    }
+
+    /// [`Extractor::push_scanline`], also putting the ping into `map` (the same detection
+    /// feeds both, so a scanline is thresholded once). The map follows the vehicle.
+    pub fn push_scanline_mapped(
+        &mut self,
+        scan: &Scanline<'_>,
+        pose: Pose,
+        map: Option<&EvidenceMap>,
+        out: &mut impl FnMut(Feature) -> bool,
+    ) -> Result<usize, ScanError> {
         if let Err(e) = scan.validate().and_then(|()| pose.validate()) {
             self.counters.rejected = self.counters.rejected.saturating_add(1);
             return Err(e);
@@ -142,6 +155,19 @@ impl Extractor {
         // 3. Runs → world-frame hits → clusters.
         let echoes = detect(scan, &self.cfg);
         let look = Vec2::from_angle(pose.heading + bearing);
+        if let Some(map) = map {
+            let mut ranges: heapless::Vec<f32, MAX_RUNS_PER_BEAM> = heapless::Vec::new();
+            for e in echoes.iter() {
+                let _ = ranges.push(e.range_m);
+            }
+            map.follow(pose.position);
+            map.observe(&Beam {
+                origin: sensor,
+                look,
+                range_m: scan.range_m,
+                echoes: &ranges,
+            });
+        }
         // Pushed, not collected: heapless' `collect` panics on overflow.
         let mut hits: heapless::Vec<Hit, MAX_RUNS_PER_BEAM> = heapless::Vec::new();
         for e in echoes.iter() {

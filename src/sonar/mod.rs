@@ -59,6 +59,7 @@
 
 mod cluster;
 pub mod detect;
+pub mod evidence;
 mod extractor;
 mod fit;
 
@@ -66,6 +67,7 @@ use crate::field::{Shape, ShapeError};
 use crate::math::{Vec2, PI};
 
 pub use detect::Echo;
+pub use evidence::{Beam, EvidenceConfig, EvidenceError, EvidenceMap, Near, Window, MAP_SIDE};
 pub use extractor::Extractor;
 
 /// Most bins a scanline may have (the Micron's maximum resolution).

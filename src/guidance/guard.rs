@@ -1,0 +1,397 @@
+//! The guard: the last line between the planner and the thrusters. Before a command goes out it
+//! is checked against what the vehicle believes — the obstacle table, the other vehicles and
+//! the evidence map's cells — independently of the potential field. A command whose motion
+//! would take the hull into something believed is turned away, slowed or stopped, and says so
+//! ([`Mode::Guarded`], counted in telemetry). The field stays the planner; this is the
+//! all-stop of MOOS-IvP and the stop/back-up of ArduPilot's avoidance, not a second planner.
+//! None of the seeds has it; seed 000 relies on the field alone, which is only as good as the
+//! perception and the tuning.
+//!
+//! **The check.** A motion along heading θ at speed v sweeps the segment from the vehicle's
+//! position p to p + L·(cos θ, sin θ), L = v·T + v²/2F_max + `margin_m`: what the vehicle
+//! covers during the reaction time T (one period: the command takes effect next period), then
+//! braking at F_max (the most the planner itself commands), plus a margin. The motion is
+//! *blocked* when, somewhere along the segment, the clearance (signed distance to the nearest
+//! believed surface) falls below the hull radius (`Params::agent_radius_m`) **and** below the
+//! clearance the vehicle has now — so a vehicle already closer than its hull to a wall may still
+//! move away from it or along it, never closer.
+//!
+//! **The verdict**, in order:
+//! 1. the vehicle's present motion (its measured velocity, within its braking distance) is
+//!    blocked → **stop**: v_set = 0, the planner's heading kept (the vehicle turns while it
+//!    brakes);
+//! 2. the commanded motion is clear → the command goes out unchanged;
+//! 3. a heading within ±`max_turn_rad` of the commanded one, tried nearest first in steps of
+//!    `turn_step_rad`, is clear at the commanded speed → **turn** to it;
+//! 4. a lower speed (halving down to `min_speed`) is clear on the commanded heading → **slow**;
+//! 5. otherwise → **stop**.
+//!
+//! Cost: one point-to-segment distance per map cell and agent per heading tried, and samples
+//! every [`SAMPLE_M`] along the segment for the table's obstacles near enough to matter.
+
+use crate::math::{cos, max, min, sin, wrap_angle, Vec2};
+use crate::params::Params;
+use crate::planner::{Command, Mode, NavState};
+use crate::world::World;
+
+/// Spacing of the clearance samples along the segment for table obstacles, m.
+pub const SAMPLE_M: f32 = 0.25;
+
+/// The guard's settings.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct GuardConfig {
+    /// Off: commands go out as planned (for reproducing the papers' runs as published).
+    pub enabled: bool,
+    /// Extra distance beyond the braking distance, m, 0 ..= 10.
+    pub margin_m: f32,
+    /// Step between the headings tried, rad.
+    pub turn_step_rad: f32,
+    /// Largest turn away from the commanded heading, rad.
+    pub max_turn_rad: f32,
+    /// Slowest speed tried before stopping, m/s.
+    pub min_speed: f32,
+}
+
+impl Default for GuardConfig {
+    fn default() -> Self {
+        GuardConfig {
+            enabled: true,
+            margin_m: 0.3,
+            turn_step_rad: crate::math::PI / 12.0,
+            max_turn_rad: crate::math::PI / 2.0,
+            min_speed: 0.1,
+        }
+    }
+}
+
+/// What the guard did.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Verdict {
+    /// The command was clear.
+    Clear,
+    /// Turned to a clear heading.
+    Turned,
+    /// Slowed to a clear speed.
+    Slowed,
+    /// Stopped.
+    Stopped,
+}
+
+/// Everything believed, seen from one position.
+struct Believed<'a> {
+    world: &'a World,
+    hull: f32,
+    /// Clearance at the vehicle's position, m.
+    here: f32,
+}
+
+/// Distance from `c` to the segment from `a` along unit `u` for `len` m.
+fn to_segment(c: Vec2, a: Vec2, u: Vec2, len: f32) -> f32 {
+    let t = max(0.0, min((c - a).dot(u), len));
+    (c - (a + u * t)).norm()
+}
+
+impl Believed<'_> {
+    /// Whether moving from `p` along unit `u` for `len` m goes below the hull radius and below
+    /// the clearance we have now.
+    fn blocked(&self, p: Vec2, u: Vec2, len: f32) -> bool {
+        let floor = min(self.hull, self.here - 1e-3);
+        let w = self.world;
+        // Points: map cells (discs) and agents (circles).
+        let r_map = w.map_radius();
+        if w.map_cells()
+            .iter()
+            .any(|&c| to_segment(c, p, u, len) - r_map < floor && ahead(c, p, u))
+        {
+            return true;
+        }
+        // The agents' circles have the vehicle's own radius (000 §III), so hull + hull.
+        if w.agents().iter().any(|a| {
+            to_segment(a.position, p, u, len) - self.hull < floor && ahead(a.position, p, u)
+        }) {
+            return true;
+        }
+        // Shapes: sampled along the segment, only those that can reach it.
+        let samples = (len / SAMPLE_M) as u32 + 1;
+        for o in w.obstacles().iter().filter(|o| !w.left_to_map(o)) {
+            let reach = (o.shape.center() - p).norm() - o.shape.bounding_radius();
+            if reach > len + self.hull {
+                continue;
+            }
+            if (1..=samples).any(|k| {
+                let x = p + u * min(k as f32 * SAMPLE_M, len);
+                o.shape.signed_distance(x) < floor
+            }) {
+                return true;
+            }
+        }
+        false
+    }
+}
+
+/// Whether `c` is not behind the vehicle (a disc behind cannot be entered by moving forward,
+/// though the segment's start is its nearest point).
+fn ahead(c: Vec2, p: Vec2, u: Vec2) -> bool {
+    (c - p).dot(u) > 0.0
+}
+
+/// Braking distance from `v` at `f_max`, plus what one period covers and the margin, m.
+fn reach(v: f32, prm: &Params, cfg: &GuardConfig) -> f32 {
+    v * prm.period_s + v * v / (2.0 * prm.f_max) + cfg.margin_m
+}
+
+fn with_motion(mut cmd: Command, heading: f32, speed: f32, verdict: Verdict) -> Command {
+    let psi = wrap_angle(heading);
+    cmd.psi_set = psi;
+    cmd.v_set = speed;
+    cmd.velocity = Vec2::new(cos(psi), sin(psi)) * speed;
+    cmd.setpoints.phi_c = psi;
+    cmd.setpoints.v_c = speed;
+    cmd.setpoints.a_c = 0.0;
+    cmd.setpoints.alpha_c = 0.0;
+    cmd.setpoints.omega_c = 0.0;
+    if verdict != Verdict::Clear {
+        cmd.mode = Mode::Guarded;
+    }
+    cmd
+}
+
+/// Checks `cmd` for the vehicle at `nav` against `world` (see the module notes) and returns
+/// the command to send with the verdict. Holds pass through unchanged.
+pub fn check(
+    cfg: &GuardConfig,
+    prm: &Params,
+    nav: &NavState,
+    world: &World,
+    cmd: Command,
+) -> (Command, Verdict) {
+    if !cfg.enabled || matches!(cmd.mode, Mode::Hold(_)) {
+        return (cmd, Verdict::Clear);
+    }
+    let p = nav.position;
+    let b = Believed {
+        world,
+        hull: prm.agent_radius_m,
+        here: world.clearance(p, prm.agent_radius_m),
+    };
+    // 1. Where the vehicle is going now, within its braking distance.
+    let speed = nav.velocity.norm();
+    if let Some(u) = nav.velocity.normalized(1e-3) {
+        let braking = speed * speed / (2.0 * prm.f_max) + cfg.margin_m;
+        if b.blocked(p, u, braking) {
+            return (
+                with_motion(cmd, cmd.psi_set, 0.0, Verdict::Stopped),
+                Verdict::Stopped,
+            );
+        }
+    }
+    let v = cmd.v_set;
+    if v.is_nan() || v <= 0.0 {
+        return (cmd, Verdict::Clear);
+    }
+    let dir = |a: f32| Vec2::new(cos(a), sin(a));
+    // 2. The command as planned.
+    if !b.blocked(p, dir(cmd.psi_set), reach(v, prm, cfg)) {
+        return (cmd, Verdict::Clear);
+    }
+    // 3. The nearest clear heading at the same speed.
+    let step = max(cfg.turn_step_rad, 1e-3);
+    let turns = min(cfg.max_turn_rad / step, 64.0) as u32;
+    for k in 1..=turns {
+        for side in [1.0, -1.0] {
+            let a = cmd.psi_set + side * k as f32 * step;
+            if !b.blocked(p, dir(a), reach(v, prm, cfg)) {
+                return (with_motion(cmd, a, v, Verdict::Turned), Verdict::Turned);
+            }
+        }
+    }
+    // 4. Slower on the planned heading.
+    let mut s = 0.5 * v;
+    while s >= cfg.min_speed {
+        if !b.blocked(p, dir(cmd.psi_set), reach(s, prm, cfg)) {
+            return (
+                with_motion(cmd, cmd.psi_set, s, Verdict::Slowed),
+                Verdict::Slowed,
+            );
+        }
+        s *= 0.5;
+    }
+    // 5. Nothing is clear.
+    (
+        with_motion(cmd, cmd.psi_set, 0.0, Verdict::Stopped),
+        Verdict::Stopped,
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::field::Shape;
+    use crate::planner::{HoldReason, PidSetpoints};
+    use crate::world::{Obstacle, Origin};
+
+    fn cmd(psi: f32, v: f32) -> Command {
+        Command {
+            psi_set: psi,
+            v_set: v,
+            setpoints: PidSetpoints::default(),
+            mode: Mode::Transit,
+            force: Vec2::ZERO,
+            velocity: Vec2::new(cos(psi), sin(psi)) * v,
+            target: Vec2::ZERO,
+            ghost_depth: 0,
+            clearance_m: f32::INFINITY,
+        }
+    }
+
+    fn nav(v: Vec2) -> NavState {
+        NavState {
+            position: Vec2::ZERO,
+            heading: 0.0,
+            velocity: v,
+        }
+    }
+
+    /// A wall across +x at `x` m, as map cells every 0.5 m.
+    fn wall(x: f32) -> World {
+        let mut w = World::new();
+        w.set_map((-20..=20).map(|k| Vec2::new(x, k as f32 * 0.5)), 0.25);
+        w
+    }
+
+    #[test]
+    fn a_clear_command_passes_unchanged() {
+        let w = wall(10.0);
+        let (out, v) = check(
+            &GuardConfig::default(),
+            &Params::default(),
+            &nav(Vec2::ZERO),
+            &w,
+            cmd(0.0, 1.0),
+        );
+        assert_eq!(v, Verdict::Clear);
+        assert_eq!(out, cmd(0.0, 1.0));
+    }
+
+    #[test]
+    fn heading_into_a_near_wall_turns_away_and_says_so() {
+        let w = wall(1.5);
+        let (out, v) = check(
+            &GuardConfig::default(),
+            &Params::default(),
+            &nav(Vec2::ZERO),
+            &w,
+            cmd(0.0, 1.0),
+        );
+        assert_eq!(v, Verdict::Turned);
+        assert_eq!(out.mode, Mode::Guarded);
+        assert!(out.psi_set.abs() >= 0.5, "{}", out.psi_set);
+        assert!((out.velocity.norm() - 1.0).abs() < 1e-5);
+    }
+
+    #[test]
+    fn moving_at_a_wall_stops() {
+        let w = wall(1.2);
+        let (out, v) = check(
+            &GuardConfig::default(),
+            &Params::default(),
+            &nav(Vec2::new(1.0, 0.0)),
+            &w,
+            cmd(0.0, 1.0),
+        );
+        assert_eq!(v, Verdict::Stopped);
+        assert_eq!(out.v_set, 0.0);
+    }
+
+    #[test]
+    fn boxed_in_slows_or_stops() {
+        // Cells all round at 1.6 m: nothing is clear at 1 m/s; slow enough, ahead is clear.
+        let mut w = World::new();
+        w.set_map(
+            (0..32).map(|k| Vec2::from_angle(k as f32 * 0.196) * 1.6),
+            0.25,
+        );
+        let (out, v) = check(
+            &GuardConfig::default(),
+            &Params::default(),
+            &nav(Vec2::ZERO),
+            &w,
+            cmd(0.0, 1.0),
+        );
+        assert!(matches!(v, Verdict::Slowed | Verdict::Stopped), "{v:?}");
+        assert!(out.v_set <= 0.5 && out.mode == Mode::Guarded);
+    }
+
+    #[test]
+    fn close_to_a_wall_it_may_still_move_away_and_along() {
+        // Wall 0.6 m away (closer than hull 0.5 + cell 0.25): away and along are allowed.
+        let w = wall(0.6);
+        let p = Params::default();
+        let g = GuardConfig::default();
+        let (_, away) = check(&g, &p, &nav(Vec2::ZERO), &w, cmd(crate::math::PI, 1.0));
+        assert_eq!(away, Verdict::Clear);
+        let (_, into) = check(&g, &p, &nav(Vec2::ZERO), &w, cmd(0.0, 0.5));
+        assert_ne!(into, Verdict::Clear);
+    }
+
+    #[test]
+    fn table_obstacles_and_agents_count_too() {
+        let mut w = World::new();
+        let rock = Shape::circle(Vec2::new(2.0, 0.0), 0.8).unwrap();
+        w.upsert_obstacle(Obstacle::new(1, rock, 2.5, Origin::Charted, 0).unwrap())
+            .unwrap();
+        let (_, v) = check(
+            &GuardConfig::default(),
+            &Params::default(),
+            &nav(Vec2::ZERO),
+            &w,
+            cmd(0.0, 1.0),
+        );
+        assert_eq!(v, Verdict::Turned);
+        let mut w = World::new();
+        w.upsert_agent(crate::world::Agent::new(2, Vec2::new(1.5, 0.0), Vec2::ZERO, 0).unwrap())
+            .unwrap();
+        let (_, v) = check(
+            &GuardConfig::default(),
+            &Params::default(),
+            &nav(Vec2::ZERO),
+            &w,
+            cmd(0.0, 1.0),
+        );
+        assert_eq!(v, Verdict::Turned);
+    }
+
+    #[test]
+    fn holds_and_a_disabled_guard_pass_through() {
+        let w = wall(0.8);
+        let hold = Command::hold(HoldReason::StaleNav, 0.0);
+        assert_eq!(
+            check(
+                &GuardConfig::default(),
+                &Params::default(),
+                &nav(Vec2::ZERO),
+                &w,
+                hold
+            )
+            .0,
+            hold
+        );
+        let off = GuardConfig {
+            enabled: false,
+            ..GuardConfig::default()
+        };
+        assert_eq!(
+            check(
+                &off,
+                &Params::default(),
+                &nav(Vec2::ZERO),
+                &w,
+                cmd(0.0, 1.0)
+            )
+            .1,
+            Verdict::Clear
+        );
+    }
+}

@@ -1,0 +1,645 @@
+//! The evidence map: what the sonar has seen, as a fixed-size occupancy grid in the world frame
+//! that scrolls with the vehicle.
+//!
+//! **Why a grid.** Feature extraction (the rest of this module) fits one circle or rectangle per
+//! echo cluster. Long walls, piers, corners and touching rocks come out as a few shapes with
+//! gaps between them, and a shape is forgotten when it ages out of the table: the vehicle then
+//! drives through a wall its sonar swept a minute ago. The grid keeps every echo where it was
+//! seen, so extended and concave structure is represented as faithfully as the beam allows,
+//! and a cell is cleared only when the sonar looks at it again and sees through it (coverage,
+//! not age). None of the seeds has a map: it feeds seed 000's stator PDF (eq. 9, 12) with the
+//! distance to the nearest believed cell, i.e. the union of everything seen acts as one
+//! obstacle (see `crate::planner::gradient`). This departs from the papers' per-obstacle sum
+//! on purpose: a wall made of many cells must repel like one wall, not like many rocks.
+//!
+//! **Cells.** [`MAP_SIDE`]² cells of `cell_m` metres; world cell (i, j) covers
+//! [i·cell, (i+1)·cell) × [j·cell, (j+1)·cell) and lives in slot (i mod N, j mod N), so moving
+//! the window never copies a cell: the columns or rows that leave are cleared and reused for
+//! those that enter. Each cell holds an evidence count 0 ..= `max`: an echo's leading edge adds
+//! `hit`, a beam that passes through (nearer than its first echo, less `stop_short_m`; or up to
+//! `free_range_m` when it returns nothing) takes `miss`; a cell is believed occupied at
+//! `occupied` or more. With the defaults a cell needs two echoes before it is believed (a
+//! surface is hit again by the next rays or the next sweep; a spurious echo at a random range
+//! almost never is), and three looks through it undo one echo — so speckle and false targets
+//! fade within a sweep while a real surface, hit on every sweep, stays.
+//!
+//! **Contexts.** One writer, the background (scanlines, [`EvidenceMap::observe`]), and one
+//! reader, the periodic task ([`EvidenceMap::nearest`], [`EvidenceMap::row_bits`]). Cells are
+//! `AtomicU8` (plain byte loads and stores on a Cortex-M4), the window origin is published under
+//! a sequence counter, so neither side ever waits: a reader that catches the origin mid-move
+//! simply uses no map for that period.
+//!
+//! **Capacity.** Fixed: [`MAP_SIDE`]² bytes. Echoes outside the window are not stored (the
+//! window follows the vehicle, re-centring when it is a quarter of the side off centre).
+
+use core::sync::atomic::{AtomicI32, AtomicU32, AtomicU8, Ordering};
+
+use crate::math::{max, min, Vec2};
+
+/// Cells per side of the window.
+pub const MAP_SIDE: usize = 64;
+/// Cells in the window.
+pub const MAP_CELLS: usize = MAP_SIDE * MAP_SIDE;
+const SIDE_I: i32 = MAP_SIDE as i32;
+const MASK: i32 = SIDE_I - 1;
+/// Re-centre when the vehicle is this many cells off the window's centre.
+const RECENTRE_CELLS: i32 = SIDE_I / 4;
+
+/// Tuning of the evidence map. [`Default`] suits a Micron-class sonar at 0–30 m.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct EvidenceConfig {
+    /// Cell size, m, 0.1 ..= 5 (the window is [`MAP_SIDE`] cells wide).
+    pub cell_m: f32,
+    /// Evidence an echo adds to its cell, 1 ..= `max`.
+    pub hit: u8,
+    /// Evidence a beam passing through takes, 0 ..= `max` (0: cells are never cleared).
+    pub miss: u8,
+    /// Evidence at which a cell is believed occupied, 1 ..= `max`.
+    pub occupied: u8,
+    /// Ceiling of the evidence count, 1 ..= 255.
+    pub max: u8,
+    /// Free space along a beam stops this far short of its first echo, m, 0 ..= 5 (a beam
+    /// grazing a surface crosses the surface's own cells before it returns).
+    pub stop_short_m: f32,
+    /// A beam with no echo clears cells out to this range, m, 0 ..= 200 (a surface met at a
+    /// grazing angle may return nothing: far cells are not cleared on silence).
+    pub free_range_m: f32,
+}
+
+/// The defaults, as a constant for `static` maps.
+const DEFAULT: EvidenceConfig = EvidenceConfig {
+    cell_m: 0.5,
+    hit: 3,
+    miss: 1,
+    occupied: 5,
+    max: 12,
+    stop_short_m: 1.0,
+    free_range_m: 10.0,
+};
+
+impl Default for EvidenceConfig {
+    fn default() -> Self {
+        DEFAULT
+    }
+}
+
+/// Which [`EvidenceConfig`] field is out of range.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum EvidenceError {
+    /// `cell_m`.
+    CellSize,
+    /// `hit`, `miss`, `occupied` or `max`.
+    Counts,
+    /// `stop_short_m` or `free_range_m`.
+    Ranges,
+}
+
+impl core::fmt::Display for EvidenceError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str(match self {
+            EvidenceError::CellSize => "evidence map cell size out of 0.1 ..= 5 m",
+            EvidenceError::Counts => "evidence map hit/miss/occupied/max out of range",
+            EvidenceError::Ranges => "evidence map stop_short_m or free_range_m out of range",
+        })
+    }
+}
+
+impl core::error::Error for EvidenceError {}
+
+impl EvidenceConfig {
+    /// Checks every field's range.
+    pub fn validate(&self) -> Result<(), EvidenceError> {
+        if !(0.1..=5.0).contains(&self.cell_m) {
+            return Err(EvidenceError::CellSize);
+        }
+        let m = self.max;
+        if m == 0
+            || !(1..=m).contains(&self.hit)
+            || self.miss > m
+            || !(1..=m).contains(&self.occupied)
+        {
+            return Err(EvidenceError::Counts);
+        }
+        if !(0.0..=5.0).contains(&self.stop_short_m) || !(0.0..=200.0).contains(&self.free_range_m)
+        {
+            return Err(EvidenceError::Ranges);
+        }
+        Ok(())
+    }
+}
+
+/// One ping as the map needs it: where it started, where it looked, how far it reached and the
+/// ranges of its echoes (nearest first).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Beam<'a> {
+    /// Sensor position, world frame, m.
+    pub origin: Vec2,
+    /// Unit look direction, world frame.
+    pub look: Vec2,
+    /// The scanline's range, m.
+    pub range_m: f32,
+    /// Leading-edge ranges of the detected echoes, m, nearest first.
+    pub echoes: &'a [f32],
+}
+
+/// The window's lower-left world cell.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Window {
+    /// World cell index of the window's first column.
+    pub x0: i32,
+    /// World cell index of the window's first row.
+    pub y0: i32,
+}
+
+impl Window {
+    fn contains(self, i: i32, j: i32) -> bool {
+        (i.wrapping_sub(self.x0) as u32) < MAP_SIDE as u32
+            && (j.wrapping_sub(self.y0) as u32) < MAP_SIDE as u32
+    }
+}
+
+/// The shared evidence grid. Put one in a `static` on a board (it is `Sync`); see the module
+/// notes for who may call what.
+pub struct EvidenceMap {
+    cells: [AtomicU8; MAP_CELLS],
+    x0: AtomicI32,
+    y0: AtomicI32,
+    /// Odd while the writer moves the window.
+    seq: AtomicU32,
+    /// Whether the window has been placed (the first pose places it).
+    placed: AtomicU8,
+    cfg: EvidenceConfig,
+}
+
+/// A believed-occupied cell near the vehicle.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Near {
+    /// The cell's centre, world frame, m.
+    pub center: Vec2,
+    /// Squared distance from the query point to the centre, m².
+    pub d2: f32,
+}
+
+#[allow(clippy::declare_interior_mutable_const)]
+const EMPTY: AtomicU8 = AtomicU8::new(0);
+
+fn floor_i(x: f32) -> i32 {
+    // Positions are validated to ±100 km, cells ≥ 0.1 m: within i32. `as` saturates anyway.
+    libm::floorf(x) as i32
+}
+
+fn slot(i: i32, j: i32) -> usize {
+    ((j & MASK) * SIDE_I + (i & MASK)) as usize
+}
+
+impl EvidenceMap {
+    /// An empty map (`cfg` is checked by [`EvidenceMap::new`]; this `const` one takes the
+    /// defaults, for statics).
+    pub const fn empty() -> Self {
+        EvidenceMap {
+            cells: [EMPTY; MAP_CELLS],
+            x0: AtomicI32::new(0),
+            y0: AtomicI32::new(0),
+            seq: AtomicU32::new(0),
+            placed: AtomicU8::new(0),
+            cfg: DEFAULT,
+        }
+    }
+
+    /// An empty map with a checked configuration.
+    pub fn new(cfg: EvidenceConfig) -> Result<Self, EvidenceError> {
+        cfg.validate()?;
+        Ok(EvidenceMap {
+            cfg,
+            ..EvidenceMap::empty()
+        })
+    }
+
+    /// Its configuration.
+    pub fn config(&self) -> &EvidenceConfig {
+        &self.cfg
+    }
+
+    /// Cell size, m.
+    pub fn cell_m(&self) -> f32 {
+        self.cfg.cell_m
+    }
+
+    /// The window as last published, or `None` before the first pose or while it moves.
+    pub fn window(&self) -> Option<Window> {
+        if self.placed.load(Ordering::Acquire) == 0 {
+            return None;
+        }
+        let s1 = self.seq.load(Ordering::Acquire);
+        let w = Window {
+            x0: self.x0.load(Ordering::Relaxed),
+            y0: self.y0.load(Ordering::Relaxed),
+        };
+        let s2 = self.seq.load(Ordering::Acquire);
+        (s1 == s2 && s1.is_multiple_of(2)).then_some(w)
+    }
+
+    fn cell_of(&self, p: Vec2) -> (i32, i32) {
+        let k = 1.0 / self.cfg.cell_m;
+        (floor_i(p.x * k), floor_i(p.y * k))
+    }
+
+    fn center_of(&self, i: i32, j: i32) -> Vec2 {
+        let c = self.cfg.cell_m;
+        Vec2::new((i as f32 + 0.5) * c, (j as f32 + 0.5) * c)
+    }
+
+    fn value(&self, i: i32, j: i32) -> u8 {
+        self.cells
+            .get(slot(i, j))
+            .map_or(0, |c| c.load(Ordering::Relaxed))
+    }
+
+    /// Whether world cell (i, j) is believed occupied (false outside `w`).
+    pub fn is_occupied(&self, w: Window, i: i32, j: i32) -> bool {
+        w.contains(i, j) && self.value(i, j) >= self.cfg.occupied
+    }
+
+    /// Forgets everything (the window stays).
+    pub fn clear(&self) {
+        for c in &self.cells {
+            c.store(0, Ordering::Relaxed);
+        }
+    }
+
+    // ---- The writer's side (background) ----
+
+    /// Keeps the window centred on `p` (writer only): when `p` is a quarter of the side off
+    /// centre, the window moves and the cells that leave it are cleared for those that enter.
+    pub fn follow(&self, p: Vec2) {
+        let (ci, cj) = self.cell_of(p);
+        let want = Window {
+            x0: ci.saturating_sub(SIDE_I / 2),
+            y0: cj.saturating_sub(SIDE_I / 2),
+        };
+        if self.placed.load(Ordering::Relaxed) == 0 {
+            self.clear();
+            self.publish(want);
+            self.placed.store(1, Ordering::Release);
+            return;
+        }
+        let old = Window {
+            x0: self.x0.load(Ordering::Relaxed),
+            y0: self.y0.load(Ordering::Relaxed),
+        };
+        let (dx, dy) = (
+            want.x0.saturating_sub(old.x0),
+            want.y0.saturating_sub(old.y0),
+        );
+        if dx.abs() < RECENTRE_CELLS && dy.abs() < RECENTRE_CELLS {
+            return;
+        }
+        self.seq.fetch_add(1, Ordering::AcqRel);
+        if dx.abs() >= SIDE_I || dy.abs() >= SIDE_I {
+            self.clear();
+        } else {
+            // Columns leaving on one side re-enter on the other: clear their slots.
+            let cols = if dx >= 0 {
+                old.x0..want.x0
+            } else {
+                want.x0 + SIDE_I..old.x0 + SIDE_I
+            };
+            for i in cols {
+                for j in 0..SIDE_I {
+                    self.set(i, j, 0);
+                }
+            }
+            let rows = if dy >= 0 {
+                old.y0..want.y0
+            } else {
+                want.y0 + SIDE_I..old.y0 + SIDE_I
+            };
+            for j in rows {
+                for i in 0..SIDE_I {
+                    self.set(i, j, 0);
+                }
+            }
+        }
+        self.x0.store(want.x0, Ordering::Relaxed);
+        self.y0.store(want.y0, Ordering::Relaxed);
+        self.seq.fetch_add(1, Ordering::AcqRel);
+    }
+
+    fn publish(&self, w: Window) {
+        self.seq.fetch_add(1, Ordering::AcqRel);
+        self.x0.store(w.x0, Ordering::Relaxed);
+        self.y0.store(w.y0, Ordering::Relaxed);
+        self.seq.fetch_add(1, Ordering::AcqRel);
+    }
+
+    fn set(&self, i: i32, j: i32, v: u8) {
+        if let Some(c) = self.cells.get(slot(i, j)) {
+            c.store(v, Ordering::Relaxed);
+        }
+    }
+
+    /// Puts one ping in the map (writer only): misses along the beam up to its first echo (less
+    /// `stop_short_m`) or to `free_range_m` when it returned nothing, a hit at every echo.
+    /// Cost: O(range / cell) byte updates.
+    pub fn observe(&self, beam: &Beam<'_>) {
+        let Some(w) = self.window() else { return };
+        let cfg = self.cfg;
+        if !(beam.origin.is_finite() && beam.look.is_finite() && beam.range_m.is_finite()) {
+            return;
+        }
+        let free_to = match beam.echoes.first() {
+            Some(&r) => r - cfg.stop_short_m,
+            None => min(beam.range_m, cfg.free_range_m),
+        };
+        if cfg.miss > 0 && free_to > 0.0 {
+            // Half-cell steps visit every cell the ray crosses (corners aside); each cell once.
+            let step = 0.5 * cfg.cell_m;
+            let n = min(free_to / step, 4.0 * MAP_SIDE as f32) as u32;
+            let mut last = None;
+            for k in 0..=n {
+                let p = beam.origin + beam.look * (k as f32 * step);
+                let (i, j) = self.cell_of(p);
+                if last == Some((i, j)) || !w.contains(i, j) {
+                    continue;
+                }
+                last = Some((i, j));
+                self.set(i, j, self.value(i, j).saturating_sub(cfg.miss));
+            }
+        }
+        for &r in beam.echoes {
+            if !(r.is_finite() && r >= 0.0 && r <= beam.range_m) {
+                continue;
+            }
+            let (i, j) = self.cell_of(beam.origin + beam.look * r);
+            if w.contains(i, j) {
+                let v = self.value(i, j).saturating_add(cfg.hit);
+                self.set(i, j, v.min(cfg.max));
+            }
+        }
+    }
+
+    // ---- The reader's side (periodic task) ----
+
+    /// The believed-occupied cells within `radius_m` of `p`, nearest first, at most `out`'s
+    /// capacity of them (the nearest ones). Cost: at most (2⌈radius/cell⌉ + 1)² byte loads,
+    /// fewer once `out` is full and the next ring cannot hold a nearer cell. Returns `false`
+    /// (and leaves `out` empty) when there is no map to read this time.
+    pub fn nearest<const K: usize>(
+        &self,
+        p: Vec2,
+        radius_m: f32,
+        out: &mut heapless::Vec<Near, K>,
+    ) -> bool {
+        out.clear();
+        let Some(w) = self.window() else { return false };
+        if !p.is_finite() || !radius_m.is_finite() {
+            return false;
+        }
+        let (ci, cj) = self.cell_of(p);
+        let cell = self.cfg.cell_m;
+        let rings = min(radius_m / cell + 1.0, SIDE_I as f32) as i32;
+        let r2max = radius_m * radius_m;
+        for k in 0..=rings {
+            // Every cell of ring k is at least (k − 1)·cell from p.
+            let inner = max(0.0, (k - 1) as f32 * cell);
+            if out.is_full() && out.last().is_some_and(|n| inner * inner > n.d2) {
+                break;
+            }
+            for (i, j) in Ring::new(ci, cj, k) {
+                if !self.is_occupied(w, i, j) {
+                    continue;
+                }
+                let c = self.center_of(i, j);
+                let d2 = (c - p).norm2();
+                if d2 <= r2max {
+                    insert_sorted(out, Near { center: c, d2 });
+                }
+            }
+        }
+        true
+    }
+
+    /// Row `r` (0 ..= [`MAP_SIDE`] − 1) of window `w` as a bitmap, bit k = column `w.x0 + k`.
+    pub fn row_bits(&self, w: Window, r: i32) -> u64 {
+        let j = w.y0.wrapping_add(r);
+        (0..SIDE_I).fold(0u64, |bits, k| {
+            if self.is_occupied(w, w.x0.wrapping_add(k), j) {
+                bits | (1u64 << k)
+            } else {
+                bits
+            }
+        })
+    }
+}
+
+/// Keeps `out` sorted by distance; when full, a nearer cell replaces the farthest.
+fn insert_sorted<const K: usize>(out: &mut heapless::Vec<Near, K>, n: Near) {
+    if out.is_full() {
+        match out.last() {
+            Some(l) if l.d2 > n.d2 => {
+                out.pop();
+            }
+            _ => return,
+        }
+    }
+    let at = out.iter().position(|x| x.d2 > n.d2).unwrap_or(out.len());
+    let _ = out.insert(at, n);
+}
+
+/// The cells of the square ring at Chebyshev distance `k` around (ci, cj).
+struct Ring {
+    ci: i32,
+    cj: i32,
+    k: i32,
+    idx: i32,
+}
+
+impl Ring {
+    fn new(ci: i32, cj: i32, k: i32) -> Self {
+        Ring { ci, cj, k, idx: 0 }
+    }
+}
+
+impl Iterator for Ring {
+    type Item = (i32, i32);
+
+    fn next(&mut self) -> Option<(i32, i32)> {
+        let k = self.k;
+        if k == 0 {
+            return (self.idx == 0).then(|| {
+                self.idx = 1;
+                (self.ci, self.cj)
+            });
+        }
+        // 8k cells: the bottom and top rows (2k + 1 each), then the sides without corners.
+        let side = 2 * k + 1;
+        let n = self.idx;
+        if n >= 8 * k {
+            return None;
+        }
+        self.idx += 1;
+        let (di, dj) = if n < side {
+            (n - k, -k)
+        } else if n < 2 * side {
+            (n - side - k, k)
+        } else {
+            let m = n - 2 * side;
+            let (col, row) = (m % 2, m / 2);
+            (if col == 0 { -k } else { k }, row - k + 1)
+        };
+        Some((self.ci + di, self.cj + dj))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+    use super::*;
+
+    fn map() -> EvidenceMap {
+        let m = EvidenceMap::new(EvidenceConfig::default()).unwrap();
+        m.follow(Vec2::ZERO);
+        m
+    }
+
+    /// One ray.
+    fn look(m: &EvidenceMap, from: Vec2, angle: f32, echo: Option<f32>) {
+        let echoes: heapless::Vec<f32, 1> = echo.into_iter().collect();
+        m.observe(&Beam {
+            origin: from,
+            look: Vec2::from_angle(angle),
+            range_m: 30.0,
+            echoes: &echoes,
+        });
+    }
+
+    /// Two rays the same way (a surface is seen by neighbouring rays).
+    fn ping(m: &EvidenceMap, from: Vec2, angle: f32, echo: Option<f32>) {
+        look(m, from, angle, echo);
+        look(m, from, angle, echo);
+    }
+
+    #[test]
+    fn rings_cover_each_cell_once() {
+        let mut seen = std::collections::HashSet::new();
+        for k in 0..6 {
+            for c in Ring::new(3, -2, k) {
+                assert!(seen.insert(c), "{c:?} twice");
+                assert_eq!(((c.0 - 3).abs()).max((c.1 + 2).abs()), k);
+            }
+        }
+        assert_eq!(seen.len(), 11 * 11);
+    }
+
+    #[test]
+    fn two_echoes_make_a_cell_occupied_and_looks_through_it_clear_it() {
+        let m = map();
+        look(&m, Vec2::ZERO, 0.0, Some(6.1));
+        let w = m.window().unwrap();
+        assert!(!m.is_occupied(w, 12, 0), "one echo may be a false target");
+        look(&m, Vec2::ZERO, 0.0, Some(6.2));
+        assert!(m.is_occupied(w, 12, 0));
+        let mut near: heapless::Vec<Near, 8> = heapless::Vec::new();
+        assert!(m.nearest(Vec2::ZERO, 10.0, &mut near));
+        assert_eq!(near.len(), 1);
+        assert!((near[0].center - Vec2::new(6.25, 0.25)).norm() < 1e-6);
+        // Beams that see past it (echo at 14 m) clear it.
+        for _ in 0..2 {
+            ping(&m, Vec2::ZERO, 0.0, Some(14.0));
+        }
+        assert!(!m.is_occupied(w, 12, 0));
+        assert!(m.is_occupied(w, 28, 0));
+    }
+
+    #[test]
+    fn silence_clears_only_near_cells_and_stops_short_of_echoes() {
+        let m = map();
+        ping(&m, Vec2::ZERO, 0.0, Some(15.2)); // a far surface (inside the ±16 m window)
+        ping(&m, Vec2::ZERO, 0.0, Some(3.0)); // a near one
+        let w = m.window().unwrap();
+        for _ in 0..10 {
+            ping(&m, Vec2::ZERO, 0.0, None);
+        }
+        assert!(!m.is_occupied(w, 6, 0), "within free_range_m: cleared");
+        assert!(
+            m.is_occupied(w, 30, 0),
+            "beyond free_range_m: kept on silence"
+        );
+        // An echo at 3.2 m does not clear the cell at 3 m (stop short by 1 m).
+        ping(&m, Vec2::ZERO, 0.0, Some(3.0));
+        for _ in 0..10 {
+            ping(&m, Vec2::ZERO, 0.0, Some(3.2));
+        }
+        assert!(m.is_occupied(w, 6, 0));
+    }
+
+    #[test]
+    fn nearest_keeps_the_k_nearest_in_order() {
+        let m = map();
+        for (k, r) in [9.0f32, 2.0, 5.0, 7.0, 3.0].iter().enumerate() {
+            ping(&m, Vec2::ZERO, k as f32 * 1.2, Some(*r));
+        }
+        let mut near: heapless::Vec<Near, 3> = heapless::Vec::new();
+        m.nearest(Vec2::ZERO, 12.0, &mut near);
+        let d: std::vec::Vec<f32> = near.iter().map(|n| n.d2.sqrt()).collect();
+        assert_eq!(d.len(), 3);
+        assert!(d[0] < d[1] && d[1] < d[2] && d[2] < 5.6, "{d:?}");
+        // Radius bounds the search.
+        m.nearest(Vec2::ZERO, 2.5, &mut near);
+        assert_eq!(near.len(), 1);
+    }
+
+    #[test]
+    fn the_window_follows_and_forgets_what_it_leaves() {
+        let m = map();
+        ping(&m, Vec2::ZERO, core::f32::consts::PI, Some(10.0)); // at x ≈ −10
+        let before = m.window().unwrap();
+        // 20 m east: beyond the re-centring threshold (8 cells = 4 m): the window moves.
+        m.follow(Vec2::new(20.0, 0.0));
+        let after = m.window().unwrap();
+        assert_eq!(after.x0, before.x0 + 40);
+        assert!(!m.is_occupied(after, -20, 0), "left the window");
+        // Its slot now belongs to x ≈ +22 and must be empty.
+        assert!(!m.is_occupied(after, -20 + 64, 0));
+        // Things still inside are kept.
+        let m = map();
+        ping(&m, Vec2::ZERO, 0.0, Some(10.0));
+        m.follow(Vec2::new(5.0, 0.0));
+        let w = m.window().unwrap();
+        assert!(m.is_occupied(w, 20, 0));
+    }
+
+    #[test]
+    fn bad_input_changes_nothing() {
+        let m = map();
+        ping(&m, Vec2::new(f32::NAN, 0.0), 0.0, Some(3.0));
+        m.observe(&Beam {
+            origin: Vec2::ZERO,
+            look: Vec2::new(1.0, 0.0),
+            range_m: 30.0,
+            echoes: &[f32::INFINITY, -1.0, 40.0],
+        });
+        let mut near: heapless::Vec<Near, 4> = heapless::Vec::new();
+        m.nearest(Vec2::ZERO, 30.0, &mut near);
+        assert!(near.is_empty());
+        assert!(!m.nearest(Vec2::new(f32::NAN, 0.0), 5.0, &mut near));
+        assert!(EvidenceMap::new(EvidenceConfig {
+            cell_m: 0.0,
+            ..EvidenceConfig::default()
+        })
+        .is_err());
+    }
+
+    #[test]
+    fn row_bits_match_cells() {
+        let m = map();
+        ping(&m, Vec2::ZERO, 0.0, Some(6.1));
+        let w = m.window().unwrap();
+        let r = 0 - w.y0;
+        assert_eq!(m.row_bits(w, r), 1u64 << (12 - w.x0));
+        assert_eq!(m.row_bits(w, r + 1), 0);
+    }
+}
