@@ -112,6 +112,11 @@ pub struct Stats {
     pub sum_cost: u64,
     /// Missed deadlines.
     pub overruns: u32,
+    /// Largest cost of a whole period (requests, sightings, evidence-map snapshot, fail-safes,
+    /// planner step, guard, frames), in the board's unit.
+    pub max_period: u32,
+    /// Evidence-map cells the planner took in the last period.
+    pub map_cells: u32,
 }
 
 static STATS: Mutex<Cell<Stats>> = Mutex::new(Cell::new(Stats {
@@ -119,6 +124,8 @@ static STATS: Mutex<Cell<Stats>> = Mutex::new(Cell::new(Stats {
     max_cost: 0,
     sum_cost: 0,
     overruns: 0,
+    max_period: 0,
+    map_cells: 0,
 }));
 
 static RUNTIME: Owned<Periodic> = Owned::new();
@@ -300,6 +307,7 @@ pub fn on_systick(ctx: &mut PeriodicCtx) {
         }
         frame.iter().all(|&b| tx.enqueue(b).is_ok())
     };
+    let period_start = board::cost_now();
     ctx.periodic.on_tick(
         now,
         &mut inputs,
@@ -307,6 +315,7 @@ pub fn on_systick(ctx: &mut PeriodicCtx) {
         &mut board::cost_now,
         &mut send,
     );
+    let period_cost = board::cost_now().wrapping_sub(period_start);
     board::kick_tx();
     board::feed_watchdog();
 
@@ -323,6 +332,8 @@ pub fn on_systick(ctx: &mut PeriodicCtx) {
         st.max_cost = st.max_cost.max(cost);
         st.sum_cost = st.sum_cost.saturating_add(u64::from(cost));
         st.overruns = st.overruns.saturating_add(u32::from(overrun));
+        st.max_period = st.max_period.max(period_cost);
+        st.map_cells = ctx.periodic.world().map_cells().len() as u32;
         cell.set(st);
     });
     // A new period from the parameters: reprogram the timer (absolute from here on).

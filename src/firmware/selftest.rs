@@ -7,7 +7,8 @@
 //!    so the periodic task always preempts a busy extractor.
 //! 3. Runs [`PERIODS`] periods with each strategy in turn (VPF, multipoint, navigation
 //!    function), switched by a `Params` message as a host would, and reports per strategy the
-//!    planner step cost (max and mean), deadline overruns and scanlines processed; then the
+//!    planner step cost (max and mean), the whole period's worst cost (map snapshot and guard
+//!    included), deadline overruns and scanlines processed; then the
 //!    stack high-water mark. It exits successfully only if no strategy overran and every worst
 //!    step was within [`STEP_BUDGET`]. Half the obstacles move, so the prediction of moving
 //!    obstacles is in the measured path.
@@ -72,7 +73,9 @@ fn flood(idle: &mut Idle) -> u32 {
         // One synthetic ping: a wall of echoes at a bearing-dependent range, with speckle.
         for (i, b) in bins.iter_mut().enumerate() {
             let r = (i as u32).wrapping_mul(2_654_435_761).wrapping_add(ping) >> 28;
-            *b = if i == 120 + (ping % 40) as usize {
+            // One strong echo per ping at 4–8 m: over the sweeps, the evidence map fills the
+            // planner's 32 nearest cells (full capacity) round the vehicle.
+            *b = if (40..43).contains(&(i as u32).wrapping_sub(ping % 40)) {
                 220
             } else {
                 (r * 4) as u8
@@ -101,7 +104,9 @@ fn send_nav(idle: &mut Idle) {
     let nav = NavRepr {
         time_ms: super::now_ms(),
         nav: NavState {
-            position: Vec2::new(0.0, 0.0),
+            // A fix that changes (by millimetres), as a real one does: the same fix over and
+            // over while commanded to move is a frozen navigation source, and holds.
+            position: Vec2::new((super::now_ms() % 1000) as f32 * 1e-5, 0.0),
             heading: 0.0,
             velocity: Vec2::new(0.8, 0.1),
         },
@@ -177,7 +182,11 @@ fn report(strategy: Strategy, scanlines: u32) -> bool {
     line.num(u64::from(s.max_cost));
     line.push(b" mean ");
     line.num(mean);
-    line.push(b" instructions, overruns ");
+    line.push(b" instructions, whole period max ");
+    line.num(u64::from(s.max_period));
+    line.push(b", map cells ");
+    line.num(u64::from(s.map_cells));
+    line.push(b", overruns ");
     line.num(u64::from(s.overruns));
     line.push(b", scanlines extracted ");
     line.num(u64::from(scanlines));

@@ -6,9 +6,11 @@
 //! - inside an obstacle's surface → all-stop;
 //! - a collision that cannot be avoided at the current speed → all-stop. "Cannot be avoided":
 //!   braking at F_max (the most the planner ever commands) from speed v needs v²/2F_max metres,
-//!   and the nearest surface is closer than that.
+//!   and the nearest surface is closer than that;
+//! - frozen navigation ([`FreezeDetector`]) → hold, until a fix that differs.
 
-use crate::planner::HoldReason;
+use crate::math::Vec2;
+use crate::planner::{HoldReason, NavState};
 
 /// The fail-safes' settings.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -42,6 +44,47 @@ pub struct Situation {
     pub f_max: f32,
 }
 
+/// Frozen navigation: a source that keeps sending the very same fix (position and heading
+/// identical to the last bit) while the vehicle is commanded to move has stopped measuring —
+/// a frozen DVL solution, a stuck serial buffer. Real fixes of a moving vehicle always change.
+/// After [`FreezeDetector::FROZEN_FIXES`] such fixes in a row the vehicle holds, and stays
+/// held until a fix differs (holding, it is no longer commanded to move, so "still the same"
+/// must not release it).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct FreezeDetector {
+    last: Option<(Vec2, f32, u64)>,
+    same: u32,
+    frozen: bool,
+}
+
+impl FreezeDetector {
+    /// Identical fixes in a row, while commanded to move, that make a freeze (0.5 s at 10 Hz).
+    pub const FROZEN_FIXES: u32 = 5;
+    /// Commanded speed above which the vehicle must be seen to move, m/s.
+    pub const MOVING_MPS: f32 = 0.1;
+
+    /// Takes this period's newest fix (stamped `time_ms`) and the speed commanded last period;
+    /// returns whether navigation is frozen. A fix already seen (same stamp) changes nothing.
+    pub fn update(&mut self, nav: &NavState, time_ms: u64, commanded_mps: f32) -> bool {
+        let fix = (nav.position, nav.heading, time_ms);
+        match self.last {
+            Some((_, _, t)) if t == time_ms => {}
+            Some((p, h, _)) if p == nav.position && h == nav.heading => {
+                if commanded_mps > Self::MOVING_MPS || self.frozen {
+                    self.same = self.same.saturating_add(1);
+                }
+                self.frozen |= self.same >= Self::FROZEN_FIXES;
+            }
+            _ => {
+                self.same = 0;
+                self.frozen = false;
+            }
+        }
+        self.last = Some(fix);
+        self.frozen
+    }
+}
+
 /// The first fail-safe that applies, in order of precedence, or `None` to plan normally.
 pub fn check(cfg: &FailsafeConfig, s: &Situation) -> Option<HoldReason> {
     match s.nav_age_ms {
@@ -64,6 +107,7 @@ pub fn check(cfg: &FailsafeConfig, s: &Situation) -> Option<HoldReason> {
 
 #[cfg(test)]
 mod tests {
+    extern crate std;
     use super::*;
 
     fn ok() -> Situation {
@@ -73,6 +117,35 @@ mod tests {
             clearance_m: 5.0,
             speed: 1.0,
             f_max: 0.5,
+        }
+    }
+
+    #[test]
+    fn a_fix_that_stops_changing_while_moving_is_frozen_until_it_changes() {
+        let mut d = FreezeDetector::default();
+        let at = |x: f32| NavState {
+            position: Vec2::new(x, 0.0),
+            heading: 0.0,
+            velocity: Vec2::ZERO,
+        };
+        // Moving normally.
+        for k in 0..10u64 {
+            assert!(!d.update(&at(k as f32 * 0.1), k * 100, 1.0));
+        }
+        // A new fix, then the same one again with fresh stamps while commanded at 1 m/s:
+        // frozen at its fifth repeat.
+        let frozen: std::vec::Vec<bool> = (10..17u64)
+            .map(|k| d.update(&at(5.0), k * 100, 1.0))
+            .collect();
+        assert_eq!(frozen, [false, false, false, false, false, true, true]);
+        // Held (commanded 0): still frozen while the fix stays the same.
+        assert!(d.update(&at(5.0), 1700, 0.0));
+        // A new fix releases it.
+        assert!(!d.update(&at(5.1), 1800, 0.0));
+        // Standing still on purpose is not a freeze.
+        let mut d = FreezeDetector::default();
+        for k in 0..20u64 {
+            assert!(!d.update(&at(3.0), k * 100, 0.0));
         }
     }
 

@@ -32,7 +32,7 @@
 use crate::math::{cos, max, min, sin, wrap_angle, Vec2};
 use crate::params::Params;
 use crate::planner::{Command, Mode, NavState};
-use crate::world::World;
+use crate::world::{World, MAX_MAP_CELLS};
 
 /// Spacing of the clearance samples along the segment for table obstacles, m.
 pub const SAMPLE_M: f32 = 0.25;
@@ -82,6 +82,8 @@ pub enum Verdict {
 /// Everything believed, seen from one position.
 struct Believed<'a> {
     world: &'a World,
+    /// The map cells that a segment of the longest length tried can reach.
+    cells: heapless::Vec<Vec2, MAX_MAP_CELLS>,
     hull: f32,
     /// Clearance at the vehicle's position, m.
     here: f32,
@@ -101,7 +103,8 @@ impl Believed<'_> {
         let w = self.world;
         // Points: map cells (discs) and agents (circles).
         let r_map = w.map_radius();
-        if w.map_cells()
+        if self
+            .cells
             .iter()
             .any(|&c| to_segment(c, p, u, len) - r_map < floor && ahead(c, p, u))
         {
@@ -171,13 +174,25 @@ pub fn check(
         return (cmd, Verdict::Clear);
     }
     let p = nav.position;
+    let speed = nav.velocity.norm();
+    // No segment tried is longer than this: cells farther than it (and the hull and a cell)
+    // cannot block any, so they are left out once here rather than per heading.
+    let longest = max(reach(cmd.v_set, prm, cfg), reach(speed, prm, cfg));
+    let near = longest + prm.agent_radius_m + world.map_radius();
+    let mut cells = heapless::Vec::new();
+    for &c in world.map_cells() {
+        // Same capacity as the map's cells: never full. (heapless' `collect` panics when full.)
+        if (c - p).norm2() <= near * near {
+            let _ = cells.push(c);
+        }
+    }
     let b = Believed {
         world,
+        cells,
         hull: prm.agent_radius_m,
         here: world.clearance(p, prm.agent_radius_m),
     };
     // 1. Where the vehicle is going now, within its braking distance.
-    let speed = nav.velocity.norm();
     if let Some(u) = nav.velocity.normalized(1e-3) {
         let braking = speed * speed / (2.0 * prm.f_max) + cfg.margin_m;
         if b.blocked(p, u, braking) {

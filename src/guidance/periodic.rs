@@ -14,7 +14,7 @@ use crate::params::Params;
 use crate::planner::{Command, Planner};
 use crate::world::World;
 
-use super::failsafe::{self, FailsafeConfig, Situation};
+use super::failsafe::{self, FailsafeConfig, FreezeDetector, Situation};
 use super::guard::{self, GuardConfig, Verdict};
 use super::tracks::{TrackConfig, Tracks};
 use super::{BackgroundCounters, Control, NavSample, Sighting, SIGHTINGS_PER_PERIOD};
@@ -35,8 +35,9 @@ pub struct RuntimeConfig {
     /// The last-line check of every command against what is believed.
     pub guard: GuardConfig,
     /// Evidence-map cells within this distance of the vehicle enter the planner's world each
-    /// period (the nearest [`MAX_MAP_CELLS`]), m. Beyond about 8 m seed 000's stator
-    /// (A⁺ = 2.5) pushes less than 1 % of the goal's pull.
+    /// period (the nearest [`MAX_MAP_CELLS`]), m. At 6 m seed 000's stator (A⁺ = 2.5) has a
+    /// gradient of 2A⁺/r³ ≈ 0.02 m/s², a twentieth of the goal's pull at its default reach; the
+    /// snapshot's cost grows with the square of this.
     pub map_reach_m: f32,
 }
 
@@ -47,7 +48,7 @@ impl Default for RuntimeConfig {
             tracks: TrackConfig::default(),
             max_age_ms: 30_000,
             guard: GuardConfig::default(),
-            map_reach_m: 8.0,
+            map_reach_m: 6.0,
         }
     }
 }
@@ -82,6 +83,7 @@ pub struct Periodic {
     counters: TelemetryCounters,
     /// Periods whose command the guard changed.
     guard_count: u32,
+    freeze: FreezeDetector,
 }
 
 impl Periodic {
@@ -103,6 +105,7 @@ impl Periodic {
             last: None,
             counters: TelemetryCounters::default(),
             guard_count: 0,
+            freeze: FreezeDetector::default(),
         })
     }
 
@@ -222,7 +225,10 @@ impl Periodic {
             speed: nav.map_or(0.0, |n| n.nav.velocity.norm()),
             f_max: params.f_max,
         };
-        let hold = failsafe::check(&self.config.failsafe, &situation);
+        let commanded = self.last.map_or(0.0, |(_, c)| c.v_set);
+        let frozen = nav.is_some_and(|n| self.freeze.update(&n.nav, n.time_ms, commanded));
+        let hold = failsafe::check(&self.config.failsafe, &situation)
+            .or(frozen.then_some(crate::planner::HoldReason::FrozenNav));
         let (Some(n), None) = (nav, hold) else {
             self.planner.reset_motion();
             let heading = nav.map_or(self.last_heading, |n| n.nav.heading);

@@ -24,6 +24,7 @@ pub const fn mode_codes(mode: Mode) -> (u8, u8) {
                 HoldReason::StaleNav => 2,
                 HoldReason::InsideObstacle => 3,
                 HoldReason::CollisionImminent => 4,
+                HoldReason::FrozenNav => 5,
             },
         ),
         Mode::Transit => (1, 0),
@@ -42,6 +43,7 @@ fn mode_from_codes(mode: u8, reason: u8, mode_row: u8) -> Result<Mode, Error> {
             2 => HoldReason::StaleNav,
             3 => HoldReason::InsideObstacle,
             4 => HoldReason::CollisionImminent,
+            5 => HoldReason::FrozenNav,
             _ => return refuse(reason_row, Problem::UnknownCode),
         }),
         1 => Mode::Transit,
@@ -949,6 +951,7 @@ pub(crate) mod tests {
             Just(Mode::Hold(HoldReason::StaleNav)),
             Just(Mode::Hold(HoldReason::InsideObstacle)),
             Just(Mode::Hold(HoldReason::CollisionImminent)),
+            Just(Mode::Hold(HoldReason::FrozenNav)),
         ]
     }
 

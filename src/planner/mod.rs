@@ -49,7 +49,7 @@ pub use gradient::SampleCircle;
 pub use setpoints::PidSetpoints;
 
 use escape::Escape;
-use setpoints::{Measured, SetpointState};
+use setpoints::{Measured, SetpointState, V_EPS};
 use strategy::ArcState;
 
 /// Largest coordinate accepted for the vehicle or a goal, m (100 km: beyond any AUV mission in a
@@ -92,6 +92,9 @@ pub enum HoldReason {
     InsideObstacle,
     /// A collision cannot be avoided at the current speed.
     CollisionImminent,
+    /// Navigation fixes keep coming but do not change while the vehicle is commanded to move:
+    /// the navigation source has frozen (`crate::guidance::failsafe::FreezeDetector`).
+    FrozenNav,
 }
 
 /// What the planner is doing.
@@ -269,13 +272,15 @@ struct Context<'a> {
 }
 
 impl Context<'_> {
-    /// The obstacles' shapes at their predicted positions.
+    /// The obstacles' shapes at their predicted positions (those left to the evidence map
+    /// excepted: [`World::left_to_map`]).
     fn predicted_shapes(&self) -> impl Iterator<Item = crate::field::Shape> + '_ {
         let shift = |i: usize| self.shifts.get(i).copied().unwrap_or(Vec2::ZERO);
         self.world
             .obstacles()
             .iter()
             .enumerate()
+            .filter(|(_, o)| !self.world.left_to_map(o))
             .map(move |(i, o)| o.shape.translated(shift(i)))
     }
 }
@@ -502,9 +507,17 @@ impl Planner {
             velocity: v_bar,
         };
         let goal = cx.mission.goal;
+        // The speed set-point is v̄ along the commanded heading: below V_EPS the heading is
+        // kept (setpoints.rs), and a small v̄ pointing elsewhere — back to the goal after an
+        // overshoot — must not push the vehicle on along the old heading.
+        let v_set = if v_bar.norm2() > V_EPS * V_EPS {
+            v_bar.norm()
+        } else {
+            crate::math::max(0.0, v_bar.dot(Vec2::from_angle(sp.phi_c)))
+        };
         Command {
             psi_set: sp.phi_c,
-            v_set: v_bar.norm().min(prm.v_max),
+            v_set: v_set.min(prm.v_max),
             setpoints: sp,
             mode: self.mode(m, cx),
             force: f_bar,

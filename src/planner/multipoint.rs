@@ -309,10 +309,25 @@ pub fn periphery_is_coarse(radius: f32, k: usize, dt: f32) -> bool {
     k < 2 || PI * radius > 0.5 * dt * (k - 1) as f32
 }
 
+/// Adds one obstacle point `p` (relative to the vehicle) to each arc point's Σ(1/d_o − 1/d_t)²
+/// (eq. 5–6), for the arc points within d_t of it. Points beyond `reach` (r + d_t) are skipped.
+fn accumulate(p: Vec2, arc: &[Vec2], rep: &mut [f32], reach: f32, dt2: f32, inv_dt: f32) {
+    if !p.is_finite() || p.norm2() > reach * reach {
+        return;
+    }
+    for (a, acc) in arc.iter().zip(rep.iter_mut()) {
+        let d2 = (p - *a).norm2();
+        if d2 <= dt2 {
+            *acc += repulsion(crate::math::sqrt(d2), inv_dt);
+        }
+    }
+}
+
 /// Evaluates U_tot at every arc point (seed 003 eq. 4–7) and returns the point of least
 /// potential (eq. 8), for the vehicle at `position` with heading ψ_h = `heading` (rad, world
 /// frame) and forward speed u = `speed` (m/s). `obstacles` yields each obstacle's shape, already
-/// moved to its predicted position by the caller; it is traversed once.
+/// moved to its predicted position by the caller; it is traversed once. `obstacle_points` are
+/// further obstacle points taken as they are (one p_j each: the evidence map's cells).
 ///
 /// Returns `None` when an input is not finite (position, heading, speed, goal, an obstacle's
 /// centre or size), when `cfg` is not [valid](ArcConfig::is_valid), or when no arc point gives
@@ -325,6 +340,7 @@ pub fn choose(
     speed: f32,
     goal: Vec2,
     obstacles: impl Iterator<Item = Shape>,
+    obstacle_points: impl Iterator<Item = Vec2>,
 ) -> Option<ArcChoice> {
     let inputs_finite =
         position.is_finite() && goal.is_finite() && heading.is_finite() && speed.is_finite();
@@ -350,6 +366,7 @@ pub fn choose(
     let dt2 = dt * dt;
     let inv_dt = 1.0 / dt;
     let mut points = [Vec2::ZERO; MAX_PERIPHERY_POINTS];
+    let arc_n = arc.get(..n).unwrap_or(&arc);
     if cfg.eta > 0.0 {
         for shape in obstacles {
             let centre = shape.center();
@@ -365,16 +382,7 @@ pub fn choose(
             }
             let m = periphery(&shape, position, k as u8, &mut points);
             for p in points.iter().take(m) {
-                let p = *p - position;
-                if p.norm2() > reach * reach {
-                    continue;
-                }
-                for (a, acc) in arc.iter().zip(rep.iter_mut()).take(n) {
-                    let d2 = (p - *a).norm2();
-                    if d2 <= dt2 {
-                        *acc += repulsion(crate::math::sqrt(d2), inv_dt);
-                    }
-                }
+                accumulate(*p - position, arc_n, &mut rep, reach, dt2, inv_dt);
             }
             // Coarse periphery (see the module notes): the nearest boundary point joins the p_j.
             if periphery_is_coarse(radius, k, dt) {
@@ -385,6 +393,13 @@ pub fn choose(
                     }
                 }
             }
+        }
+    }
+
+    // Obstacle points given as such (evidence-map cells): each is one p_j of eq. 5.
+    if cfg.eta > 0.0 {
+        for p in obstacle_points {
+            accumulate(p - position, arc_n, &mut rep, reach, dt2, inv_dt);
         }
     }
 
@@ -486,7 +501,7 @@ mod tests {
             (1.9, Vec2::new(-20.0, 40.0)),
             (-2.5, Vec2::new(-60.0, -70.0)),
         ] {
-            let c = choose(&cfg, p, heading, 1.0, goal, none()).unwrap();
+            let c = choose(&cfg, p, heading, 1.0, goal, none(), core::iter::empty()).unwrap();
             let want = (goal - p).angle();
             let off = wrap_angle(c.bearing - want).abs();
             assert!(
@@ -497,7 +512,16 @@ mod tests {
             assert!(c.potential.is_finite() && c.potential > 0.0);
         }
         // Straight at the goal, with an odd N: the middle point.
-        let c = choose(&cfg, p, 0.0, 1.0, Vec2::new(100.0, -2.0), none()).unwrap();
+        let c = choose(
+            &cfg,
+            p,
+            0.0,
+            1.0,
+            Vec2::new(100.0, -2.0),
+            none(),
+            core::iter::empty(),
+        )
+        .unwrap();
         assert_eq!(c.index as usize, cfg.arc_points() / 2);
         assert!(c.bearing.abs() < 1e-6);
     }
@@ -506,7 +530,16 @@ mod tests {
     fn potential_is_eq_4_in_open_water() {
         let cfg = ArcConfig::default();
         let goal = Vec2::new(40.0, 0.0);
-        let c = choose(&cfg, Vec2::ZERO, 0.0, 1.5, goal, none()).unwrap();
+        let c = choose(
+            &cfg,
+            Vec2::ZERO,
+            0.0,
+            1.5,
+            goal,
+            none(),
+            core::iter::empty(),
+        )
+        .unwrap();
         let d_a = (goal - c.point).norm();
         let want = 0.5 * cfg.xi * (d_a + 1.5) * (d_a + 1.5);
         assert!(
@@ -550,7 +583,16 @@ mod tests {
                     want = (i, u_tot);
                 }
             }
-            let got = choose(&cfg, p, heading, 1.0, goal, obstacles.iter().copied()).unwrap();
+            let got = choose(
+                &cfg,
+                p,
+                heading,
+                1.0,
+                goal,
+                obstacles.iter().copied(),
+                core::iter::empty(),
+            )
+            .unwrap();
             assert_eq!(got.index as usize, want.0, "{p:?}");
             assert!(
                 (got.potential - want.1).abs() < 1e-4 * want.1,
@@ -564,18 +606,54 @@ mod tests {
         let cfg = ArcConfig::default();
         let last = cfg.arc_points() - 1;
         // Behind and a little to the left: the hardest left turn.
-        let c = choose(&cfg, Vec2::ZERO, 0.0, 1.0, Vec2::new(-50.0, 1.0), none()).unwrap();
+        let c = choose(
+            &cfg,
+            Vec2::ZERO,
+            0.0,
+            1.0,
+            Vec2::new(-50.0, 1.0),
+            none(),
+            core::iter::empty(),
+        )
+        .unwrap();
         assert_eq!(c.index as usize, last);
         assert!((c.bearing - cfg.max_turn_rad).abs() < 1e-5);
         // Behind and to the right: the hardest right turn.
-        let c = choose(&cfg, Vec2::ZERO, 0.0, 1.0, Vec2::new(-50.0, -1.0), none()).unwrap();
+        let c = choose(
+            &cfg,
+            Vec2::ZERO,
+            0.0,
+            1.0,
+            Vec2::new(-50.0, -1.0),
+            none(),
+            core::iter::empty(),
+        )
+        .unwrap();
         assert_eq!(c.index, 0);
         assert!((c.bearing + cfg.max_turn_rad).abs() < 1e-5);
         // Dead astern: either extreme.
-        let c = choose(&cfg, Vec2::ZERO, 0.0, 1.0, Vec2::new(-50.0, 0.0), none()).unwrap();
+        let c = choose(
+            &cfg,
+            Vec2::ZERO,
+            0.0,
+            1.0,
+            Vec2::new(-50.0, 0.0),
+            none(),
+            core::iter::empty(),
+        )
+        .unwrap();
         assert!(c.index == 0 || c.index as usize == last, "{}", c.index);
         // Goal inside the arc, behind: still the nearest arc point, an extreme.
-        let c = choose(&cfg, Vec2::ZERO, 0.0, 1.0, Vec2::new(-0.3, 0.2), none()).unwrap();
+        let c = choose(
+            &cfg,
+            Vec2::ZERO,
+            0.0,
+            1.0,
+            Vec2::new(-0.3, 0.2),
+            none(),
+            core::iter::empty(),
+        )
+        .unwrap();
         assert_eq!(c.index as usize, last);
     }
 
@@ -594,6 +672,7 @@ mod tests {
                 1.0,
                 Vec2::new(60.0, 0.0),
                 [obstacle].into_iter(),
+                core::iter::empty(),
             )
             .unwrap();
             assert!(c.point.y.abs() > 0.05, "stays on the line: {c:?}");
@@ -608,15 +687,51 @@ mod tests {
     fn far_obstacles_change_nothing() {
         let cfg = ArcConfig::default();
         let goal = Vec2::new(80.0, 10.0);
-        let free = choose(&cfg, Vec2::ZERO, 0.2, 1.0, goal, none()).unwrap();
+        let free = choose(
+            &cfg,
+            Vec2::ZERO,
+            0.2,
+            1.0,
+            goal,
+            none(),
+            core::iter::empty(),
+        )
+        .unwrap();
         let far = [circle(0.0, 30.0, 5.0), circle(-20.0, 0.0, 8.0)];
-        let with = choose(&cfg, Vec2::ZERO, 0.2, 1.0, goal, far.into_iter()).unwrap();
+        let with = choose(
+            &cfg,
+            Vec2::ZERO,
+            0.2,
+            1.0,
+            goal,
+            far.into_iter(),
+            core::iter::empty(),
+        )
+        .unwrap();
         assert_eq!(free, with);
         // η = 0 ignores even a near one.
         let cfg0 = ArcConfig { eta: 0.0, ..cfg };
         let near = [circle(4.0, 0.5, 2.0)];
-        let a = choose(&cfg0, Vec2::ZERO, 0.2, 1.0, goal, near.into_iter()).unwrap();
-        let b = choose(&cfg0, Vec2::ZERO, 0.2, 1.0, goal, none()).unwrap();
+        let a = choose(
+            &cfg0,
+            Vec2::ZERO,
+            0.2,
+            1.0,
+            goal,
+            near.into_iter(),
+            core::iter::empty(),
+        )
+        .unwrap();
+        let b = choose(
+            &cfg0,
+            Vec2::ZERO,
+            0.2,
+            1.0,
+            goal,
+            none(),
+            core::iter::empty(),
+        )
+        .unwrap();
         assert_eq!(a, b);
     }
 
@@ -730,7 +845,16 @@ mod tests {
             periphery,
             ..ArcConfig::default()
         };
-        let full = choose(&at(32, 16), Vec2::ZERO, 0.4, 1.0, goal, obstacles()).unwrap();
+        let full = choose(
+            &at(32, 16),
+            Vec2::ZERO,
+            0.4,
+            1.0,
+            goal,
+            obstacles(),
+            core::iter::empty(),
+        )
+        .unwrap();
         assert!((full.index as usize) < MAX_ARC_POINTS);
         for (points, periphery) in [(33, 16), (32, 17), (255, 255)] {
             let over = choose(
@@ -740,13 +864,23 @@ mod tests {
                 1.0,
                 goal,
                 obstacles(),
+                core::iter::empty(),
             );
             assert_eq!(over, Some(full), "N = {points}, K = {periphery}");
         }
         assert_eq!(at(255, 255).arc_points(), MAX_ARC_POINTS);
         assert_eq!(at(255, 255).periphery_points(), MAX_PERIPHERY_POINTS);
         // 0 reads as 1: straight ahead is the only candidate.
-        let one = choose(&at(0, 0), Vec2::ZERO, 0.4, 1.0, goal, obstacles()).unwrap();
+        let one = choose(
+            &at(0, 0),
+            Vec2::ZERO,
+            0.4,
+            1.0,
+            goal,
+            obstacles(),
+            core::iter::empty(),
+        )
+        .unwrap();
         assert_eq!(one.index, 0);
         assert!((one.bearing - 0.4).abs() < 1e-6);
         // The extremes of a full arc are exactly ±ψ_m.
@@ -761,14 +895,53 @@ mod tests {
         let p = Vec2::ZERO;
         let g = Vec2::new(10.0, 0.0);
         let nan = f32::NAN;
-        assert_eq!(choose(&cfg, Vec2::new(nan, 0.0), 0.0, 1.0, g, none()), None);
-        assert_eq!(choose(&cfg, p, nan, 1.0, g, none()), None);
-        assert_eq!(choose(&cfg, p, f32::INFINITY, 1.0, g, none()), None);
-        assert_eq!(choose(&cfg, p, 0.0, nan, g, none()), None);
-        assert_eq!(choose(&cfg, p, 0.0, 1.0, Vec2::new(0.0, nan), none()), None);
+        assert_eq!(
+            choose(
+                &cfg,
+                Vec2::new(nan, 0.0),
+                0.0,
+                1.0,
+                g,
+                none(),
+                core::iter::empty()
+            ),
+            None
+        );
+        assert_eq!(
+            choose(&cfg, p, nan, 1.0, g, none(), core::iter::empty()),
+            None
+        );
+        assert_eq!(
+            choose(&cfg, p, f32::INFINITY, 1.0, g, none(), core::iter::empty()),
+            None
+        );
+        assert_eq!(
+            choose(&cfg, p, 0.0, nan, g, none(), core::iter::empty()),
+            None
+        );
+        assert_eq!(
+            choose(
+                &cfg,
+                p,
+                0.0,
+                1.0,
+                Vec2::new(0.0, nan),
+                none(),
+                core::iter::empty()
+            ),
+            None
+        );
         let bad_obstacle = circle(3.0, 0.0, 1.0).translated(Vec2::new(nan, 0.0));
         assert_eq!(
-            choose(&cfg, p, 0.0, 1.0, g, [bad_obstacle].into_iter()),
+            choose(
+                &cfg,
+                p,
+                0.0,
+                1.0,
+                g,
+                [bad_obstacle].into_iter(),
+                core::iter::empty()
+            ),
             None
         );
         for bad in [
@@ -785,7 +958,10 @@ mod tests {
             },
         ] {
             assert!(!bad.is_valid());
-            assert_eq!(choose(&bad, p, 0.0, 1.0, g, none()), None);
+            assert_eq!(
+                choose(&bad, p, 0.0, 1.0, g, none(), core::iter::empty()),
+                None
+            );
         }
         assert!(cfg.is_valid());
     }
@@ -800,7 +976,16 @@ mod tests {
             Vec2::new(2.0, 0.0),
             Vec2::new(-1.0, 0.0),
         ] {
-            let c = choose(&cfg, p, 0.0, 1.0, Vec2::new(30.0, 0.0), [o].into_iter()).unwrap();
+            let c = choose(
+                &cfg,
+                p,
+                0.0,
+                1.0,
+                Vec2::new(30.0, 0.0),
+                [o].into_iter(),
+                core::iter::empty(),
+            )
+            .unwrap();
             assert!(c.point.is_finite() && c.potential.is_finite(), "{c:?}");
         }
         // An arc point exactly on a periphery point (the facing point of this circle).
@@ -812,12 +997,22 @@ mod tests {
             1.0,
             Vec2::new(30.0, 0.0),
             [touching].into_iter(),
+            core::iter::empty(),
         )
         .unwrap();
         assert!(c.potential.is_finite() && c.index as usize != cfg.arc_points() / 2);
         // Goal on the vehicle, speed 0, astern, huge.
         for speed in [0.0, -3.0, 1e30] {
-            let c = choose(&cfg, Vec2::ZERO, 0.0, speed, Vec2::ZERO, none()).unwrap();
+            let c = choose(
+                &cfg,
+                Vec2::ZERO,
+                0.0,
+                speed,
+                Vec2::ZERO,
+                none(),
+                core::iter::empty(),
+            )
+            .unwrap();
             assert!(c.potential.is_finite());
         }
         // Extreme coordinates: far goal, overflowing offsets, far vehicle.
@@ -828,13 +1023,40 @@ mod tests {
             (Vec2::new(1e20, -1e20), Vec2::new(1e20 + 1e14, -1e20)),
         ];
         for (p, g) in cases {
-            let c = choose(&cfg, p, 0.0, 1.0, g, [o, o.translated(p)].into_iter()).unwrap();
+            let c = choose(
+                &cfg,
+                p,
+                0.0,
+                1.0,
+                g,
+                [o, o.translated(p)].into_iter(),
+                core::iter::empty(),
+            )
+            .unwrap();
             assert!(c.point.is_finite() && c.potential.is_finite(), "{c:?}");
         }
         // The far goal's bearing still wins in open water.
-        let c = choose(&cfg, Vec2::ZERO, 0.0, 1.0, Vec2::new(1e30, 1e30), none()).unwrap();
+        let c = choose(
+            &cfg,
+            Vec2::ZERO,
+            0.0,
+            1.0,
+            Vec2::new(1e30, 1e30),
+            none(),
+            core::iter::empty(),
+        )
+        .unwrap();
         assert!((c.bearing - cfg.max_turn_rad).abs() < 1e-5, "{c:?}");
-        let c = choose(&cfg, Vec2::ZERO, 0.0, 1.0, Vec2::new(1e30, 1e28), none()).unwrap();
+        let c = choose(
+            &cfg,
+            Vec2::ZERO,
+            0.0,
+            1.0,
+            Vec2::new(1e30, 1e28),
+            none(),
+            core::iter::empty(),
+        )
+        .unwrap();
         assert!(
             (c.bearing - 0.01).abs() <= 0.5 * resolution(&cfg) + 1e-5,
             "{c:?}"
@@ -854,6 +1076,7 @@ mod tests {
             1.0,
             Vec2::new(1e5, 0.0),
             many,
+            core::iter::empty(),
         )
         .unwrap();
         assert!(c.potential.is_finite());
@@ -878,7 +1101,16 @@ mod tests {
             if (goal - p).norm() < 2.0 {
                 return (true, step, clearance);
             }
-            let c = choose(cfg, p, heading, speed, goal, obstacles.iter().copied()).unwrap();
+            let c = choose(
+                cfg,
+                p,
+                heading,
+                speed,
+                goal,
+                obstacles.iter().copied(),
+                core::iter::empty(),
+            )
+            .unwrap();
             let n = replan_periods(cfg.arc_m, speed, period);
             let travel = speed * period * n as f32;
             let dir = (c.point - p).normalized(1e-9).unwrap();

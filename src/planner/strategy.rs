@@ -87,6 +87,7 @@ impl Planner {
                 speed,
                 goal,
                 cx.obstacle_shapes(prm.agent_radius_m),
+                cx.world.map_cells().iter().copied(),
             );
             *arc = ArcState {
                 target: choice.map(|c| c.point),
@@ -175,6 +176,11 @@ impl Planner {
         }
         for a in cx.world.agents() {
             world.push_merged(a.position, 2.0 * prm.agent_radius_m)?;
+        }
+        // Evidence-map cells are small spheres; a wall of them merges into one enclosing
+        // sphere, which is how far a sphere world can represent it.
+        for &c in cx.world.map_cells() {
+            world.push_merged(c, cx.world.map_radius() + prm.agent_radius_m)?;
         }
         world.set_kappa(max(1.0, navfn::kappa(prm.nf_kappa, world.len())))?;
         Ok(world)

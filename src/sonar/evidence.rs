@@ -34,7 +34,7 @@
 
 use core::sync::atomic::{AtomicI32, AtomicU32, AtomicU8, Ordering};
 
-use crate::math::{max, min, Vec2};
+use crate::math::{min, Vec2};
 
 /// Cells per side of the window.
 pub const MAP_SIDE: usize = 64;
@@ -42,6 +42,8 @@ pub const MAP_SIDE: usize = 64;
 pub const MAP_CELLS: usize = MAP_SIDE * MAP_SIDE;
 const SIDE_I: i32 = MAP_SIDE as i32;
 const MASK: i32 = SIDE_I - 1;
+/// Farthest a [`EvidenceMap::nearest`] query looks, cells (8 m at the default 0.5 m).
+pub const MAX_REACH_CELLS: i32 = 16;
 /// Re-centre when the vehicle is this many cells off the window's centre.
 const RECENTRE_CELLS: i32 = SIDE_I / 4;
 
@@ -383,10 +385,13 @@ impl EvidenceMap {
 
     // ---- The reader's side (periodic task) ----
 
-    /// The believed-occupied cells within `radius_m` of `p`, nearest first, at most `out`'s
-    /// capacity of them (the nearest ones). Cost: at most (2⌈radius/cell⌉ + 1)² byte loads,
-    /// fewer once `out` is full and the next ring cannot hold a nearer cell. Returns `false`
-    /// (and leaves `out` empty) when there is no map to read this time.
+    /// The believed-occupied cells within `radius_m` of `p` (at most [`MAX_REACH_CELLS`]
+    /// cells), nearest first, at most `out`'s capacity K of them: the nearest by whole-cell
+    /// offset from `p`'s cell (ties at the K-th distance are taken in scan order). Two passes
+    /// over the square of side 2·radius about `p`, clipped to the window — the first counts
+    /// occupied cells per squared cell distance, the second takes those under the distance
+    /// that holds K — so the cost is two byte loads per cell and no sorting of more than K.
+    /// Returns `false` (and leaves `out` empty) when there is no map to read this time.
     pub fn nearest<const K: usize>(
         &self,
         p: Vec2,
@@ -395,30 +400,61 @@ impl EvidenceMap {
     ) -> bool {
         out.clear();
         let Some(w) = self.window() else { return false };
-        if !p.is_finite() || !radius_m.is_finite() {
+        if !p.is_finite() || radius_m.is_nan() || radius_m < 0.0 {
             return false;
         }
         let (ci, cj) = self.cell_of(p);
         let cell = self.cfg.cell_m;
-        let rings = min(radius_m / cell + 1.0, SIDE_I as f32) as i32;
-        let r2max = radius_m * radius_m;
-        for k in 0..=rings {
-            // Every cell of ring k is at least (k − 1)·cell from p.
-            let inner = max(0.0, (k - 1) as f32 * cell);
-            if out.is_full() && out.last().is_some_and(|n| inner * inner > n.d2) {
-                break;
-            }
-            for (i, j) in Ring::new(ci, cj, k) {
-                if !self.is_occupied(w, i, j) {
-                    continue;
-                }
-                let c = self.center_of(i, j);
-                let d2 = (c - p).norm2();
-                if d2 <= r2max {
-                    insert_sorted(out, Near { center: c, d2 });
+        let r = min(radius_m / cell, MAX_REACH_CELLS as f32) as i32;
+        let r2 = r * r;
+        let (i0, i1) = (
+            ci.saturating_sub(r).max(w.x0),
+            ci.saturating_add(r).min(w.x0 + MASK),
+        );
+        let (j0, j1) = (
+            cj.saturating_sub(r).max(w.y0),
+            cj.saturating_add(r).min(w.y0 + MASK),
+        );
+        let occupied = |i: i32, j: i32| {
+            let (di, dj) = (i - ci, j - cj);
+            let d2 = di * di + dj * dj;
+            (d2 <= r2 && self.value(i, j) >= self.cfg.occupied).then_some(d2 as usize)
+        };
+        // Pass 1: occupied cells per squared cell distance.
+        let mut count = [0u16; (MAX_REACH_CELLS * MAX_REACH_CELLS + 1) as usize];
+        for j in j0..=j1 {
+            for i in i0..=i1 {
+                if let Some(c) = occupied(i, j).and_then(|d2| count.get_mut(d2)) {
+                    *c = c.saturating_add(1);
                 }
             }
         }
+        // The squared distance up to which the K nearest lie.
+        let mut cut = r2 as usize;
+        let mut total = 0usize;
+        for (d2, &c) in count.iter().enumerate() {
+            total += usize::from(c);
+            if total >= K {
+                cut = d2;
+                break;
+            }
+        }
+        // Pass 2: take them.
+        for j in j0..=j1 {
+            for i in i0..=i1 {
+                if occupied(i, j).is_some_and(|d2| d2 <= cut) {
+                    let center = self.center_of(i, j);
+                    let near = Near {
+                        center,
+                        d2: (center - p).norm2(),
+                    };
+                    if out.push(near).is_err() {
+                        break;
+                    }
+                }
+            }
+        }
+        sort_by_distance(out);
         true
     }
 
@@ -435,62 +471,21 @@ impl EvidenceMap {
     }
 }
 
-/// Keeps `out` sorted by distance; when full, a nearer cell replaces the farthest.
-fn insert_sorted<const K: usize>(out: &mut heapless::Vec<Near, K>, n: Near) {
-    if out.is_full() {
-        match out.last() {
-            Some(l) if l.d2 > n.d2 => {
-                out.pop();
+/// Insertion sort by d² (K ≤ a few dozen; core's sorts keep a panic path the firmware's
+/// link-time check refuses).
+fn sort_by_distance(out: &mut [Near]) {
+    for k in 1..out.len() {
+        let mut m = k;
+        while m > 0 {
+            let (Some(a), Some(b)) = (out.get(m - 1), out.get(m)) else {
+                break;
+            };
+            if a.d2 <= b.d2 {
+                break;
             }
-            _ => return,
+            out.swap(m - 1, m);
+            m -= 1;
         }
-    }
-    let at = out.iter().position(|x| x.d2 > n.d2).unwrap_or(out.len());
-    let _ = out.insert(at, n);
-}
-
-/// The cells of the square ring at Chebyshev distance `k` around (ci, cj).
-struct Ring {
-    ci: i32,
-    cj: i32,
-    k: i32,
-    idx: i32,
-}
-
-impl Ring {
-    fn new(ci: i32, cj: i32, k: i32) -> Self {
-        Ring { ci, cj, k, idx: 0 }
-    }
-}
-
-impl Iterator for Ring {
-    type Item = (i32, i32);
-
-    fn next(&mut self) -> Option<(i32, i32)> {
-        let k = self.k;
-        if k == 0 {
-            return (self.idx == 0).then(|| {
-                self.idx = 1;
-                (self.ci, self.cj)
-            });
-        }
-        // 8k cells: the bottom and top rows (2k + 1 each), then the sides without corners.
-        let side = 2 * k + 1;
-        let n = self.idx;
-        if n >= 8 * k {
-            return None;
-        }
-        self.idx += 1;
-        let (di, dj) = if n < side {
-            (n - k, -k)
-        } else if n < 2 * side {
-            (n - side - k, k)
-        } else {
-            let m = n - 2 * side;
-            let (col, row) = (m % 2, m / 2);
-            (if col == 0 { -k } else { k }, row - k + 1)
-        };
-        Some((self.ci + di, self.cj + dj))
     }
 }
 
@@ -520,18 +515,6 @@ mod tests {
     fn ping(m: &EvidenceMap, from: Vec2, angle: f32, echo: Option<f32>) {
         look(m, from, angle, echo);
         look(m, from, angle, echo);
-    }
-
-    #[test]
-    fn rings_cover_each_cell_once() {
-        let mut seen = std::collections::HashSet::new();
-        for k in 0..6 {
-            for c in Ring::new(3, -2, k) {
-                assert!(seen.insert(c), "{c:?} twice");
-                assert_eq!(((c.0 - 3).abs()).max((c.1 + 2).abs()), k);
-            }
-        }
-        assert_eq!(seen.len(), 11 * 11);
     }
 
     #[test]

@@ -1123,6 +1123,7 @@ mod tests {
             ping_overhead_s: f64::NAN,
             noise_level: 1e9,
             speckle_prob: 2.0,
+            false_echo_prob: f64::NAN,
             echo_strength: f64::NAN,
             range_loss_per_m: -3.0,
             echo_fluctuation: 5.0,
