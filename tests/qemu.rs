@@ -119,6 +119,11 @@ fn selftest_meets_the_budgets_on_the_emulated_cortex_m4() {
         let mean = number_after(report, "mean");
         let overruns = number_after(report, "overruns");
         let scanlines = number_after(report, "scanlines extracted");
+        let cells = number_after(report, "map cells");
+        assert_eq!(
+            cells, 32,
+            "{strategy}: the evidence map was not at full capacity"
+        );
         assert!(
             max <= 100_000,
             "{strategy}: step cost {max} instructions over budget"

@@ -157,11 +157,11 @@ fn seed_001_scenarios_fly_the_square_formation() {
 
 #[test]
 fn videoray_scenarios_sense_as_their_headers_say() {
-    // The walls of the U and the gap go to the firmware as contacts until the sonar extractor
-    // handles walls (see those files' headers); the random field is sensed by the sonar.
+    // The walls of the U and the gap, and the random field, are sensed by the vehicle's own
+    // sonar (the firmware's evidence map holds walls).
     for (name, sensing) in [
-        ("u_trap.toml", Sensing::Contacts),
-        ("narrow_gap.toml", Sensing::Contacts),
+        ("u_trap.toml", Sensing::Sonar),
+        ("narrow_gap.toml", Sensing::Sonar),
         ("random_clutter.toml", Sensing::Sonar),
     ] {
         let s = shipped(name);

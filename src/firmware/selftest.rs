@@ -42,8 +42,8 @@ pub fn run(idle: &mut Idle, params: Params) -> ! {
             }
         }
         let _ = super::take_stats();
-        let scanlines = flood(idle);
-        ok &= report(strategy, scanlines);
+        let flood = flood(idle);
+        ok &= report(strategy, &flood);
     }
     let mut line = Line::new();
     line.push(b"selftest: stack high-water ");
@@ -59,10 +59,25 @@ pub fn run(idle: &mut Idle, params: Params) -> ! {
 }
 
 /// [`PERIODS`] periods of sonar flood; returns the scanlines fed.
-fn flood(idle: &mut Idle) -> u32 {
+/// What the background did during a flood.
+struct Flood {
+    scanlines: u32,
+    /// Cost of decoding and processing one scanline frame (extraction and evidence map), in
+    /// the board's unit, over the frames no period preempted: the largest and the sum.
+    max_cost: u32,
+    sum_cost: u64,
+    measured: u32,
+}
+
+fn flood(idle: &mut Idle) -> Flood {
     let mut bins = [0u8; 400];
     let mut ping = 0u32;
-    let mut scanlines = 0u32;
+    let mut f = Flood {
+        scanlines: 0,
+        max_cost: 0,
+        sum_cost: 0,
+        measured: 0,
+    };
     while stats().periods < PERIODS {
         // Keep navigation fresh (the periodic task holds on stale navigation), and serve the
         // UART as the firmware would.
@@ -90,14 +105,22 @@ fn flood(idle: &mut Idle) -> u32 {
         };
         let mut frame = [0u8; vpf::link::MAX_FRAME];
         if let Ok(n) = scan.emit_frame(ping as u16, &mut frame) {
-            if let Some(f) = frame.get(..n) {
-                idle.feed(f);
-                scanlines += 1;
+            if let Some(bytes) = frame.get(..n) {
+                let periods = stats().periods;
+                let start = board::cost_now();
+                idle.feed(bytes);
+                let cost = board::cost_now().wrapping_sub(start);
+                f.scanlines += 1;
+                if stats().periods == periods {
+                    f.max_cost = f.max_cost.max(cost);
+                    f.sum_cost += u64::from(cost);
+                    f.measured += 1;
+                }
             }
         }
         ping = ping.wrapping_add(1);
     }
-    scanlines
+    f
 }
 
 fn send_nav(idle: &mut Idle) {
@@ -170,7 +193,7 @@ fn load_world(idle: &mut Idle) {
 }
 
 /// Prints one strategy's line; true if it met the budget.
-fn report(strategy: Strategy, scanlines: u32) -> bool {
+fn report(strategy: Strategy, flood: &Flood) -> bool {
     let s = super::take_stats();
     let mean = s.sum_cost / u64::from(s.periods.max(1));
     let mut line = Line::new();
@@ -189,8 +212,12 @@ fn report(strategy: Strategy, scanlines: u32) -> bool {
     line.push(b", overruns ");
     line.num(u64::from(s.overruns));
     line.push(b", scanlines extracted ");
-    line.num(u64::from(scanlines));
-    line.push(b"\n");
+    line.num(u64::from(flood.scanlines));
+    line.push(b" (background per scanline max ");
+    line.num(u64::from(flood.max_cost));
+    line.push(b" mean ");
+    line.num(flood.sum_cost / u64::from(flood.measured.max(1)));
+    line.push(b")\n");
     board::log(line.bytes());
     s.overruns == 0 && s.max_cost <= STEP_BUDGET && s.periods >= PERIODS
 }
@@ -217,14 +244,14 @@ fn stack_high_water() -> usize {
 
 /// A tiny line buffer with decimal numbers (no `core::fmt`, which carries panicking paths).
 struct Line {
-    buf: [u8; 200],
+    buf: [u8; 256],
     len: usize,
 }
 
 impl Line {
     fn new() -> Self {
         Line {
-            buf: [0; 200],
+            buf: [0; 256],
             len: 0,
         }
     }

@@ -756,7 +756,7 @@ pub(crate) mod tests {
             with(48, &f32::NEG_INFINITY.to_le_bytes()),
             Err(Error::field(11, Problem::NonFinite))
         );
-        assert_eq!(with(68, &[4]), Err(Error::field(16, Problem::UnknownCode)));
+        assert_eq!(with(68, &[5]), Err(Error::field(16, Problem::UnknownCode)));
         assert_eq!(
             with(68, &[0, 0]),
             Err(Error::field(17, Problem::UnknownCode))
