@@ -36,6 +36,10 @@ use crate::world::{World, MAX_MAP_CELLS};
 
 /// Spacing of the clearance samples along the segment for table obstacles, m.
 pub const SAMPLE_M: f32 = 0.25;
+/// Slowest speed assumed when timing a moving obstacle against the vehicle, m/s.
+const MIN_SPEED_MPS: f32 = 0.2;
+/// Farthest ahead a moving obstacle is predicted, s.
+const MAX_LOOKAHEAD_S: f32 = 10.0;
 
 /// The guard's settings.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -96,9 +100,10 @@ fn to_segment(c: Vec2, a: Vec2, u: Vec2, len: f32) -> f32 {
 }
 
 impl Believed<'_> {
-    /// Whether moving from `p` along unit `u` for `len` m goes below the hull radius and below
-    /// the clearance we have now.
-    fn blocked(&self, p: Vec2, u: Vec2, len: f32) -> bool {
+    /// Whether moving from `p` along unit `u` for `len` m at `speed` m/s goes below the hull
+    /// radius and below the clearance we have now. A moving obstacle is taken where it will be
+    /// when the vehicle gets to each sample (its velocity times the time to get there).
+    fn blocked(&self, p: Vec2, u: Vec2, len: f32, speed: f32) -> bool {
         let floor = min(self.hull, self.here - 1e-3);
         let w = self.world;
         // Points: map cells (discs) and agents (circles).
@@ -118,14 +123,19 @@ impl Believed<'_> {
         }
         // Shapes: sampled along the segment, only those that can reach it.
         let samples = (len / SAMPLE_M) as u32 + 1;
+        let per_m = 1.0 / max(speed, MIN_SPEED_MPS);
+        let t_end = min(len * per_m, MAX_LOOKAHEAD_S);
         for o in w.obstacles().iter().filter(|o| !w.left_to_map(o)) {
-            let reach = (o.shape.center() - p).norm() - o.shape.bounding_radius();
+            let reach = (o.shape.center() - p).norm()
+                - o.shape.bounding_radius()
+                - o.velocity.norm() * t_end;
             if reach > len + self.hull {
                 continue;
             }
             if (1..=samples).any(|k| {
-                let x = p + u * min(k as f32 * SAMPLE_M, len);
-                o.shape.signed_distance(x) < floor
+                let s = min(k as f32 * SAMPLE_M, len);
+                let t = min(s * per_m, MAX_LOOKAHEAD_S);
+                o.shape.signed_distance(p + u * s - o.velocity * t) < floor
             }) {
                 return true;
             }
@@ -195,7 +205,7 @@ pub fn check(
     // 1. Where the vehicle is going now, within its braking distance.
     if let Some(u) = nav.velocity.normalized(1e-3) {
         let braking = speed * speed / (2.0 * prm.f_max) + cfg.margin_m;
-        if b.blocked(p, u, braking) {
+        if b.blocked(p, u, braking, speed) {
             return (
                 with_motion(cmd, cmd.psi_set, 0.0, Verdict::Stopped),
                 Verdict::Stopped,
@@ -208,7 +218,7 @@ pub fn check(
     }
     let dir = |a: f32| Vec2::new(cos(a), sin(a));
     // 2. The command as planned.
-    if !b.blocked(p, dir(cmd.psi_set), reach(v, prm, cfg)) {
+    if !b.blocked(p, dir(cmd.psi_set), reach(v, prm, cfg), v) {
         return (cmd, Verdict::Clear);
     }
     // 3. The nearest clear heading at the same speed.
@@ -217,7 +227,7 @@ pub fn check(
     for k in 1..=turns {
         for side in [1.0, -1.0] {
             let a = cmd.psi_set + side * k as f32 * step;
-            if !b.blocked(p, dir(a), reach(v, prm, cfg)) {
+            if !b.blocked(p, dir(a), reach(v, prm, cfg), v) {
                 return (with_motion(cmd, a, v, Verdict::Turned), Verdict::Turned);
             }
         }
@@ -225,7 +235,7 @@ pub fn check(
     // 4. Slower on the planned heading.
     let mut s = 0.5 * v;
     while s >= cfg.min_speed {
-        if !b.blocked(p, dir(cmd.psi_set), reach(s, prm, cfg)) {
+        if !b.blocked(p, dir(cmd.psi_set), reach(s, prm, cfg), s) {
             return (
                 with_motion(cmd, cmd.psi_set, s, Verdict::Slowed),
                 Verdict::Slowed,
@@ -376,6 +386,28 @@ mod tests {
             cmd(0.0, 1.0),
         );
         assert_eq!(v, Verdict::Turned);
+    }
+
+    #[test]
+    fn a_crossing_obstacle_is_met_where_it_will_be() {
+        // 1.2 m to starboard of the track, 1 m ahead: clear if it stays, in the way at 1 m/s
+        // towards the track (both get to x = 1 m in a second).
+        let rock = Shape::circle(Vec2::new(1.0, -1.2), 0.5).unwrap();
+        let still = Obstacle::new(1, rock, 2.5, Origin::Sensed, 0).unwrap();
+        let mut w = World::new();
+        w.upsert_obstacle(still).unwrap();
+        let g = GuardConfig::default();
+        let p = Params::default();
+        assert_eq!(
+            check(&g, &p, &nav(Vec2::ZERO), &w, cmd(0.0, 1.0)).1,
+            Verdict::Clear
+        );
+        w.upsert_obstacle(still.moving(Vec2::new(0.0, 1.0)).unwrap())
+            .unwrap();
+        assert_ne!(
+            check(&g, &p, &nav(Vec2::ZERO), &w, cmd(0.0, 1.0)).1,
+            Verdict::Clear
+        );
     }
 
     #[test]

@@ -16,13 +16,16 @@
 //!
 //! **Velocity.** An alpha–beta filter per track (e.g. Bar-Shalom & Li, *Estimation and
 //! Tracking*, §5.3): with the residual r = z − (x + v·Δt), x ← x + v·Δt + α·r and
-//! v ← v + (β/Δt)·r. Updates less than `min_update_ms` apart leave the velocity alone, since a
+//! v ← v + (β/Δt)·r; the second sighting starts it with the two-point difference (gain 1 in
+//! place of β), so a crossing target has a velocity one sweep after it is first seen — with a
+//! 9 s sweep, waiting for β to close the error let a 1 m/s target cross the track unpredicted
+//! (generated crossing worlds, own sonar). Updates less than `min_update_ms` apart leave the velocity alone, since a
 //! short Δt turns centre noise into speed. The velocity is handed to the planner
 //! (`Obstacle::velocity`) only once a track has `min_hits` updates, has moved farther than its
 //! own radius (at least 1 m) since it was first seen, and is faster than `min_speed_mps`.
 //!
 //! The defaults are measured, not derived: α = 1 (the obstacle is where the sonar saw it last),
-//! β = 1/3 (the velocity closes a third of its error per sweep), a 0.5 m/s floor. As the
+//! β = 1/3 (the velocity closes a third of its error per sweep), a 0.5 m/s floor, two hits. As the
 //! vehicle passes a still rock the sonar sees other faces of it and the fitted centre wanders,
 //! at up to about 0.3 m/s; reported as motion and extrapolated over the planning horizon, those
 //! speeds, and equally a smoothed (α < 1) centre that lags the improving fits, led the VideoRay
@@ -94,7 +97,7 @@ impl Default for TrackConfig {
             alpha: 1.0,
             beta: 1.0 / 3.0,
             min_update_ms: 500,
-            min_hits: 3,
+            min_hits: 2,
             min_speed_mps: 0.5,
             max_speed_mps: 3.0,
         }
@@ -149,7 +152,10 @@ impl Track {
         self.center = predicted + r * cfg.alpha;
         if time_ms >= self.time_ms.saturating_add(cfg.min_update_ms) && dt > 0.0 {
             let cap = min(cfg.max_speed_mps, MAX_OBJECT_SPEED);
-            self.velocity = (self.velocity + r * (cfg.beta / dt)).bounded(cap);
+            // The second sighting sets the velocity from the two centres (a sweep apart), the
+            // usual two-point start of an alpha–beta filter; later ones correct it by β.
+            let gain = if self.hits == 1 { 1.0 } else { cfg.beta };
+            self.velocity = (self.velocity + r * (gain / dt)).bounded(cap);
             self.time_ms = time_ms;
         } else {
             self.time_ms = self.time_ms.max(time_ms);
