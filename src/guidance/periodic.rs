@@ -84,6 +84,8 @@ pub struct Periodic {
     /// Periods whose command the guard changed.
     guard_count: u32,
     freeze: FreezeDetector,
+    /// Periods held because navigation had frozen.
+    frozen_holds: u32,
 }
 
 impl Periodic {
@@ -106,6 +108,7 @@ impl Periodic {
             counters: TelemetryCounters::default(),
             guard_count: 0,
             freeze: FreezeDetector::default(),
+            frozen_holds: 0,
         })
     }
 
@@ -227,6 +230,7 @@ impl Periodic {
         };
         let commanded = self.last.map_or(0.0, |(_, c)| c.v_set);
         let frozen = nav.is_some_and(|n| self.freeze.update(&n.nav, n.time_ms, commanded));
+        self.frozen_holds = self.frozen_holds.saturating_add(u32::from(frozen));
         let hold = failsafe::check(&self.config.failsafe, &situation)
             .or(frozen.then_some(crate::planner::HoldReason::FrozenNav));
         let (Some(n), None) = (nav, hold) else {
@@ -318,6 +322,8 @@ impl Periodic {
         c.features_extracted = bg.features_extracted;
         c.table_full = self.world.counters.rejected_full;
         c.table_evicted = self.world.counters.evicted;
+        c.guard_interventions = self.guard_count;
+        c.frozen_nav_holds = self.frozen_holds;
     }
 
     /// Counts bytes the board's receive queue dropped.

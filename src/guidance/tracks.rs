@@ -357,7 +357,11 @@ mod tests {
 
     #[test]
     fn an_unconfirmed_track_reports_no_velocity_and_stale_tracks_go() {
-        let cfg = TrackConfig::default();
+        // Three hits wanted here, so two are unconfirmed (the default, two, is tested below).
+        let cfg = TrackConfig {
+            min_hits: 3,
+            ..TrackConfig::default()
+        };
         let mut w = World::new();
         let mut t = Tracks::default();
         t.admit(
@@ -382,6 +386,25 @@ mod tests {
             "two hits: not yet confirmed"
         );
         assert_eq!(t.tracks().len(), 1);
+        // With the default two hits, the two-point start gives the velocity at once.
+        let mut w2 = World::new();
+        let mut t2 = Tracks::default();
+        let d = TrackConfig::default();
+        t2.admit(
+            &d,
+            2.5,
+            &mut w2,
+            &at(feature(10.0, 0.0, 1.0, 0.9), 0),
+            Vec2::ZERO,
+        );
+        t2.admit(
+            &d,
+            2.5,
+            &mut w2,
+            &at(feature(13.0, 0.0, 1.0, 0.9), 4000),
+            Vec2::ZERO,
+        );
+        assert!((w2.obstacles()[0].velocity - Vec2::new(0.75, 0.0)).norm() < 1e-6);
         // Not seen for 30 s: the world drops it, and the track goes with it.
         w.expire(40_000, 30_000);
         assert!(w.obstacles().is_empty());

@@ -240,9 +240,15 @@ pub struct TelemetryCounters {
     pub table_evicted: u32,
     /// Sonar features extracted.
     pub features_extracted: u32,
+    /// Periods whose command the guard turned, slowed or stopped (after the sixteen above on
+    /// the wire).
+    pub guard_interventions: u32,
+    /// Periods held because navigation had frozen.
+    pub frozen_nav_holds: u32,
 }
 
-/// Number of counters in [`TelemetryCounters`].
+/// Number of counters in [`TelemetryCounters`]'s first block (rows 2 ..= 17); the guard's and
+/// the frozen-navigation counters follow the byte fields (rows 24, 25).
 pub const TELEMETRY_COUNTERS: usize = 16;
 
 impl TelemetryCounters {
@@ -289,6 +295,8 @@ impl TelemetryCounters {
             table_full,
             table_evicted,
             features_extracted,
+            guard_interventions: 0,
+            frozen_nav_holds: 0,
         }
     }
 
@@ -304,14 +312,15 @@ impl TelemetryCounters {
 }
 
 /// `Telemetry` payload length.
-pub const TELEMETRY_LEN: usize = 82;
+pub const TELEMETRY_LEN: usize = 90;
 
 /// `Telemetry` (0x82): health and counters, sent periodically.
 ///
-/// Layout (82 bytes): 0 `time_ms` u64 · 1 `step_cost` u32 · 2..=17 the sixteen u32 counters
+/// Layout (90 bytes): 0 `time_ms` u64 · 1 `step_cost` u32 · 2..=17 the sixteen u32 counters
 /// of [`TelemetryCounters`] in declaration order · 18 `mode` u8 · 19 `hold_reason` u8 ·
 /// 20 `obstacles` u8 (table fill, ≤ `MAX_OBSTACLES`) · 21 `agents` u8 (≤ `MAX_AGENTS`) ·
-/// 22 `ghost_depth` u8 (≤ `MAX_GHOSTS`) · 23 `cost_unit` u8 ([`CostUnit`]).
+/// 22 `ghost_depth` u8 (≤ `MAX_GHOSTS`) · 23 `cost_unit` u8 ([`CostUnit`]) ·
+/// 24 `guard_interventions` u32 · 25 `frozen_nav_holds` u32.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct TelemetryRepr {
@@ -365,6 +374,8 @@ impl<'a> Payload<'a> for TelemetryRepr {
         let agents = r.u8()?;
         let ghost_depth = r.u8()?;
         let unit = r.u8()?;
+        let guard_interventions = r.u32()?;
+        let frozen_nav_holds = r.u32()?;
         r.finish()?;
         let t = TelemetryRepr {
             time_ms,
@@ -374,7 +385,11 @@ impl<'a> Payload<'a> for TelemetryRepr {
             ghost_depth,
             step_cost,
             cost_unit: CostUnit::from_code(unit).ok_or(Error::field(23, Problem::UnknownCode))?,
-            counters: TelemetryCounters::from_array(counters),
+            counters: TelemetryCounters {
+                guard_interventions,
+                frozen_nav_holds,
+                ..TelemetryCounters::from_array(counters)
+            },
         };
         t.check()?;
         Ok(t)
@@ -404,6 +419,8 @@ impl<'a> Payload<'a> for TelemetryRepr {
         ] {
             w.u8(b)?;
         }
+        w.u32(self.counters.guard_interventions)?;
+        w.u32(self.counters.frozen_nav_holds)?;
         Ok(w.len())
     }
 }
@@ -775,7 +792,11 @@ pub(crate) mod tests {
             ghost_depth: 0,
             step_cost: 1234,
             cost_unit: CostUnit::Cycles,
-            counters: TelemetryCounters::from_array(core::array::from_fn(|i| i as u32 + 1)),
+            counters: TelemetryCounters {
+                guard_interventions: 17,
+                frozen_nav_holds: 18,
+                ..TelemetryCounters::from_array(core::array::from_fn(|i| i as u32 + 1))
+            },
         }
     }
 
@@ -788,6 +809,7 @@ pub(crate) mod tests {
             want.extend([i, 0, 0, 0]);
         }
         want.extend([0, 2, 3, 1, 0, 2]);
+        want.extend([17, 0, 0, 0, 18, 0, 0, 0]);
         assert_eq!(want.len(), TELEMETRY_LEN);
         let mut out = [0u8; TELEMETRY_LEN];
         assert_eq!(t.emit(&mut out), Ok(TELEMETRY_LEN));

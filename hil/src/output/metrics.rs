@@ -167,7 +167,7 @@ pub struct StepCost {
 
 /// The counters that indicate trouble, by name, with their values (all of them; zero ones
 /// included).
-fn trouble(c: &TelemetryCounters) -> [(&'static str, u32); 13] {
+fn trouble(c: &TelemetryCounters) -> [(&'static str, u32); 14] {
     [
         ("rx_crc_errors", c.rx_crc_errors),
         ("rx_oversize", c.rx_oversize),
@@ -182,6 +182,7 @@ fn trouble(c: &TelemetryCounters) -> [(&'static str, u32); 13] {
         ("tx_frames_dropped", c.tx_frames_dropped),
         ("deadline_overruns", c.deadline_overruns),
         ("table_full", c.table_full),
+        ("frozen_nav_holds", c.frozen_nav_holds),
     ]
 }
 
@@ -394,8 +395,8 @@ impl fmt::Display for VehicleMetrics {
             Some(c) => {
                 write!(
                     f,
-                    "; firmware received {} frames, extracted {} sonar features, evicted {} obstacles",
-                    c.rx_frames, c.features_extracted, c.table_evicted
+                    "; firmware received {} frames, extracted {} sonar features, evicted {} obstacles, guard intervened in {} periods",
+                    c.rx_frames, c.features_extracted, c.table_evicted, c.guard_interventions
                 )?;
                 let bad: Vec<String> = trouble(c)
                     .iter()
@@ -616,7 +617,7 @@ mod tests {
         let json = serde_json::to_value(&m).unwrap();
         assert_eq!(json["counters"]["rx_frames"], 7);
         assert_eq!(json["counters"]["deadline_overruns"], 2);
-        assert_eq!(json["counters"].as_object().unwrap().len(), 16);
+        assert_eq!(json["counters"].as_object().unwrap().len(), 18);
         assert!(m.to_string().contains("deadline_overruns 2"));
     }
 
