@@ -16,6 +16,7 @@
 //! - [`compare`]: the same scenarios flown with each guidance strategy, side by side;
 //! - [`sweep`]: parameter tuning sweeps over scenario batches, and their recipes (seed 002).
 
+pub mod bench;
 pub mod compare;
 pub mod faults;
 pub mod firmware;

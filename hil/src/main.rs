@@ -8,6 +8,7 @@
 //! hil sweep SPEC.toml [--out DIR] [--jobs N] [--shard K/N] [--quiet]
 //! hil merge DIR... [--out DIR]
 //! hil compare [SCENARIO.toml...] [--strategies vpf,multipoint,navfn] [--firmware host|qemu]
+//! hil bench [--families ...] [--seeds N] [--strategies ...] [--models ...] [--sensing ...]
 //! ```
 //!
 //! `hil run` also takes `--params RECIPE.toml` (a `[planner]` table, as `hil sweep` writes).
@@ -25,6 +26,7 @@ const USAGE: &str = "usage:
   hil sweep SPEC.toml [options]     tune the planner's parameters over a scenario batch
   hil merge DIR...                  combine a sweep's shards (hil sweep --help)
   hil compare [SCENARIO.toml...]    fly scenarios with each strategy, print a table (hil compare --help)
+  hil bench [options]               fly generated worlds, tabulate success and safety (hil bench --help)
 
 options for run:
   --out DIR                 output directory
@@ -260,6 +262,7 @@ fn main() -> ExitCode {
         Some("sweep") => hil::sweep::cli_sweep(it),
         Some("merge") => hil::sweep::cli_merge(it),
         Some("compare") => hil::compare::cli(it),
+        Some("bench") => hil::bench::cli(it),
         Some("-h" | "--help") => {
             println!("{USAGE}");
             ExitCode::SUCCESS

@@ -259,7 +259,7 @@ pub fn sweep(spec_path: &Path, opts: &Options) -> Result<Outcome, String> {
             .map_err(io("cannot open", &csv_path))?;
         let mut file = std::io::BufWriter::new(file);
         pool::run_all(
-            &work,
+            &|run| pool::one(&work, run),
             &pending,
             jobs,
             opts.quiet,

@@ -52,31 +52,32 @@ pub fn one(w: &Work<'_>, run: usize) -> RunRow {
     }
 }
 
-/// Runs `pending` on `jobs` threads; `on_row` gets each finished row on the calling thread.
-/// Shows a progress bar (runs done of `total`, runs/s, ETA) on a terminal unless `quiet`;
-/// `already` runs were done before.
-pub fn run_all(
-    w: &Work<'_>,
+/// Runs `pending` on `jobs` threads, each run `r` as `work(r)`; `on_row` gets each finished
+/// row on the calling thread. Shows a progress bar (runs done of `total`, runs/s, ETA) on a
+/// terminal unless `quiet`; `already` runs were done before. (`hil bench` uses it too.)
+#[allow(clippy::too_many_arguments)]
+pub fn run_all<R: Send>(
+    work: &(dyn Fn(usize) -> R + Sync),
     pending: &[usize],
     jobs: usize,
     quiet: bool,
     already: usize,
     total: usize,
-    mut on_row: impl FnMut(RunRow) -> std::io::Result<()>,
+    mut on_row: impl FnMut(R) -> std::io::Result<()>,
 ) -> std::io::Result<()> {
     let next = AtomicUsize::new(0);
     let show = !quiet && std::io::stderr().is_terminal();
     let started = Instant::now();
     let mut result = Ok(());
     std::thread::scope(|s| {
-        let (tx, rx) = mpsc::channel::<RunRow>();
+        let (tx, rx) = mpsc::channel::<R>();
         for _ in 0..jobs.max(1).min(pending.len().max(1)) {
             let tx = tx.clone();
             let next = &next;
             s.spawn(move || loop {
                 let i = next.fetch_add(1, Ordering::Relaxed);
                 let Some(&run) = pending.get(i) else { break };
-                if tx.send(one(w, run)).is_err() {
+                if tx.send(work(run)).is_err() {
                     break;
                 }
             });

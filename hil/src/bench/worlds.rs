@@ -1,0 +1,448 @@
+//! The benchmark's world families: each world deterministic from (family, seed), drawn in a
+//! local frame — start at the origin heading +x, goal on or near the +x axis — and then turned
+//! by a random angle about the start, so no family is aligned with the grid or the axes.
+//!
+//! Missions are 100–300 m, except every fourth seed (40–80 m: short ones too). Sizes are for a
+//! VideoRay-class craft (hull 0.2 m); a craft that needs more room gets fewer feasible draws
+//! (each world is checked by [`super::feasible`] for the craft before it is flown, and redrawn
+//! from the next sub-seed when it is not).
+
+use std::f64::consts::PI;
+
+use crate::sim::Rng;
+use crate::types::{SimObstacle, SimShape, P2};
+
+/// The families, in table order.
+pub const FAMILIES: [Family; 12] = [
+    Family::Clutter,
+    Family::Boxes,
+    Family::WallGap,
+    Family::Harbour,
+    Family::UTrap,
+    Family::LTrap,
+    Family::Channel,
+    Family::Serpentine,
+    Family::Rocks,
+    Family::Crossing,
+    Family::HeadOn,
+    Family::Formation,
+];
+
+/// A family of generated worlds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum Family {
+    /// A field of random circles.
+    Clutter,
+    /// A field of rotated rectangles.
+    Boxes,
+    /// Long walls across the track with one gap 20–40 m off the line.
+    WallGap,
+    /// A quay with piers: start in one berth, goal in another.
+    Harbour,
+    /// A U opening towards the start, the goal behind it.
+    UTrap,
+    /// An L across the track: the long arm blocks, the short one hooks back.
+    LTrap,
+    /// A channel with a bend, walls on both sides.
+    Channel,
+    /// Three long walls from alternate sides.
+    Serpentine,
+    /// Clusters of touching and overlapping rocks.
+    Rocks,
+    /// Movers crossing the track at up to the vehicle's speed, timed to meet it.
+    Crossing,
+    /// Two vehicles swapping ends, a few rocks.
+    HeadOn,
+    /// Three or four vehicles in a square formation transiting light clutter.
+    Formation,
+}
+
+impl Family {
+    /// The family's name in the CLI and the tables.
+    pub fn name(self) -> &'static str {
+        match self {
+            Family::Clutter => "clutter",
+            Family::Boxes => "boxes",
+            Family::WallGap => "wall_gap",
+            Family::Harbour => "harbour",
+            Family::UTrap => "utrap",
+            Family::LTrap => "ltrap",
+            Family::Channel => "channel",
+            Family::Serpentine => "serpentine",
+            Family::Rocks => "rocks",
+            Family::Crossing => "crossing",
+            Family::HeadOn => "head_on",
+            Family::Formation => "formation",
+        }
+    }
+
+    /// The family named `s`.
+    pub fn parse(s: &str) -> Option<Family> {
+        FAMILIES.iter().copied().find(|f| f.name() == s)
+    }
+}
+
+/// One vehicle of a world.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Craft {
+    /// Start, m.
+    pub start: P2,
+    /// Initial heading, rad.
+    pub heading: f64,
+    /// Goal, m.
+    pub goal: P2,
+}
+
+/// A generated world: obstacles (true geometry at t = 0) and vehicles.
+#[derive(Clone, Debug, PartialEq)]
+pub struct World {
+    /// Its family.
+    pub family: Family,
+    /// Its seed.
+    pub seed: u64,
+    /// The obstacles.
+    pub obstacles: Vec<SimObstacle>,
+    /// The vehicles (one, except head-on and formation).
+    pub crafts: Vec<Craft>,
+    /// A square formation of this lattice, m, for every vehicle (formation worlds).
+    pub formation_m: Option<f64>,
+}
+
+fn between(rng: &mut Rng, lo: f64, hi: f64) -> f64 {
+    lo + rng.uniform() * (hi - lo)
+}
+
+fn circle(c: P2, r: f64) -> SimShape {
+    SimShape::Circle {
+        center: c,
+        radius: r,
+    }
+}
+
+/// A wall: a rectangle from `a` to `b`, `t` m thick.
+fn wall(a: P2, b: P2, t: f64) -> SimShape {
+    let d = b.sub(a);
+    SimShape::Rectangle {
+        center: a.add(d.scale(0.5)),
+        half_size: P2::new(0.5 * d.norm(), 0.5 * t),
+        angle: d.y.atan2(d.x),
+    }
+}
+
+fn rot(p: P2, a: f64) -> P2 {
+    let (s, c) = a.sin_cos();
+    P2::new(c * p.x - s * p.y, s * p.x + c * p.y)
+}
+
+fn rotated(sh: &SimShape, a: f64) -> SimShape {
+    match sh {
+        SimShape::Circle { center, radius } => circle(rot(*center, a), *radius),
+        SimShape::Rectangle {
+            center,
+            half_size,
+            angle,
+        } => SimShape::Rectangle {
+            center: rot(*center, a),
+            half_size: *half_size,
+            angle: angle + a,
+        },
+        SimShape::Polygon { points } => SimShape::Polygon {
+            points: points.iter().map(|p| rot(*p, a)).collect(),
+        },
+    }
+}
+
+/// Free gap between the bounding circles of `s` and each of `placed`, m (∞ with none).
+fn gap(s: &SimShape, placed: &[SimShape]) -> f64 {
+    placed
+        .iter()
+        .map(|p| s.center().sub(p.center()).norm() - s.bounding_radius() - p.bounding_radius())
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// Scatters shapes from `draw` over x in `xs`, |y| ≤ `half_w`, keeping `min_gap` between
+/// them and `keep` m from each of `away`, until `n` are placed or the tries run out.
+#[allow(clippy::too_many_arguments)]
+fn scatter(
+    rng: &mut Rng,
+    n: usize,
+    xs: (f64, f64),
+    half_w: f64,
+    min_gap: f64,
+    away: &[P2],
+    keep: f64,
+    draw: &mut dyn FnMut(&mut Rng, P2) -> SimShape,
+) -> Vec<SimShape> {
+    let mut out: Vec<SimShape> = Vec::new();
+    for _ in 0..n * 40 {
+        if out.len() >= n {
+            break;
+        }
+        let c = P2::new(between(rng, xs.0, xs.1), between(rng, -half_w, half_w));
+        let s = draw(rng, c);
+        let clear = away
+            .iter()
+            .all(|a| s.center().sub(*a).norm() - s.bounding_radius() >= keep);
+        if clear && gap(&s, &out) >= min_gap {
+            out.push(s);
+        }
+    }
+    out
+}
+
+/// World `seed` of `family`, attempt `attempt` (a redraw after an infeasible one).
+pub fn generate(family: Family, seed: u64, attempt: u64) -> World {
+    let tag = family as u64 + 1;
+    let mut rng = Rng::stream(seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ tag, attempt);
+    let short = seed % 4 == 3;
+    let length = if short {
+        between(&mut rng, 40.0, 80.0)
+    } else {
+        between(&mut rng, 100.0, 300.0)
+    };
+    let goal = P2::new(length, 0.0);
+    let start = P2::new(0.0, 0.0);
+    let mut shapes: Vec<SimShape> = Vec::new();
+    let mut movers: Vec<SimObstacle> = Vec::new();
+    let mut crafts = vec![Craft {
+        start,
+        heading: 0.0,
+        goal,
+    }];
+    let mut formation_m = None;
+    match family {
+        Family::Clutter | Family::Boxes => {
+            let boxes = family == Family::Boxes;
+            let half_w = 25.0;
+            let n = (length * 2.0 * half_w / between(&mut rng, 90.0, 160.0)) as usize;
+            shapes = scatter(
+                &mut rng,
+                n,
+                (8.0, length - 8.0),
+                half_w,
+                2.0,
+                &[start, goal],
+                5.0,
+                &mut |r, c| {
+                    if boxes {
+                        SimShape::Rectangle {
+                            center: c,
+                            half_size: P2::new(between(r, 0.8, 4.0), between(r, 0.5, 2.0)),
+                            angle: r.uniform() * PI,
+                        }
+                    } else {
+                        circle(c, between(r, 0.8, 3.0))
+                    }
+                },
+            );
+        }
+        Family::WallGap => {
+            // One or two walls across the track, each 60–100 m long, a 4–8 m gap 20–40 m off.
+            let walls = if length > 120.0 { 2 } else { 1 };
+            for k in 0..walls {
+                let x = length * (k as f64 + 1.0) / (walls as f64 + 1.0);
+                let side = if rng.uniform() < 0.5 { -1.0 } else { 1.0 };
+                let off = side * between(&mut rng, 20.0, 40.0);
+                let w = between(&mut rng, 4.0, 8.0);
+                let half = between(&mut rng, 30.0, 50.0);
+                let (lo, hi) = (off - 0.5 * w, off + 0.5 * w);
+                shapes.push(wall(P2::new(x, -half + off.min(0.0)), P2::new(x, lo), 1.0));
+                shapes.push(wall(P2::new(x, hi), P2::new(x, half + off.max(0.0)), 1.0));
+            }
+        }
+        Family::Harbour => {
+            // A quay along y = 0 with piers every `spacing` m; berth to berth along it.
+            let spacing = between(&mut rng, 14.0, 22.0);
+            let pier = between(&mut rng, 12.0, 20.0);
+            let berths = ((length / spacing).round() as usize).clamp(2, 10);
+            let quay_len = spacing * (berths as f64 + 1.0);
+            shapes.push(wall(P2::new(-spacing, -1.0), P2::new(quay_len, -1.0), 2.0));
+            for k in 0..=berths + 1 {
+                let x = -0.5 * spacing + k as f64 * spacing;
+                shapes.push(wall(P2::new(x, 0.0), P2::new(x, pier), 1.5));
+            }
+            let y = between(&mut rng, 3.0, 0.6 * pier);
+            crafts[0] = Craft {
+                start: P2::new(0.0, y),
+                heading: PI / 2.0,
+                goal: P2::new(spacing * berths as f64, between(&mut rng, 3.0, 0.6 * pier)),
+            };
+        }
+        Family::UTrap | Family::LTrap => {
+            let x = between(&mut rng, 0.4, 0.6) * length;
+            let depth = between(&mut rng, 8.0, 16.0);
+            let half = between(&mut rng, 8.0, 15.0);
+            // The bottom across the track, the arms reaching back towards the start.
+            shapes.push(wall(P2::new(x, -half), P2::new(x, half), 1.0));
+            shapes.push(wall(P2::new(x - depth, half), P2::new(x, half), 1.0));
+            if family == Family::UTrap {
+                shapes.push(wall(P2::new(x - depth, -half), P2::new(x, -half), 1.0));
+            } else {
+                // An L: the long side extends past the track, no second arm.
+                let more = between(&mut rng, 10.0, 25.0);
+                shapes.push(wall(P2::new(x, -half - more), P2::new(x, -half), 1.0));
+            }
+        }
+        Family::Channel => {
+            // Two parallel walls 6–12 m apart along a track with one bend of 30–60°.
+            let width = between(&mut rng, 6.0, 12.0);
+            let bend = between(&mut rng, 30.0, 60.0).to_radians()
+                * if rng.uniform() < 0.5 { -1.0 } else { 1.0 };
+            let leg = 0.5 * length;
+            let corner = P2::new(leg, 0.0);
+            let end = corner.add(rot(P2::new(leg, 0.0), bend));
+            crafts[0].goal = end;
+            let n1 = P2::new(0.0, 0.5 * width);
+            let n2 = rot(n1, bend);
+            for s in [1.0, -1.0] {
+                let a0 = P2::new(-5.0, 0.0).add(n1.scale(s));
+                let a1 = corner.add(n1.scale(s));
+                let b0 = corner.add(n2.scale(s));
+                let b1 = end.add(rot(P2::new(5.0, 0.0), bend)).add(n2.scale(s));
+                shapes.push(wall(a0, a1, 1.0));
+                shapes.push(wall(b0, b1, 1.0));
+            }
+        }
+        Family::Serpentine => {
+            let reach = between(&mut rng, 30.0, 45.0);
+            let first = if rng.uniform() < 0.5 { -1.0 } else { 1.0 };
+            for k in 0..3 {
+                let x = length * (k as f64 + 1.0) / 4.0;
+                let s = if k % 2 == 0 { first } else { -first };
+                // From far on one side to `reach − 44 + …` past the line: the gap is on the
+                // other side, 6–12 m wide at the wall's end.
+                let tip = -s * between(&mut rng, 6.0, 12.0);
+                shapes.push(wall(P2::new(x, s * reach), P2::new(x, tip), 1.0));
+            }
+        }
+        Family::Rocks => {
+            let clusters = (length / 35.0).ceil() as usize;
+            for k in 0..clusters {
+                let c = P2::new(
+                    length * (k as f64 + 1.0) / (clusters as f64 + 1.0),
+                    between(&mut rng, -6.0, 6.0),
+                );
+                let n = 3 + (rng.uniform() * 4.0) as usize;
+                for _ in 0..n {
+                    let p = c.add(P2::new(between(&mut rng, -4.0, 4.0), between(&mut rng, -4.0, 4.0)));
+                    shapes.push(circle(p, between(&mut rng, 1.0, 2.5)));
+                }
+            }
+        }
+        Family::Crossing => {
+            // Movers crossing at 0.3–1.0 m/s, timed to reach the track when a vehicle at
+            // 0.6 m/s would be there, from either side.
+            let n = (length / 40.0).ceil() as usize;
+            for k in 0..n {
+                let x = length * (k as f64 + 1.0) / (n as f64 + 1.0);
+                let speed = between(&mut rng, 0.3, 1.0);
+                let t_meet = x / 0.6;
+                let s = if rng.uniform() < 0.5 { -1.0 } else { 1.0 };
+                let y0 = -s * speed * t_meet;
+                movers.push(SimObstacle {
+                    shape: circle(P2::new(x, y0), between(&mut rng, 1.0, 2.0)),
+                    velocity: P2::new(0.0, s * speed),
+                });
+            }
+            shapes = scatter(
+                &mut rng,
+                (length / 25.0) as usize,
+                (10.0, length - 10.0),
+                20.0,
+                3.0,
+                &[start, goal],
+                6.0,
+                &mut |r, c| circle(c, between(r, 0.8, 2.0)),
+            );
+        }
+        Family::HeadOn => {
+            let off = between(&mut rng, -1.0, 1.0);
+            crafts.push(Craft {
+                start: P2::new(length, off),
+                heading: PI,
+                goal: P2::new(0.0, off),
+            });
+            shapes = scatter(
+                &mut rng,
+                (length / 30.0) as usize,
+                (15.0, length - 15.0),
+                15.0,
+                3.0,
+                &[start, goal, P2::new(0.0, off), P2::new(length, off)],
+                6.0,
+                &mut |r, c| circle(c, between(r, 0.8, 2.0)),
+            );
+        }
+        Family::Formation => {
+            let lattice = 4.0;
+            formation_m = Some(lattice);
+            let n = 3 + (rng.uniform() * 2.0) as usize;
+            crafts = (0..n)
+                .map(|k| Craft {
+                    start: P2::new(-((k / 2) as f64) * lattice, (k % 2) as f64 * lattice),
+                    heading: 0.0,
+                    goal,
+                })
+                .collect();
+            shapes = scatter(
+                &mut rng,
+                (length / 20.0) as usize,
+                (15.0, length - 15.0),
+                20.0,
+                6.0,
+                &[start, goal],
+                10.0,
+                &mut |r, c| circle(c, between(r, 0.8, 2.0)),
+            );
+        }
+    }
+    let turn = rng.uniform() * 2.0 * PI;
+    let mut obstacles: Vec<SimObstacle> = shapes
+        .iter()
+        .map(|s| SimObstacle::fixed(rotated(s, turn)))
+        .collect();
+    obstacles.extend(movers.iter().map(|m| SimObstacle {
+        shape: rotated(&m.shape, turn),
+        velocity: rot(m.velocity, turn),
+    }));
+    for c in &mut crafts {
+        c.start = rot(c.start, turn);
+        c.goal = rot(c.goal, turn);
+        c.heading += turn;
+    }
+    World {
+        family,
+        seed,
+        obstacles,
+        crafts,
+        formation_m,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn worlds_are_deterministic_and_differ_by_seed() {
+        for f in FAMILIES {
+            assert_eq!(generate(f, 3, 0), generate(f, 3, 0), "{}", f.name());
+            assert_ne!(generate(f, 3, 0), generate(f, 4, 0), "{}", f.name());
+            assert_eq!(Family::parse(f.name()), Some(f));
+        }
+    }
+
+    #[test]
+    fn every_family_has_obstacles_and_a_mission_of_the_stated_length() {
+        for f in FAMILIES {
+            for seed in 0..4 {
+                let w = generate(f, seed, 0);
+                assert!(!w.obstacles.is_empty() || f == Family::HeadOn, "{}", f.name());
+                for c in &w.crafts {
+                    let d = c.goal.sub(c.start).norm();
+                    assert!((30.0..=330.0).contains(&d), "{} {seed}: {d}", f.name());
+                }
+            }
+        }
+    }
+}
