@@ -48,6 +48,8 @@ pub enum Reply {
     Reply(ReplyRepr),
     /// A log line.
     Log(String),
+    /// A chunk of the evidence map.
+    Belief(crate::output::belief::Chunk),
 }
 
 /// Sees the traffic: logs it, and may alter outgoing frames (faults).
@@ -385,6 +387,7 @@ impl Firmware {
                     Message::Telemetry(t) => Reply::Telemetry(t),
                     Message::Reply(r) => Reply::Reply(r),
                     Message::Log(l) => Reply::Log(l.text.to_string()),
+                    Message::Belief(b) => Reply::Belief(crate::output::belief::Chunk::of(&b)),
                     _ => continue,
                 };
                 self.inbox.push(r);

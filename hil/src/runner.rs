@@ -483,6 +483,10 @@ fn collect(
                     )));
                 }
             }
+            Reply::Belief(c) => {
+                let position = s.model.state().position;
+                s.record.belief.apply(c, t_ms as f64 * 1e-3, position);
+            }
             Reply::Telemetry(tel) => {
                 s.record.telemetry = Some(*tel);
                 s.record.cost_unit = Some(tel.cost_unit);

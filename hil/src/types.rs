@@ -143,4 +143,6 @@ pub struct VehicleRecord {
     pub step_costs: Vec<u32>,
     /// Unit of the step costs.
     pub cost_unit: Option<vpf::link::CostUnit>,
+    /// What the firmware believed (its evidence map, from `Belief` messages).
+    pub belief: crate::output::belief::Belief,
 }

@@ -219,6 +219,10 @@ fn dispatch(
         Message::ChartClear(c) => queue_control(Control::ChartClear(header, c), counters),
         Message::Tick(t) => sink.tick(t.time_ms),
         // Firmware → host messages are refused by the decoder (Direction::ToFirmware).
-        Message::Command(_) | Message::Telemetry(_) | Message::Reply(_) | Message::Log(_) => {}
+        Message::Command(_)
+        | Message::Telemetry(_)
+        | Message::Reply(_)
+        | Message::Log(_)
+        | Message::Belief(_) => {}
     }
 }

@@ -19,7 +19,8 @@ use super::guard::{self, GuardConfig, Verdict};
 use super::tracks::{TrackConfig, Tracks};
 use super::{BackgroundCounters, Control, NavSample, Sighting, SIGHTINGS_PER_PERIOD};
 use crate::link::RxCounters;
-use crate::sonar::{EvidenceMap, Near};
+use crate::link::{BeliefRepr, BELIEF_ROWS};
+use crate::sonar::{EvidenceMap, Near, MAP_SIDE};
 use crate::world::MAX_MAP_CELLS;
 
 /// The runtime's own settings (the planner's are [`Params`]).
@@ -39,6 +40,9 @@ pub struct RuntimeConfig {
     /// gradient of 2A⁺/r³ ≈ 0.02 m/s², a twentieth of the goal's pull at its default reach; the
     /// snapshot's cost grows with the square of this.
     pub map_reach_m: f32,
+    /// A [`BeliefRepr`] chunk of the evidence map goes out every this many periods (0: never);
+    /// with 16-row chunks of the 64-row window the whole map takes four chunks.
+    pub belief_every: u16,
 }
 
 impl Default for RuntimeConfig {
@@ -49,6 +53,7 @@ impl Default for RuntimeConfig {
             max_age_ms: 30_000,
             guard: GuardConfig::default(),
             map_reach_m: 6.0,
+            belief_every: 2,
         }
     }
 }
@@ -86,6 +91,8 @@ pub struct Periodic {
     freeze: FreezeDetector,
     /// Periods held because navigation had frozen.
     frozen_holds: u32,
+    /// Periods counted for the `Belief` schedule.
+    belief_tick: u32,
 }
 
 impl Periodic {
@@ -109,6 +116,7 @@ impl Periodic {
             guard_count: 0,
             freeze: FreezeDetector::default(),
             frozen_holds: 0,
+            belief_tick: 0,
         })
     }
 
@@ -208,7 +216,35 @@ impl Periodic {
             counters: self.counters,
         };
         self.send(&Message::Telemetry(telemetry), tx);
+        if let Some(m) = map {
+            self.send_belief(now_ms, m, tx);
+        }
         cmd
+    }
+
+    /// Every `belief_every` periods, the next chunk of the evidence map (round-robin).
+    fn send_belief(&mut self, now_ms: u64, map: &EvidenceMap, tx: &mut impl FnMut(&[u8]) -> bool) {
+        let every = u32::from(self.config.belief_every);
+        self.belief_tick = self.belief_tick.wrapping_add(1);
+        let Some(w) = map.window() else { return };
+        if every == 0 || !self.belief_tick.is_multiple_of(every) {
+            return;
+        }
+        let chunks = (MAP_SIDE / BELIEF_ROWS) as u32;
+        let chunk = (self.belief_tick / every) % chunks;
+        let first = chunk as i32 * BELIEF_ROWS as i32;
+        let mut bytes = [0u8; 8 * BELIEF_ROWS];
+        for (r, out) in bytes.chunks_exact_mut(8).enumerate() {
+            out.copy_from_slice(&map.row_bits(w, first + r as i32).to_le_bytes());
+        }
+        let belief = BeliefRepr {
+            time_ms: now_ms,
+            cell_bits: map.cell_m().to_bits(),
+            x0: w.x0,
+            y0: w.y0.wrapping_add(first),
+            bitmap: &bytes,
+        };
+        self.send(&Message::Belief(belief), tx);
     }
 
     /// Fail-safes, then the planner.

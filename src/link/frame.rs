@@ -54,11 +54,13 @@ pub enum MessageType {
     Reply = 0x83,
     /// A diagnostic text line ([`LogRepr`](super::LogRepr)).
     Log = 0x84,
+    /// A chunk of the firmware's evidence map ([`BeliefRepr`](super::BeliefRepr)).
+    Belief = 0x85,
 }
 
 impl MessageType {
     /// Every message type, in code order.
-    pub const ALL: [MessageType; 12] = [
+    pub const ALL: [MessageType; 13] = [
         MessageType::Nav,
         MessageType::Scanline,
         MessageType::Contacts,
@@ -71,6 +73,7 @@ impl MessageType {
         MessageType::Telemetry,
         MessageType::Reply,
         MessageType::Log,
+        MessageType::Belief,
     ];
 
     /// Its wire code.
@@ -93,6 +96,7 @@ impl MessageType {
             0x82 => MessageType::Telemetry,
             0x83 => MessageType::Reply,
             0x84 => MessageType::Log,
+            0x85 => MessageType::Belief,
             _ => return None,
         })
     }

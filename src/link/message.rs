@@ -16,6 +16,7 @@
 //!
 //! For a byte stream use the [`Decoder`](super::Decoder) instead.
 
+use super::belief::{BeliefRepr, BELIEF_MAX_LEN};
 use super::cobs;
 use super::control::{
     ChartClearRepr, ChartObstacleRepr, TickRepr, MISSION_LEN_WITH_FORMATION, PARAMS_LEN,
@@ -85,6 +86,8 @@ pub enum Message<'a> {
     Reply(ReplyRepr),
     /// A diagnostic line (firmware → host).
     Log(LogRepr<'a>),
+    /// A chunk of the evidence map (firmware → host).
+    Belief(BeliefRepr<'a>),
 }
 
 /// Applies `$f` to the payload inside any variant.
@@ -103,6 +106,7 @@ macro_rules! each {
             Message::Telemetry($p) => $f,
             Message::Reply($p) => $f,
             Message::Log($p) => $f,
+            Message::Belief($p) => $f,
         }
     };
 }
@@ -132,6 +136,7 @@ impl<'a> Message<'a> {
             MessageType::Telemetry => Message::Telemetry(Payload::parse(payload)?),
             MessageType::Reply => Message::Reply(Payload::parse(payload)?),
             MessageType::Log => Message::Log(Payload::parse(payload)?),
+            MessageType::Belief => Message::Belief(Payload::parse(payload)?),
         })
     }
 
@@ -202,6 +207,7 @@ from_payload!(
     Telemetry(TelemetryRepr),
     Reply(ReplyRepr),
     Log(LogRepr<'a>),
+    Belief(BeliefRepr<'a>),
 );
 
 const fn max(a: usize, b: usize) -> usize {
@@ -225,7 +231,10 @@ pub const fn max_payload_len() -> usize {
         max(MISSION_LEN_WITH_FORMATION, 6 + MAX_SHAPE_LEN),
         max(3, max(PARAMS_LEN, 8)),
     );
-    let reports = max(max(COMMAND_LEN, TELEMETRY_LEN), max(6, 1 + MAX_LOG_LEN));
+    let reports = max(
+        max(COMMAND_LEN, TELEMETRY_LEN),
+        max(6, max(1 + MAX_LOG_LEN, BELIEF_MAX_LEN)),
+    );
     max(sensors, max(control, reports))
 }
 
@@ -392,6 +401,7 @@ pub(crate) mod tests {
         Telemetry(TelemetryRepr),
         Reply(ReplyRepr),
         Log((u8, String)),
+        Belief(crate::link::belief::tests::OwnedBelief),
     }
 
     impl Owned {
@@ -421,6 +431,7 @@ pub(crate) mod tests {
                     level: LogLevel::from_code(*l).unwrap(),
                     text,
                 }),
+                Owned::Belief(b) => Message::Belief(crate::link::belief::tests::belief(b)),
             }
         }
     }
@@ -446,6 +457,7 @@ pub(crate) mod tests {
             arb_telemetry().prop_map(Owned::Telemetry),
             arb_reply().prop_map(Owned::Reply),
             arb_log().prop_map(Owned::Log),
+            crate::link::belief::tests::arb_belief().prop_map(Owned::Belief),
         ]
     }
 

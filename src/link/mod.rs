@@ -30,6 +30,7 @@
 //!
 //! Nothing here allocates, panics or indexes out of bounds on any input.
 
+pub mod belief;
 pub mod cobs;
 mod codec;
 pub mod control;
@@ -41,6 +42,7 @@ pub mod report;
 pub mod sensors;
 pub mod shape;
 
+pub use belief::{BeliefRepr, BELIEF_ROWS};
 pub use control::{param_index, ChartClearRepr, ChartObstacleRepr, TickRepr, PARAM_NAMES};
 pub use decoder::{Decoder, Outcome, RxCounters};
 pub use frame::{encode_frame, frame_buffer_len, split_frame, Direction, Header, MessageType};

@@ -21,6 +21,31 @@ const MAX_NORMALS: usize = MAX_OBSTACLES + 1;
 /// Step of the central differences for obstacle normals, m.
 const NORMAL_STEP_M: f32 = 0.01;
 
+/// How far ahead the goal-point is carried, in attractor reaches σ.
+pub const CARROT_SIGMAS: f32 = 2.0;
+
+/// Where seed 000's goal-point PDF (eq. 13) is centred for a vehicle at `p` heading for
+/// `target`: the target itself within [`CARROT_SIGMAS`]·σ, else the point that far along the
+/// straight line to it — a "carrot on a stick" (000 §III's own image for the ghost
+/// goal-points).
+///
+/// **Departure from the paper, and why.** Eq. 13 is a Gaussian of reach σ: its pull
+/// A⁻·d/σ²·e^{−d²/2σ²} at distance d is 0.27·A⁻/σ at 2σ and below one thousandth of that
+/// at 5σ, under friction and rounding, so a goal 150 m away with the default σ = 40 m does not
+/// move the vehicle at all. Carried to 2σ ahead, the goal-point pulls with its 2σ strength
+/// until the real goal is within 2σ, and from there on the field is the paper's. Every paper
+/// experiment starts within 2σ of its goal, so their runs are unchanged.
+pub fn carrot(p: Vec2, target: Vec2, sigma: f32) -> Vec2 {
+    let d = target - p;
+    let reach = CARROT_SIGMAS * sigma;
+    let n2 = d.norm2();
+    if n2 <= reach * reach {
+        target
+    } else {
+        p + d * (reach / crate::math::sqrt(n2))
+    }
+}
+
 impl Planner {
     /// One VPF period: E, its sampled gradient and friction give F; the ghost goal-points
     /// are updated after the shared integration.
@@ -30,8 +55,9 @@ impl Planner {
         let world = cx.world;
         let target = m.escape.active_target(cx.mission.goal);
 
-        // Attractors: the active goal-point and the virtual leader (001 Table 1).
-        let goal = GoalPdf::new(target, prm.a_minus, prm.sigma_m);
+        // Attractors: the active goal-point — carried within reach — and the virtual leader
+        // (001 Table 1).
+        let goal = GoalPdf::new(carrot(p, target, prm.sigma_m), prm.a_minus, prm.sigma_m);
         let formation = cx
             .mission
             .formation
@@ -122,5 +148,19 @@ impl Planner {
         cmd.ghost_depth = m.escape.ghosts().len() as u8;
         cmd.mode = self.mode(m, cx);
         cmd
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_goal_point_is_carried_within_reach_and_never_past_the_goal() {
+        let g = Vec2::new(300.0, 0.0);
+        assert!((carrot(Vec2::ZERO, g, 40.0) - Vec2::new(80.0, 0.0)).norm() < 1e-3);
+        assert_eq!(carrot(Vec2::new(250.0, 0.0), g, 40.0), g);
+        let c = carrot(Vec2::new(0.0, 100.0), Vec2::ZERO, 10.0);
+        assert!((c - Vec2::new(0.0, 80.0)).norm() < 1e-4, "{c:?}");
     }
 }

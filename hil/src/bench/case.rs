@@ -99,6 +99,8 @@ pub struct Row {
     /// For true obstacle surface within sonar range, the distance to the nearest believed
     /// obstacle, m (p95); filled when the firmware reports what it believed.
     pub perception_miss_m: Option<f64>,
+    /// The same distance's mean, m.
+    pub perception_miss_mean_m: Option<f64>,
     /// Share of believed obstacle cells with no true surface near them.
     pub perception_false_frac: Option<f64>,
     /// Why the run was not flown or failed to run (then `success` is false).
@@ -141,13 +143,13 @@ pub fn scenario_text(world: &World, attempt: u64, case: &Case, duration_s: f64) 
         case.seed
     );
     let _ = writeln!(t, "name = \"{}\"", case.id());
-    let _ = writeln!(t, "duration_s = {duration_s:.1}\ndt_s = 0.1\nseed = {}", case.seed);
-    let _ = writeln!(t, "\n[planner]\nstrategy = \"{}\"", case.strategy.name());
     let _ = writeln!(
         t,
-        "\n[sonar]\nmode = \"{}\"",
-        sensing_name(case.sensing)
+        "duration_s = {duration_s:.1}\ndt_s = 0.1\nseed = {}",
+        case.seed
     );
+    let _ = writeln!(t, "\n[planner]\nstrategy = \"{}\"", case.strategy.name());
+    let _ = writeln!(t, "\n[sonar]\nmode = \"{}\"", sensing_name(case.sensing));
     let sensing = match case.sensing {
         Sensing::Sonar => "sonar",
         Sensing::Contacts => "contacts",
@@ -240,6 +242,7 @@ pub fn fly(case: &Case, params: Option<&Params>, run: &QuietRun, failed_dir: &Pa
         reference_s: None,
         guard_periods: 0,
         perception_miss_m: None,
+        perception_miss_mean_m: None,
         perception_false_frac: None,
         error: None,
     };
@@ -286,14 +289,17 @@ fn measure(row: &mut Row, out: &RunOutput, world: &World, shortest: f64, referen
     let s = Summary::of(out);
     let vs = &s.vehicles;
     row.collided = vs.iter().any(|v| v.collisions > 0);
-    row.min_clearance_m = vs
-        .iter()
-        .filter_map(|v| v.min_clearance_m)
-        .reduce(f64::min);
+    row.min_clearance_m = vs.iter().filter_map(|v| v.min_clearance_m).reduce(f64::min);
     row.guard_periods = vs
         .iter()
         .filter_map(|v| v.counters.map(|c| c.guard_interventions))
         .sum();
+    // Perception: the worst vehicle's miss, the fleet's mean share of false cells.
+    let seen: Vec<_> = vs.iter().filter_map(|v| v.perception).collect();
+    row.perception_miss_m = seen.iter().map(|p| p.miss_p95_m).reduce(f64::max);
+    row.perception_miss_mean_m = seen.iter().map(|p| p.miss_mean_m).reduce(f64::max);
+    row.perception_false_frac = (!seen.is_empty())
+        .then(|| seen.iter().map(|p| p.false_frac).sum::<f64>() / seen.len() as f64);
     let arrived = match world.formation_m {
         // A formation settles round the goal, not on it: N + 1 lattice cells of side λ fit
         // within λ·√(N + 1) (as the planner's own arrival-in-formation test).
@@ -307,9 +313,14 @@ fn measure(row: &mut Row, out: &RunOutput, world: &World, shortest: f64, referen
     row.success = !vs.is_empty() && arrived && !row.collided;
     let path = vs.iter().map(|v| v.path_length_m).fold(0.0, f64::max);
     row.path_ratio = (shortest > 0.0).then(|| path / shortest);
-    let last = vs.iter().map(|v| v.time_to_goal_s).collect::<Option<Vec<f64>>>();
+    let last = vs
+        .iter()
+        .map(|v| v.time_to_goal_s)
+        .collect::<Option<Vec<f64>>>();
     row.time_ratio = match (world.formation_m, last) {
-        (None, Some(t)) if reference > 0.0 => Some(t.iter().fold(0.0f64, |a, &b| a.max(b)) / reference),
+        (None, Some(t)) if reference > 0.0 => {
+            Some(t.iter().fold(0.0f64, |a, &b| a.max(b)) / reference)
+        }
         _ => None,
     };
 }
@@ -339,14 +350,18 @@ mod tests {
                     model: ModelKind::VideoRay,
                     sensing: Sensing::Sonar,
                 };
-                let (w, attempt, shortest) = feasible_world(&case)
-                    .unwrap_or_else(|e| panic!("{}: {e}", case.id()));
+                let (w, attempt, shortest) =
+                    feasible_world(&case).unwrap_or_else(|e| panic!("{}: {e}", case.id()));
                 let straight = w
                     .crafts
                     .iter()
                     .map(|c| c.goal.sub(c.start).norm())
                     .fold(0.0, f64::max);
-                assert!(shortest >= straight - 1.0, "{}: {shortest} < {straight}", case.id());
+                assert!(
+                    shortest >= straight - 1.0,
+                    "{}: {shortest} < {straight}",
+                    case.id()
+                );
                 let text = scenario_text(&w, attempt, &case, duration_s(shortest));
                 let sc = scenario::parse(&text, &case.id())
                     .unwrap_or_else(|e| panic!("{}: {e}\n{text}", case.id()));

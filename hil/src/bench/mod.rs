@@ -124,9 +124,13 @@ fn parse_strategy(s: &str) -> Option<Strategy> {
 }
 
 fn parse_model(s: &str) -> Option<ModelKind> {
-    [ModelKind::VideoRay, ModelKind::FlatFish, ModelKind::Kinematic]
-        .into_iter()
-        .find(|m| m.name() == s)
+    [
+        ModelKind::VideoRay,
+        ModelKind::FlatFish,
+        ModelKind::Kinematic,
+    ]
+    .into_iter()
+    .find(|m| m.name() == s)
 }
 
 fn parse_sensing(s: &str) -> Option<Sensing> {
@@ -321,8 +325,11 @@ pub fn bench(o: &Options) -> Result<(PathBuf, report::Report), String> {
     std::fs::write(&md, rep.markdown()).map_err(io("cannot write", &md))?;
     let js = dir.join("bench.json");
     let json = serde_json::json!({ "format": FORMAT, "summary": rep.json(), "runs": rows });
-    std::fs::write(&js, serde_json::to_string_pretty(&json).unwrap_or_default() + "\n")
-        .map_err(io("cannot write", &js))?;
+    std::fs::write(
+        &js,
+        serde_json::to_string_pretty(&json).unwrap_or_default() + "\n",
+    )
+    .map_err(io("cannot write", &js))?;
     Ok((dir, rep))
 }
 
@@ -359,9 +366,16 @@ mod tests {
     #[test]
     fn arguments_parse_and_refuse_with_a_reason() {
         let o = parse_args(
-            ["--families", "clutter,harbour", "--seeds", "3", "--sensing", "scanlines,contacts"]
-                .map(String::from)
-                .into_iter(),
+            [
+                "--families",
+                "clutter,harbour",
+                "--seeds",
+                "3",
+                "--sensing",
+                "scanlines,contacts",
+            ]
+            .map(String::from)
+            .into_iter(),
         )
         .unwrap()
         .unwrap();

@@ -34,6 +34,8 @@ pub struct Line {
     pub median_guard_periods: Option<f64>,
     /// Median perception miss (p95 per run), m.
     pub median_perception_miss_m: Option<f64>,
+    /// Median perception miss (mean per run), m.
+    pub median_perception_miss_mean_m: Option<f64>,
     /// Median share of believed cells with no true surface near.
     pub median_perception_false: Option<f64>,
 }
@@ -62,7 +64,8 @@ fn median(mut v: Vec<f64>) -> Option<f64> {
 }
 
 fn line(family: &str, rows: &[&Row]) -> Line {
-    let f = |get: &dyn Fn(&Row) -> Option<f64>| median(rows.iter().filter_map(|r| get(r)).collect());
+    let f =
+        |get: &dyn Fn(&Row) -> Option<f64>| median(rows.iter().filter_map(|r| get(r)).collect());
     Line {
         family: family.to_string(),
         runs: rows.len(),
@@ -78,6 +81,7 @@ fn line(family: &str, rows: &[&Row]) -> Line {
         median_path_ratio: f(&|r| r.path_ratio),
         median_guard_periods: f(&|r| Some(f64::from(r.guard_periods))),
         median_perception_miss_m: f(&|r| r.perception_miss_m),
+        median_perception_miss_mean_m: f(&|r| r.perception_miss_mean_m),
         median_perception_false: f(&|r| r.perception_false_frac),
     }
 }
@@ -130,7 +134,7 @@ impl Report {
             s.push_str(
                 "| family | runs | success | collisions | not flown | clearance worst / median (m) \
                  | time / ref (median) | path / shortest (median) | guard periods (median) \
-                 | perception miss p95 (m) | false cells |\n\
+                 | perception miss mean / p95 (m) | false cells |\n\
                  |---|---|---|---|---|---|---|---|---|---|---|\n",
             );
             for l in lines {
@@ -141,7 +145,7 @@ impl Report {
                 };
                 let _ = writeln!(
                     s,
-                    "| {} | {} | {} ({pct:.0} %) | {} | {} | {} / {} | {} | {} | {} | {} | {} |",
+                    "| {} | {} | {} ({pct:.0} %) | {} | {} | {} / {} | {} | {} | {} | {} / {} | {} |",
                     if l.family == "all" {
                         "**all**".to_string()
                     } else {
@@ -156,6 +160,7 @@ impl Report {
                     opt(l.median_time_ratio, 2),
                     opt(l.median_path_ratio, 2),
                     opt(l.median_guard_periods, 0),
+                    opt(l.median_perception_miss_mean_m, 2),
                     opt(l.median_perception_miss_m, 2),
                     opt(l.median_perception_false, 3),
                 );
@@ -189,6 +194,7 @@ mod tests {
             reference_s: Some(100.0),
             guard_periods: 3,
             perception_miss_m: None,
+            perception_miss_mean_m: None,
             perception_false_frac: None,
             error: None,
         }

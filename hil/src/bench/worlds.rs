@@ -324,7 +324,10 @@ pub fn generate(family: Family, seed: u64, attempt: u64) -> World {
                 );
                 let n = 3 + (rng.uniform() * 4.0) as usize;
                 for _ in 0..n {
-                    let p = c.add(P2::new(between(&mut rng, -4.0, 4.0), between(&mut rng, -4.0, 4.0)));
+                    let p = c.add(P2::new(
+                        between(&mut rng, -4.0, 4.0),
+                        between(&mut rng, -4.0, 4.0),
+                    ));
                     shapes.push(circle(p, between(&mut rng, 1.0, 2.5)));
                 }
             }
@@ -437,7 +440,11 @@ mod tests {
         for f in FAMILIES {
             for seed in 0..4 {
                 let w = generate(f, seed, 0);
-                assert!(!w.obstacles.is_empty() || f == Family::HeadOn, "{}", f.name());
+                assert!(
+                    !w.obstacles.is_empty() || f == Family::HeadOn,
+                    "{}",
+                    f.name()
+                );
                 for c in &w.crafts {
                     let d = c.goal.sub(c.start).norm();
                     assert!((30.0..=330.0).contains(&d), "{} {seed}: {d}", f.name());

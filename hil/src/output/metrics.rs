@@ -28,7 +28,9 @@ use std::fmt;
 
 use serde::Serialize;
 
+use super::belief::Perception;
 use super::RunOutput;
+use crate::sim::sonar::OtherVehicle;
 use crate::sim::vehicle::wrap_pi;
 use crate::types::{Sample, VehicleRecord, P2};
 use vpf::link::TelemetryCounters;
@@ -98,6 +100,9 @@ pub struct VehicleMetrics {
     pub step_cost: StepCost,
     /// The last telemetry's counters (null if no telemetry arrived).
     pub counters: Option<TelemetryCounters>,
+    /// How the firmware's believed map compared with the truth (`belief.rs`); `None` without
+    /// `Belief` messages (contacts, or an older firmware).
+    pub perception: Option<Perception>,
 }
 
 /// A vehicle's error against its goal and its heading set-point at one sample, in its body
@@ -199,10 +204,39 @@ impl Summary {
             vehicles: run
                 .vehicles
                 .iter()
-                .map(|v| VehicleMetrics::of(v, run.arrival_radius_m, run.dt_s))
+                .enumerate()
+                .map(|(i, v)| {
+                    let mut m = VehicleMetrics::of(v, run.arrival_radius_m, run.dt_s);
+                    m.perception = perception(run, i);
+                    m
+                })
                 .collect(),
         }
     }
+}
+
+/// Vehicle `i`'s perception metrics (`belief.rs`), the other vehicles where they were.
+fn perception(run: &RunOutput, i: usize) -> Option<Perception> {
+    let v = run.vehicles.get(i)?;
+    let others = |t: f64| {
+        run.vehicles
+            .iter()
+            .enumerate()
+            .filter(|(k, _)| *k != i)
+            .filter_map(|(_, o)| {
+                let k = ((t / run.dt_s.max(1e-3)).round() as usize)
+                    .min(o.samples.len().checked_sub(1)?);
+                let s = o.samples.get(k)?;
+                Some(OtherVehicle {
+                    id: 0,
+                    position: s.state.position,
+                    velocity: P2::default(),
+                    hull_radius: 0.2,
+                })
+            })
+            .collect()
+    };
+    super::belief::measure(&v.belief, &run.obstacles, &others)
 }
 
 fn finite(p: P2) -> bool {
@@ -315,6 +349,7 @@ impl VehicleMetrics {
             final_mode: v.samples.last().map(|s| s.mode.clone()),
             step_cost,
             counters: v.telemetry.map(|t| t.counters),
+            perception: None,
         }
     }
 }

@@ -10,6 +10,7 @@
 //! Nothing here panics on empty or odd input: no samples gives empty tables and a plot that
 //! says so, and NaN values are skipped where they would break a number (plots, sums, minima).
 
+pub mod belief;
 pub mod commands;
 pub mod frames;
 pub mod metrics;

@@ -82,6 +82,10 @@ pub fn render(run: &RunOutput) -> String {
     if let Some(v) = run.vehicles.first() {
         draw_contours(&mut s, &frame, run, v.goal);
     }
+    let believed = run.vehicles.iter().any(|v| !v.belief.ever.is_empty());
+    for v in &run.vehicles {
+        draw_belief(&mut s, &frame, &v.belief);
+    }
     for o in &run.obstacles {
         draw_obstacle(&mut s, &frame, o, t_end);
     }
@@ -101,8 +105,48 @@ pub fn render(run: &RunOutput) -> String {
             "text-anchor=\"middle\" font-size=\"16\" fill=\"#888\"",
         );
     }
-    legend(&mut s, &frame, run, any_collision);
+    legend(&mut s, &frame, run, any_collision, believed);
     s.finish()
+}
+
+/// Fill of a cell ever believed occupied, and of one still believed at the end.
+const BELIEF_EVER: &str = "fill=\"#f0a030\" fill-opacity=\"0.25\"";
+const BELIEF_NOW: &str = "fill=\"#e07000\" fill-opacity=\"0.75\"";
+
+/// The firmware's evidence map under the truth: every cell ever believed faint, the cells
+/// believed at the end strong. One rectangle per horizontal run of cells keeps the file small.
+fn draw_belief(s: &mut Svg, f: &Frame, b: &super::belief::Belief) {
+    if b.cell_m <= 0.0 {
+        return;
+    }
+    for (cells, attrs) in [(&b.ever, BELIEF_EVER), (&b.cells, BELIEF_NOW)] {
+        let mut rows: std::collections::BTreeMap<i32, Vec<i32>> = Default::default();
+        for &(i, j) in cells {
+            rows.entry(j).or_default().push(i);
+        }
+        for (j, mut is) in rows {
+            is.sort_unstable();
+            let mut k = 0;
+            while k < is.len() {
+                let start = is[k];
+                let mut end = start;
+                while k + 1 < is.len() && is[k + 1] == end + 1 {
+                    k += 1;
+                    end = is[k];
+                }
+                k += 1;
+                let (x0, x1) = (f64::from(start) * b.cell_m, f64::from(end + 1) * b.cell_m);
+                let (y0, y1) = (f64::from(j) * b.cell_m, f64::from(j + 1) * b.cell_m);
+                // Only what lies inside the plot's frame.
+                let (x0, x1) = (x0.max(f.x0), x1.min(f.x1));
+                if x0 >= x1 || y0 < f.y0 || y1 > f.y1 {
+                    continue;
+                }
+                let (px0, px1, py1, py0) = (f.px(x0), f.px(x1), f.py(y0), f.py(y1));
+                s.rect(px0, py0, px1 - px0, py1 - py0, attrs);
+            }
+        }
+    }
 }
 
 /// A data rectangle that holds everything, with equal scaling.
@@ -610,7 +654,7 @@ fn draw_vehicle(s: &mut Svg, f: &Frame, v: &VehicleRecord, colour: &str) -> bool
     any
 }
 
-fn legend(s: &mut Svg, f: &Frame, run: &RunOutput, any_collision: bool) {
+fn legend(s: &mut Svg, f: &Frame, run: &RunOutput, any_collision: bool, believed: bool) {
     let x = f.left + f.width + 22.0;
     let tx = x + 34.0;
     let text = |s: &mut Svg, y: f64, t: &str| s.text(tx, y + 4.0, t, "fill=\"#222\"");
@@ -662,6 +706,14 @@ fn legend(s: &mut Svg, f: &Frame, run: &RunOutput, any_collision: bool) {
     );
     text(s, y, "moving obstacle at the end");
     y += 18.0;
+    if believed {
+        s.rect(x + 2.0, y - 7.0, 20.0, 14.0, BELIEF_EVER);
+        text(s, y, "believed by the firmware (sonar map)");
+        y += 18.0;
+        s.rect(x + 2.0, y - 7.0, 20.0, 14.0, BELIEF_NOW);
+        text(s, y, "... and still believed at the end");
+        y += 18.0;
+    }
     if any_collision {
         s.circle(
             x + 12.0,
