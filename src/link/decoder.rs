@@ -321,6 +321,7 @@ mod tests {
     extern crate std;
     use super::*;
     use crate::link::message::tests::arb_owned;
+    use crate::link::PROTOCOL_VERSION;
     use crate::link::{
         encode_frame, LogLevel, LogRepr, MessageType, Payload, TickRepr, MAX_PAYLOAD,
     };
@@ -356,7 +357,7 @@ mod tests {
 
     /// The Tick frame of frame.rs's vector, byte for byte.
     const TICK_1000_SEQ_1: [u8; 16] = [
-        0x04, 0x02, 0x08, 0x01, 0x03, 0xe8, 0x03, 0x01, 0x01, 0x01, 0x01, 0x01, 0x03, 0xb9, 0xf9,
+        0x04, 0x03, 0x08, 0x01, 0x03, 0xe8, 0x03, 0x01, 0x01, 0x01, 0x01, 0x01, 0x03, 0xcc, 0xfa,
         0x00,
     ];
 
@@ -410,7 +411,7 @@ mod tests {
         s.extend([0x05, 0x01, 0x00]);
         s.extend([0x03, 0x01, 0x02, 0x00]);
         // Version and type, with good CRCs.
-        for (v, t) in [(1u8, 0x08u8), (2, 0x7e)] {
+        for (v, t) in [(1u8, 0x08u8), (PROTOCOL_VERSION, 0x7e)] {
             let mut raw = std::vec![v, t, 0, 0];
             let crc = crate::link::crc::crc16(&raw);
             raw.extend(crc.to_le_bytes());
