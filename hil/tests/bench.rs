@@ -1,0 +1,92 @@
+//! A fixed slice of `hil bench`: one generated world of every family (seed 1), flown by the
+//! VideoRay with its own sonar (scanlines), default parameters, VPF, on the host-process
+//! firmware. Nothing may be touched; the perception columns must be filled (the firmware
+//! reported its map) and honest (a perfect-perception run reports none).
+//!
+//! The slice is not where the numbers come from — `cargo hil bench` flies 204 worlds — but a
+//! change that makes the vehicle drive into what it saw fails here.
+
+use hil::bench::case::{self, Case};
+use hil::bench::worlds::FAMILIES;
+use hil::firmware::{self, Target};
+use hil::runner::QuietRun;
+use hil::scenario::Sensing;
+use hil::sim::ModelKind;
+use std::path::Path;
+use vpf::Strategy;
+
+fn quiet() -> QuietRun {
+    QuietRun {
+        target: Target::Host,
+        binary: firmware::build(&Target::Host).expect("host firmware builds"),
+        stop_early: true,
+        socket: true,
+    }
+}
+
+fn failed_dir() -> std::path::PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../target/hil-tests/bench-slice")
+}
+
+#[test]
+fn one_world_of_every_family_is_flown_without_contact() {
+    let run = quiet();
+    let rows: Vec<_> = FAMILIES
+        .iter()
+        .map(|&family| {
+            let c = Case {
+                family,
+                seed: 1,
+                strategy: Strategy::Vpf,
+                model: ModelKind::VideoRay,
+                sensing: Sensing::Sonar,
+            };
+            case::fly(&c, None, &run, &failed_dir())
+        })
+        .collect();
+    for r in &rows {
+        println!(
+            "{}: success {}, clearance {:?}, guard {}, perception miss {:?} m, false {:?}",
+            r.id,
+            r.success,
+            r.min_clearance_m,
+            r.guard_periods,
+            r.perception_miss_mean_m,
+            r.perception_false_frac
+        );
+    }
+    for r in &rows {
+        assert!(r.error.is_none(), "{}: {:?}", r.id, r.error);
+        assert!(
+            !r.collided,
+            "{}: contact (clearance {:?}); see {}",
+            r.id,
+            r.min_clearance_m,
+            failed_dir().display()
+        );
+        assert!(
+            r.perception_miss_m.is_some() && r.perception_false_frac.is_some(),
+            "{}: the firmware reported no belief",
+            r.id
+        );
+    }
+}
+
+#[test]
+fn perfect_perception_reports_no_belief_and_the_reference_is_the_grid_path() {
+    let c = Case {
+        family: hil::bench::worlds::Family::WallGap,
+        seed: 2,
+        strategy: Strategy::Vpf,
+        model: ModelKind::VideoRay,
+        sensing: Sensing::Contacts,
+    };
+    let row = case::fly(&c, None, &quiet(), &failed_dir());
+    assert!(row.error.is_none(), "{:?}", row.error);
+    assert_eq!(row.perception_miss_m, None);
+    // A wall with a gap 20–40 m off the line: the shortest path is longer than the straight line.
+    let (w, _, shortest) = case::feasible_world(&c).unwrap();
+    let straight = w.crafts[0].goal.sub(w.crafts[0].start).norm();
+    assert!(shortest > straight + 1.0, "{shortest} vs {straight}");
+    assert!((row.reference_s.unwrap() - shortest / case::CRUISE_MPS).abs() < 1e-9);
+}
