@@ -204,7 +204,7 @@ pub fn measure(
             for p in boundary(sh, SURFACE_STEP_M) {
                 let to = p.sub(s.position);
                 let d = to.norm();
-                if d > SEEN_RANGE_M || d < 1e-6 {
+                if !(1e-6..=SEEN_RANGE_M).contains(&d) {
                     continue;
                 }
                 // Line of sight: nothing else (nor the same shape's far side) nearer on the ray.
