@@ -423,17 +423,34 @@ fn send_sensors(
                 s.fw.send(&Message::Scanline(ping.as_scanline()), &mut s.tap)
                     .map_err(fw_err)?;
             }
-        }
-        Sensing::Contacts => {
-            let found = sonar_sim::contacts(t, truth, &sc.obstacles, others, sc.sonar.range_m);
-            for chunk in found.chunks(vpf::link::MAX_CONTACTS) {
-                let m = Message::Contacts(ContactsRepr {
-                    time_ms: t_ms,
-                    contacts: ContactList::new(chunk),
-                });
-                s.fw.send(&m, &mut s.tap).map_err(fw_err)?;
+            if sc.sonar.vehicle_contacts {
+                send_contacts(s, t, t_ms, truth, &[], others, sc.sonar.range_m)?;
             }
         }
+        Sensing::Contacts => {
+            send_contacts(s, t, t_ms, truth, &sc.obstacles, others, sc.sonar.range_m)?
+        }
+    }
+    Ok(())
+}
+
+/// Sends the obstacles and vehicles within `range` m as contacts.
+fn send_contacts(
+    s: &mut Sim,
+    t: f64,
+    t_ms: u64,
+    truth: &VehicleState,
+    obstacles: &[crate::types::SimObstacle],
+    others: &[OtherVehicle],
+    range: f64,
+) -> Result<(), RunError> {
+    let found = sonar_sim::contacts(t, truth, obstacles, others, range);
+    for chunk in found.chunks(vpf::link::MAX_CONTACTS) {
+        let m = Message::Contacts(ContactsRepr {
+            time_ms: t_ms,
+            contacts: ContactList::new(chunk),
+        });
+        s.fw.send(&m, &mut s.tap).map_err(fw_err)?;
     }
     Ok(())
 }

@@ -136,6 +136,11 @@ pub struct Sonar {
     /// Probability per ping of a spurious target echo (fish, a side lobe), 0 ..= 1; default
     /// 0.03.
     pub false_echoes: f64,
+    /// With scanlines, the other vehicles also come as vehicle contacts (an acoustic
+    /// positioning system, or a sonar that classifies them): seed 001's virtual leader takes the
+    /// neighbours' positions as known. Default false: the vehicles see each other only through
+    /// their sonars.
+    pub vehicle_contacts: bool,
 }
 
 impl Default for Sonar {
@@ -149,6 +154,7 @@ impl Default for Sonar {
             speckle: 0.002,
             beam_rays: 5,
             false_echoes: 0.03,
+            vehicle_contacts: false,
         }
     }
 }
@@ -529,6 +535,19 @@ impl<'a> Table<'a> {
                     &v.span(),
                     &self.key(key),
                     format!("expected a string, got {}", type_name(other)),
+                )),
+            })
+            .transpose()
+    }
+
+    fn boolean(&self, key: &str) -> Result<Option<bool>, ScenarioError> {
+        self.get(key)
+            .map(|v| match v.get_ref() {
+                DeValue::Boolean(b) => Ok(*b),
+                other => Err(self.src.err(
+                    &v.span(),
+                    &self.key(key),
+                    format!("expected true or false, got {}", type_name(other)),
                 )),
             })
             .transpose()
@@ -1039,6 +1058,7 @@ fn sonar(root: &Table<'_>) -> Result<Sonar, ScenarioError> {
             "speckle",
             "beam_rays",
             "false_echoes",
+            "vehicle_contacts",
         ],
         "[sonar]",
     )?;
@@ -1087,6 +1107,9 @@ fn sonar(root: &Table<'_>) -> Result<Sonar, ScenarioError> {
     }
     if let Some(n) = t.number("false_echoes")? {
         s.false_echoes = n.within(0.0, 1.0, "")?;
+    }
+    if let Some(b) = t.boolean("vehicle_contacts")? {
+        s.vehicle_contacts = b;
     }
     Ok(s)
 }

@@ -142,6 +142,10 @@ pub struct Beam<'a> {
     pub look: Vec2,
     /// The scanline's range, m.
     pub range_m: f32,
+    /// The sonar hears nothing nearer than this (its blanking distance), m: the beam says
+    /// nothing about those cells, so they are neither hit nor cleared — a vehicle or rock
+    /// that comes that close stays believed where it was last seen.
+    pub blank_m: f32,
     /// Leading-edge ranges of the detected echoes, m, nearest first.
     pub echoes: &'a [f32],
 }
@@ -360,8 +364,9 @@ impl EvidenceMap {
             // Half-cell steps visit every cell the ray crosses (corners aside); each cell once.
             let step = 0.5 * cfg.cell_m;
             let n = min(free_to / step, 4.0 * MAP_SIDE as f32) as u32;
+            let first = libm::ceilf(beam.blank_m.max(0.0) / step) as u32;
             let mut last = None;
-            for k in 0..=n {
+            for k in first..=n {
                 let p = beam.origin + beam.look * (k as f32 * step);
                 let (i, j) = self.cell_of(p);
                 if last == Some((i, j)) || !w.contains(i, j) {
@@ -507,6 +512,7 @@ mod tests {
             origin: from,
             look: Vec2::from_angle(angle),
             range_m: 30.0,
+            blank_m: 0.0,
             echoes: &echoes,
         });
     }
@@ -560,6 +566,28 @@ mod tests {
     }
 
     #[test]
+    fn silence_inside_the_blanking_distance_clears_nothing() {
+        let m = map();
+        ping(&m, Vec2::ZERO, 0.0, Some(2.1));
+        let w = m.window().unwrap();
+        // The sonar has come within 1.5 m of it (blanking 2 m) and hears nothing.
+        for _ in 0..10 {
+            m.observe(&Beam {
+                origin: Vec2::new(0.6, 0.0),
+                look: Vec2::new(1.0, 0.0),
+                range_m: 30.0,
+                blank_m: 2.0,
+                echoes: &[],
+            });
+        }
+        assert!(
+            m.is_occupied(w, 4, 0),
+            "kept: it was inside the blanking distance"
+        );
+        assert!(!m.is_occupied(w, 10, 0) || !m.is_occupied(w, 12, 0));
+    }
+
+    #[test]
     fn nearest_keeps_the_k_nearest_in_order() {
         let m = map();
         for (k, r) in [9.0f32, 2.0, 5.0, 7.0, 3.0].iter().enumerate() {
@@ -603,6 +631,7 @@ mod tests {
             origin: Vec2::ZERO,
             look: Vec2::new(1.0, 0.0),
             range_m: 30.0,
+            blank_m: 0.0,
             echoes: &[f32::INFINITY, -1.0, 40.0],
         });
         let mut near: heapless::Vec<Near, 4> = heapless::Vec::new();

@@ -165,6 +165,7 @@ impl Extractor {
                 origin: sensor,
                 look,
                 range_m: scan.range_m,
+                blank_m: self.cfg.blanking_m,
                 echoes: &ranges,
             });
         }

@@ -150,6 +150,10 @@ pub fn scenario_text(world: &World, attempt: u64, case: &Case, duration_s: f64) 
     );
     let _ = writeln!(t, "\n[planner]\nstrategy = \"{}\"", case.strategy.name());
     let _ = writeln!(t, "\n[sonar]\nmode = \"{}\"", sensing_name(case.sensing));
+    if world.formation_m.is_some() {
+        // The virtual leader needs the neighbours' positions (seed 001 takes them as known).
+        t.push_str("vehicle_contacts = true\n");
+    }
     let sensing = match case.sensing {
         Sensing::Sonar => "sonar",
         Sensing::Contacts => "contacts",

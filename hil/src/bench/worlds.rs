@@ -53,7 +53,9 @@ pub enum Family {
     Crossing,
     /// Two vehicles swapping ends, a few rocks.
     HeadOn,
-    /// Three or four vehicles in a square formation transiting light clutter.
+    /// Three or four vehicles in a square formation transiting light clutter. The vehicles
+    /// know each other's positions (`[sonar] vehicle_contacts`): seed 001's virtual leader is
+    /// built on them; the obstacles still come from each vehicle's own sonar.
     Formation,
 }
 
