@@ -13,7 +13,7 @@ use crate::output::{plot, RunOutput, Summary};
 use crate::runner::{hull_radius, run_quiet, QuietRun};
 use crate::scenario::{self, Sensing};
 use crate::sim::ModelKind;
-use crate::types::SimShape;
+use crate::sweep::generate::{obstacle_table, wrap_deg};
 
 /// Redraws of an infeasible world before it is given up.
 pub const MAX_ATTEMPTS: u64 = 20;
@@ -175,54 +175,9 @@ pub fn scenario_text(world: &World, attempt: u64, case: &Case, duration_s: f64) 
         }
     }
     for o in &world.obstacles {
-        t.push_str("\n[[obstacle]]\n");
-        match &o.shape {
-            SimShape::Circle { center, radius } => {
-                let _ = writeln!(
-                    t,
-                    "shape = \"circle\"\ncenter = [{:.3}, {:.3}]\nradius = {radius:.3}",
-                    center.x, center.y
-                );
-            }
-            SimShape::Rectangle {
-                center,
-                half_size,
-                angle,
-            } => {
-                let _ = writeln!(
-                    t,
-                    "shape = \"rectangle\"\ncenter = [{:.3}, {:.3}]\nhalf_size = [{:.3}, {:.3}]\n\
-                     angle_deg = {:.3}",
-                    center.x,
-                    center.y,
-                    half_size.x,
-                    half_size.y,
-                    wrap_deg(angle.to_degrees())
-                );
-            }
-            SimShape::Polygon { points } => {
-                let pts: Vec<String> = points
-                    .iter()
-                    .map(|p| format!("[{:.3}, {:.3}]", p.x, p.y))
-                    .collect();
-                let _ = writeln!(t, "shape = \"polygon\"\npoints = [{}]", pts.join(", "));
-            }
-        }
-        if o.velocity.norm() > 0.0 {
-            let _ = writeln!(t, "velocity = [{:.3}, {:.3}]", o.velocity.x, o.velocity.y);
-        }
+        obstacle_table(&mut t, &o.shape, o.velocity);
     }
     t
-}
-
-/// An angle in degrees within −180 ..= 180 (the schema takes ±360).
-fn wrap_deg(d: f64) -> f64 {
-    let w = (d + 180.0).rem_euclid(360.0) - 180.0;
-    if w.is_finite() {
-        w
-    } else {
-        0.0
-    }
 }
 
 /// How long a run may take: three reference times and a minute, at least two minutes.

@@ -344,32 +344,7 @@ pub fn generate(spec: &Spec, kind: Kind, index: usize) -> Generated {
         goal.y
     );
     for o in &obstacles {
-        match o {
-            SimShape::Circle { center, radius } => {
-                let _ = writeln!(
-                    t,
-                    "\n[[obstacle]]\nshape = \"circle\"\ncenter = [{:.3}, {:.3}]\nradius = {radius:.3}",
-                    center.x, center.y
-                );
-            }
-            SimShape::Rectangle {
-                center,
-                half_size,
-                angle,
-            } => {
-                let _ = writeln!(
-                    t,
-                    "\n[[obstacle]]\nshape = \"rectangle\"\ncenter = [{:.3}, {:.3}]\n\
-                     half_size = [{:.3}, {:.3}]\nangle_deg = {:.2}",
-                    center.x,
-                    center.y,
-                    half_size.x,
-                    half_size.y,
-                    wrap_deg(angle.to_degrees())
-                );
-            }
-            SimShape::Polygon { .. } => {}
-        }
+        obstacle_table(&mut t, o, P2::default());
     }
     // What the file says, not the unrounded draw, is what the checks below and the tests see.
     let parsed: Vec<SimShape> = match scenario::parse(&t, &id) {
@@ -387,7 +362,52 @@ pub fn generate(spec: &Spec, kind: Kind, index: usize) -> Generated {
 }
 
 /// Degrees in (-180, 180].
-fn wrap_deg(d: f64) -> f64 {
+/// Appends the `[[obstacle]]` table of `shape` moving at `velocity` m/s to a scenario file's
+/// text (centimetre-rounded coordinates; `hil bench` writes its worlds with it too).
+pub fn obstacle_table(t: &mut String, shape: &SimShape, velocity: P2) {
+    match shape {
+        SimShape::Circle { center, radius } => {
+            let _ = writeln!(
+                t,
+                "\n[[obstacle]]\nshape = \"circle\"\ncenter = [{:.3}, {:.3}]\nradius = {radius:.3}",
+                center.x, center.y
+            );
+        }
+        SimShape::Rectangle {
+            center,
+            half_size,
+            angle,
+        } => {
+            let _ = writeln!(
+                t,
+                "\n[[obstacle]]\nshape = \"rectangle\"\ncenter = [{:.3}, {:.3}]\n\
+                 half_size = [{:.3}, {:.3}]\nangle_deg = {:.2}",
+                center.x,
+                center.y,
+                half_size.x,
+                half_size.y,
+                wrap_deg(angle.to_degrees())
+            );
+        }
+        SimShape::Polygon { points } => {
+            let pts: Vec<String> = points
+                .iter()
+                .map(|p| format!("[{:.3}, {:.3}]", p.x, p.y))
+                .collect();
+            let _ = writeln!(
+                t,
+                "\n[[obstacle]]\nshape = \"polygon\"\npoints = [{}]",
+                pts.join(", ")
+            );
+        }
+    }
+    if velocity.norm() > 0.0 {
+        let _ = writeln!(t, "velocity = [{:.3}, {:.3}]", velocity.x, velocity.y);
+    }
+}
+
+/// An angle in degrees within −180 ..= 180 (the scenario schema takes ±360).
+pub fn wrap_deg(d: f64) -> f64 {
     let w = d.rem_euclid(360.0);
     if w > 180.0 {
         w - 360.0
