@@ -311,3 +311,34 @@ fn the_criterion_ranks_a_collision_below_any_collision_free_set() {
     assert_eq!(ranked[0].set, 1);
     assert_eq!(ranked[1].collided, 1);
 }
+
+#[test]
+fn a_sweep_batch_takes_the_benchmarks_worlds() {
+    let text = GOOD.replace(
+        "clutter = 1",
+        "clutter = 1\nbench_families = [\"harbour\", \"serpentine\"]\nbench_count = 2",
+    );
+    let s = spec::parse(&text, "bench.toml").unwrap_or_else(|e| panic!("{e}"));
+    let batch = generate::batch(&s, Path::new(".")).unwrap_or_else(|e| panic!("{e}"));
+    let ids: Vec<&str> = batch.iter().map(|b| b.id.as_str()).collect();
+    for id in [
+        "bench:harbour:0",
+        "bench:harbour:1",
+        "bench:serpentine:0",
+        "bench:serpentine:1",
+    ] {
+        assert!(ids.contains(&id), "{id} missing from {ids:?}");
+    }
+    // The same world the benchmark flies (same obstacles).
+    let b = batch.iter().find(|b| b.id == "bench:harbour:1").unwrap();
+    let w = hil::bench::worlds::generate(hil::bench::worlds::Family::Harbour, 1, 0);
+    assert_eq!(b.scenario.obstacles.len(), w.obstacles.len());
+    let bad = refusal(&GOOD.replace(
+        "clutter = 1",
+        "clutter = 1\nbench_families = [\"reef\"]\nbench_count = 1",
+    ));
+    assert!(
+        bad.contains("reef") || bad.contains("bench family"),
+        "{bad}"
+    );
+}

@@ -476,5 +476,31 @@ pub fn batch(spec: &Spec, spec_dir: &std::path::Path) -> Result<Vec<BatchScenari
             out.push(fix(s, g.id, g.text));
         }
     }
+    // `hil bench` worlds: the same world `hil bench` flies for this craft, checked feasible.
+    let sc = &spec.scenarios;
+    for &family in &sc.bench_families {
+        for i in 0..sc.bench_count {
+            let case = crate::bench::case::Case {
+                family,
+                seed: i as u64,
+                strategy: vpf::Strategy::Vpf,
+                model: spec.craft.model,
+                sensing: sc.sensing,
+            };
+            let id = format!("bench:{}:{i}", family.name());
+            let (w, attempt, shortest) =
+                crate::bench::case::feasible_world(&case).map_err(|e| ScenarioError {
+                    file: id.clone(),
+                    line: 0,
+                    column: None,
+                    key: String::new(),
+                    message: format!("no feasible draw for the craft: {e}"),
+                })?;
+            let limit = crate::bench::case::duration_s(shortest / crate::bench::case::CRUISE_MPS);
+            let text = crate::bench::case::scenario_text(&w, attempt, &case, limit);
+            let s = scenario::parse(&text, &id)?;
+            out.push(fix(s, id, text));
+        }
+    }
     Ok(out)
 }

@@ -145,6 +145,11 @@ pub struct Scenarios {
     pub passage: usize,
     /// Generated U-traps.
     pub utrap: usize,
+    /// `hil bench` world families (`bench_families`), `bench_count` worlds of each, drawn for
+    /// the craft's model (`crate::bench::worlds`).
+    pub bench_families: Vec<crate::bench::worlds::Family>,
+    /// Worlds per bench family.
+    pub bench_count: usize,
     /// Start–goal distance of generated scenarios, m: `[min, max]`.
     pub length_m: (f64, f64),
     /// How the generated scenarios' vehicles sense obstacles.
@@ -181,6 +186,8 @@ impl Default for Scenarios {
             clutter: 0,
             passage: 0,
             utrap: 0,
+            bench_families: Vec::new(),
+            bench_count: 0,
             length_m: (40.0, 80.0),
             sensing: Sensing::Contacts,
             speed_mps: 1.0,
@@ -676,6 +683,8 @@ fn scenarios(root: &Table<'_>) -> Result<Scenarios, ScenarioError> {
             "clutter",
             "passage",
             "utrap",
+            "bench_families",
+            "bench_count",
             "length_m",
             "sensing",
             "speed_mps",
@@ -713,11 +722,38 @@ fn scenarios(root: &Table<'_>) -> Result<Scenarios, ScenarioError> {
     s.clutter = count("clutter")?;
     s.passage = count("passage")?;
     s.utrap = count("utrap")?;
-    if s.files.is_empty() && s.clutter + s.passage + s.utrap == 0 {
+    if let Some(v) = t.get("bench_families") {
+        let DeValue::Array(a) = v.get_ref() else {
+            return Err(t.fail(v, "bench_families", "expected a list of bench family names"));
+        };
+        for (i, item) in a.iter().enumerate() {
+            let family = match item.get_ref() {
+                DeValue::String(f) => crate::bench::worlds::Family::parse(f),
+                _ => None,
+            };
+            let Some(family) = family else {
+                return Err(t.src.err(
+                    &item.span(),
+                    &format!("{}[{i}]", t.key("bench_families")),
+                    format!(
+                        "expected a bench family: one of {}",
+                        crate::bench::worlds::FAMILIES.map(|f| f.name()).join(", ")
+                    ),
+                ));
+            };
+            s.bench_families.push(family);
+        }
+    }
+    s.bench_count = count("bench_count")?;
+    if s.bench_families.is_empty() {
+        s.bench_count = 0;
+    }
+    if s.files.is_empty() && s.clutter + s.passage + s.utrap + s.bench_count == 0 {
         return Err(t.src.err(
             &t.span,
             &t.path,
-            "no scenario: list `files` or ask for generated `clutter`, `passage` or `utrap`",
+            "no scenario: list `files` or ask for generated `clutter`, `passage`, `utrap` or \
+             `bench_families` with `bench_count`",
         ));
     }
     if let Some(r) = t.range_in("length_m", 15.0, 1000.0)? {
