@@ -145,11 +145,6 @@ impl Periodic {
         &self.counters
     }
 
-    /// Periods whose command the guard turned, slowed or stopped.
-    pub fn guard_count(&self) -> u32 {
-        self.guard_count
-    }
-
     /// Counts a missed deadline (the board detects it).
     pub fn count_overrun(&mut self) {
         self.counters.deadline_overruns = self.counters.deadline_overruns.saturating_add(1);
