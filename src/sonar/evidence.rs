@@ -303,35 +303,19 @@ impl EvidenceMap {
         if dx.abs() < RECENTRE_CELLS && dy.abs() < RECENTRE_CELLS {
             return;
         }
-        self.seq.fetch_add(1, Ordering::AcqRel);
+        // The slots of the columns and rows that leave are cleared for those that enter
+        // (readers of the old window see far-edge cells empty a moment early: harmless).
         if dx.abs() >= SIDE_I || dy.abs() >= SIDE_I {
             self.clear();
         } else {
-            // Columns leaving on one side re-enter on the other: clear their slots.
-            let cols = if dx >= 0 {
-                old.x0..want.x0
-            } else {
-                want.x0 + SIDE_I..old.x0 + SIDE_I
-            };
-            for i in cols {
-                for j in 0..SIDE_I {
-                    self.set(i, j, 0);
-                }
+            for i in leaving(old.x0, want.x0) {
+                (0..SIDE_I).for_each(|j| self.set(i, j, 0));
             }
-            let rows = if dy >= 0 {
-                old.y0..want.y0
-            } else {
-                want.y0 + SIDE_I..old.y0 + SIDE_I
-            };
-            for j in rows {
-                for i in 0..SIDE_I {
-                    self.set(i, j, 0);
-                }
+            for j in leaving(old.y0, want.y0) {
+                (0..SIDE_I).for_each(|i| self.set(i, j, 0));
             }
         }
-        self.x0.store(want.x0, Ordering::Relaxed);
-        self.y0.store(want.y0, Ordering::Relaxed);
-        self.seq.fetch_add(1, Ordering::AcqRel);
+        self.publish(want);
     }
 
     fn publish(&self, w: Window) {
@@ -473,6 +457,15 @@ impl EvidenceMap {
                 bits
             }
         })
+    }
+}
+
+/// The world indices (columns or rows) that leave a window side moving from `old` to `new`.
+fn leaving(old: i32, new: i32) -> core::ops::Range<i32> {
+    if new >= old {
+        old..new
+    } else {
+        new + SIDE_I..old + SIDE_I
     }
 }
 

@@ -150,16 +150,7 @@ fn boundary(shape: &SimShape, step: f64) -> Vec<P2> {
                 })
                 .collect()
         }
-        SimShape::Rectangle {
-            center,
-            half_size,
-            angle,
-        } => {
-            let (s, c) = angle.sin_cos();
-            let corner = |x: f64, y: f64| center.add(P2::new(c * x - s * y, s * x + c * y));
-            let (a, b) = (half_size.x, half_size.y);
-            ring(&[corner(-a, -b), corner(a, -b), corner(a, b), corner(-a, b)])
-        }
+        SimShape::Rectangle { .. } => shape.corners().map_or_else(Vec::new, |c| ring(&c)),
         SimShape::Polygon { points } => ring(points),
     }
 }

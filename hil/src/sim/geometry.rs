@@ -165,7 +165,7 @@ impl SimShape {
     }
 
     /// A rectangle's corners, counter-clockwise (other shapes: none).
-    fn corners(&self) -> Option<[P2; 4]> {
+    pub fn corners(&self) -> Option<[P2; 4]> {
         if let SimShape::Rectangle {
             center,
             half_size,
