@@ -11,7 +11,9 @@
 //! - [`world`]: fixed-capacity obstacle and agent tables, ageing, overflow policy;
 //! - [`planner`]: the planner step — sampled gradient, friction, bounding, integration,
 //!   PI-D set-points, ghost goal-points, virtual-leader formation;
-//! - [`sonar`]: mechanically scanned sonar scanlines to obstacle features;
+//! - [`sonar`]: mechanically scanned sonar scanlines to obstacle features and the evidence map;
+//! - [`route`]: the background route layer — a wavefront over a coarse grid of what is
+//!   believed, handing the planner its next intermediate goal-point;
 //! - [`link`]: the serial link's wire format (COBS frames, CRC, messages; `docs/protocol.md`);
 //! - [`guidance`]: the hardware-independent runtime — periodic task, background decoding and
 //!   extraction, fail-safes, telemetry — that the firmware and the host process run.
@@ -43,6 +45,7 @@ pub mod link;
 pub mod math;
 pub mod params;
 pub mod planner;
+pub mod route;
 pub mod sonar;
 pub mod world;
 

@@ -34,6 +34,7 @@ use vpf::guidance::{
 };
 use vpf::link::RxCounters;
 use vpf::params::Params;
+use vpf::route::{Route, RouteSlot};
 use vpf::sonar::{EvidenceMap, ExtractorConfig};
 
 use crate::board::active as board;
@@ -83,6 +84,9 @@ static RX_DROPPED: AtomicU32 = AtomicU32::new(0);
 /// The evidence map: written by the background, read by the periodic task (atomic cells and a
 /// sequence-counted window: `crate::sonar::evidence`), so it needs no lock and no `unsafe`.
 static EVIDENCE: EvidenceMap = EvidenceMap::empty();
+/// The newest route: written by the background, read by the periodic task (a sequence-counted
+/// slot of atomics: `vpf::route::handoff`).
+static ROUTE: RouteSlot = RouteSlot::new();
 
 /// The periodic task's state, handed to SysTick once.
 pub struct PeriodicCtx {
@@ -211,7 +215,8 @@ pub fn init(params: Params) -> Option<Idle> {
         RUNTIME.get()?
     };
     // Contacts get the planner's A_s⁺ when the periodic task admits them.
-    let background = Background::new(ExtractorConfig::default(), params.a_plus)?;
+    let route = RuntimeConfig::default().route;
+    let background = Background::new(ExtractorConfig::default(), route, params.a_plus)?;
     let ctx = PeriodicCtx {
         periodic,
         tx: tx_p,
@@ -265,6 +270,9 @@ impl Inputs for PeriodicInputs<'_> {
     }
     fn link_counters(&mut self) -> (RxCounters, BackgroundCounters) {
         critical_section::with(|cs| LINK.borrow(cs).get())
+    }
+    fn route(&mut self) -> Option<Route> {
+        ROUTE.latest()
     }
 }
 
@@ -390,6 +398,9 @@ impl Sink for IdleSink {
     fn tick(&mut self, time_ms: u64) {
         critical_section::with(|cs| LOCKSTEP.borrow(cs).set((true, Some(time_ms))));
         board::enter_lockstep();
+    }
+    fn route(&mut self, r: Route) {
+        ROUTE.publish(&r);
     }
 }
 

@@ -7,6 +7,7 @@
 //! leaves through a [`Sink`], which the board implements with lock-free queues.
 
 use crate::link::{Decoder, Direction, Message, Outcome, ReplyRepr, RxCounters};
+use crate::route::{Route, RouteConfig, Router};
 use crate::sonar::{EvidenceMap, Extractor, ExtractorConfig, Pose};
 
 use super::{Control, NavSample, Sighting};
@@ -22,6 +23,8 @@ pub trait Sink {
     fn control(&mut self, c: Control) -> bool;
     /// Lockstep: the host says the firmware's time is now `time_ms`; run a period.
     fn tick(&mut self, time_ms: u64);
+    /// Publishes the newest route (overwrites the previous one).
+    fn route(&mut self, r: Route);
 }
 
 /// What the background dropped, for telemetry.
@@ -40,10 +43,11 @@ pub struct BackgroundCounters {
     pub contacts_rejected: u32,
 }
 
-/// The decoder, the sonar extractor and the newest pose they need.
+/// The decoder, the sonar extractor, the route layer and the newest pose they need.
 pub struct Background {
     decoder: Decoder,
     extractor: Extractor,
+    router: Router,
     pose: Option<Pose>,
     /// Set by the first `Tick`: firmware time is then the host's, and navigation is stamped
     /// with its own time of validity instead of its arrival.
@@ -54,13 +58,14 @@ pub struct Background {
 }
 
 impl Background {
-    /// A background with the sonar extractor configured by `sonar` (validated; the default on
-    /// a refusal, which cannot happen for `ExtractorConfig::default()`), and host contacts given
-    /// repulsiveness `contact_a_plus`.
-    pub fn new(sonar: ExtractorConfig, contact_a_plus: f32) -> Option<Self> {
+    /// A background with the sonar extractor configured by `sonar` (`None` if it is refused,
+    /// which cannot happen for `ExtractorConfig::default()`), the route layer by `route`, and
+    /// host contacts given repulsiveness `contact_a_plus`.
+    pub fn new(sonar: ExtractorConfig, route: RouteConfig, contact_a_plus: f32) -> Option<Self> {
         Some(Background {
             decoder: Decoder::accepting(Direction::ToFirmware),
             extractor: Extractor::new(sonar).ok()?,
+            router: Router::new(route),
             pose: None,
             lockstep: false,
             counters: BackgroundCounters::default(),
@@ -71,6 +76,11 @@ impl Background {
     /// Whether a `Tick` has come: firmware time is then the host's.
     pub fn lockstep(&self) -> bool {
         self.lockstep
+    }
+
+    /// The route layer.
+    pub fn router(&self) -> &Router {
+        &self.router
     }
 
     /// The decoder's counters.
@@ -104,6 +114,7 @@ impl Background {
                         now_ms,
                         self.lockstep,
                         &mut self.extractor,
+                        &mut self.router,
                         &mut self.pose,
                         &mut self.counters,
                         self.contact_a_plus,
@@ -149,6 +160,7 @@ fn dispatch(
     now_ms: u64,
     lockstep: bool,
     extractor: &mut Extractor,
+    router: &mut Router,
     pose: &mut Option<Pose>,
     counters: &mut BackgroundCounters,
     contact_a_plus: f32,
@@ -165,10 +177,15 @@ fn dispatch(
                 position: n.nav.position,
                 heading: n.nav.heading,
             });
+            let time_ms = if lockstep { n.time_ms } else { now_ms };
             sink.nav(NavSample {
                 nav: n.nav,
-                time_ms: if lockstep { n.time_ms } else { now_ms },
+                time_ms,
             });
+            // The slow part of the route layer runs here, at most once per `replan_ms`.
+            if let Some(r) = router.on_nav(n.nav.position, time_ms, map) {
+                sink.route(r);
+            }
         }
         Message::Scanline(scan) => {
             let Some(p) = *pose else {
@@ -198,6 +215,9 @@ fn dispatch(
                         contact.to_agent(now_ms).map(Sighting::Agent)
                     }
                 };
+                if let Ok(Sighting::Obstacle(o)) = &s {
+                    router.obstacle(&o.shape, o.velocity);
+                }
                 match s {
                     Ok(s) => {
                         let ok = sink.sighting(s);
@@ -207,16 +227,27 @@ fn dispatch(
                 }
             }
         }
-        Message::Mission(m) => queue_control(Control::Mission(header, m), counters),
+        Message::Mission(m) => {
+            router.set_goal(m.goal.is_finite().then_some(m.goal));
+            queue_control(Control::Mission(header, m), counters)
+        }
         Message::Params(p) => queue_control(Control::Params(header, p), counters),
         Message::ChartObstacle(c) => match c.to_obstacle(now_ms) {
-            Ok(o) => queue_control(Control::Chart(header, o), counters),
+            Ok(o) => {
+                router.obstacle(&o.shape, o.velocity);
+                queue_control(Control::Chart(header, o), counters)
+            }
             Err(e) => queue_control(
                 Control::Reply(ReplyRepr::from_object_error(header, e)),
                 counters,
             ),
         },
-        Message::ChartClear(c) => queue_control(Control::ChartClear(header, c), counters),
+        Message::ChartClear(c) => {
+            // The route grid does not know which cells one chart entry made: all go (still
+            // contacts are marked again as they are seen).
+            router.forget_charts();
+            queue_control(Control::ChartClear(header, c), counters)
+        }
         Message::Tick(t) => sink.tick(t.time_ms),
         // Firmware → host messages are refused by the decoder (Direction::ToFirmware).
         Message::Command(_)

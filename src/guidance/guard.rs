@@ -49,6 +49,9 @@ pub struct GuardConfig {
     pub enabled: bool,
     /// Extra distance beyond the braking distance, m, 0 ..= 10.
     pub margin_m: f32,
+    /// Clearance kept beyond the hull radius, m: the vehicle's sway in a turn and the sonar's
+    /// range error are not in the check.
+    pub hull_margin_m: f32,
     /// Step between the headings tried, rad.
     pub turn_step_rad: f32,
     /// Largest turn away from the commanded heading, rad.
@@ -62,6 +65,7 @@ impl Default for GuardConfig {
         GuardConfig {
             enabled: true,
             margin_m: 0.3,
+            hull_margin_m: 0.25,
             turn_step_rad: crate::math::PI / 12.0,
             max_turn_rad: crate::math::PI / 2.0,
             min_speed: 0.1,
@@ -89,6 +93,11 @@ struct Believed<'a> {
     /// The map cells that a segment of the longest length tried can reach.
     cells: heapless::Vec<Vec2, MAX_MAP_CELLS>,
     hull: f32,
+    /// Radius of another vehicle's circle, m.
+    agent_r: f32,
+    /// Radius of the disc that covers a map cell, m: a surface anywhere in a believed cell is
+    /// within it, so the check errs on the safe side of the grid's resolution.
+    r_map: f32,
     /// Clearance at the vehicle's position, m.
     here: f32,
 }
@@ -106,8 +115,8 @@ impl Believed<'_> {
     fn blocked(&self, p: Vec2, u: Vec2, len: f32, speed: f32) -> bool {
         let floor = min(self.hull, self.here - 1e-3);
         let w = self.world;
-        // Points: map cells (discs) and agents (circles).
-        let r_map = w.map_radius();
+        // Points: map cells (discs covering the whole square cell) and agents (circles).
+        let r_map = self.r_map;
         if self
             .cells
             .iter()
@@ -117,7 +126,7 @@ impl Believed<'_> {
         }
         // The agents' circles have the vehicle's own radius (000 §III), so hull + hull.
         if w.agents().iter().any(|a| {
-            to_segment(a.position, p, u, len) - self.hull < floor && ahead(a.position, p, u)
+            to_segment(a.position, p, u, len) - self.agent_r < floor && ahead(a.position, p, u)
         }) {
             return true;
         }
@@ -188,7 +197,8 @@ pub fn check(
     // No segment tried is longer than this: cells farther than it (and the hull and a cell)
     // cannot block any, so they are left out once here rather than per heading.
     let longest = max(reach(cmd.v_set, prm, cfg), reach(speed, prm, cfg));
-    let near = longest + prm.agent_radius_m + world.map_radius();
+    let r_map = world.map_radius() * core::f32::consts::SQRT_2;
+    let near = longest + prm.agent_radius_m + r_map;
     let mut cells = heapless::Vec::new();
     for &c in world.map_cells() {
         // Same capacity as the map's cells: never full. (heapless' `collect` panics when full.)
@@ -199,8 +209,13 @@ pub fn check(
     let b = Believed {
         world,
         cells,
-        hull: prm.agent_radius_m,
-        here: world.clearance(p, prm.agent_radius_m),
+        hull: prm.agent_radius_m + cfg.hull_margin_m,
+        agent_r: prm.agent_radius_m,
+        r_map,
+        here: world.clearance(p, prm.agent_radius_m).min(
+            crate::world::nearest_cell(world.map_cells(), p)
+                .map_or(f32::INFINITY, |(_, d)| d - r_map),
+        ),
     };
     // 1. Where the vehicle is going now, within its braking distance.
     if let Some(u) = nav.velocity.normalized(1e-3) {

@@ -12,6 +12,7 @@ use crate::link::{
 use crate::math::Vec2;
 use crate::params::Params;
 use crate::planner::{Command, Planner};
+use crate::route::{Route, RouteConfig};
 use crate::world::World;
 
 use super::failsafe::{self, FailsafeConfig, FreezeDetector, Situation};
@@ -43,6 +44,8 @@ pub struct RuntimeConfig {
     /// A [`BeliefRepr`] chunk of the evidence map goes out every this many periods (0: never);
     /// with 16-row chunks of the 64-row window the whole map takes four chunks.
     pub belief_every: u16,
+    /// The route layer (`crate::route`): the background plans, this task follows.
+    pub route: RouteConfig,
 }
 
 impl Default for RuntimeConfig {
@@ -54,6 +57,7 @@ impl Default for RuntimeConfig {
             guard: GuardConfig::default(),
             map_reach_m: 6.0,
             belief_every: 2,
+            route: RouteConfig::default(),
         }
     }
 }
@@ -68,6 +72,9 @@ pub trait Inputs {
     fn control(&mut self) -> Option<Control>;
     /// The slow side's counters, for telemetry.
     fn link_counters(&mut self) -> (RxCounters, BackgroundCounters);
+    /// The newest route the background published, if any (`None` also while it is being
+    /// written: the task keeps the one it had).
+    fn route(&mut self) -> Option<Route>;
 }
 
 /// The periodic task's state.
@@ -93,6 +100,8 @@ pub struct Periodic {
     frozen_holds: u32,
     /// Periods counted for the `Belief` schedule.
     belief_tick: u32,
+    /// The newest route read from the background.
+    route: Option<Route>,
 }
 
 impl Periodic {
@@ -117,12 +126,18 @@ impl Periodic {
             freeze: FreezeDetector::default(),
             frozen_holds: 0,
             belief_tick: 0,
+            route: None,
         })
     }
 
     /// The planner (read-only: requests go through [`Control`]).
     pub fn planner(&self) -> &Planner {
         &self.planner
+    }
+
+    /// The newest route read from the background.
+    pub fn route(&self) -> Option<&Route> {
+        self.route.as_ref()
     }
 
     /// The world tables.
@@ -188,6 +203,15 @@ impl Periodic {
             self.world
                 .set_map(near.iter().map(|c| c.center), 0.5 * m.cell_m());
         }
+
+        if let Some(r) = inputs.route() {
+            self.route = Some(r);
+        }
+        let aim = match (self.route, self.planner.mission()) {
+            (Some(r), Some(m)) => r.aim_for(m.goal, now_ms, &self.config.route),
+            _ => None,
+        };
+        self.planner.set_route(aim);
 
         let cmd = self.plan(now_ms, nav, cost);
         self.last = Some((now_ms, cmd));

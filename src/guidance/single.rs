@@ -10,6 +10,7 @@ use heapless::Deque;
 use crate::link::{CostUnit, RxCounters};
 use crate::params::Params;
 use crate::planner::Command;
+use crate::route::Route;
 use crate::sonar::{EvidenceMap, ExtractorConfig};
 
 use super::{
@@ -23,6 +24,7 @@ struct Queues {
     sightings: Deque<Sighting, SIGHTING_QUEUE>,
     controls: Deque<Control, CONTROL_QUEUE>,
     tick: Option<u64>,
+    route: Option<Route>,
     rx: RxCounters,
     bg: BackgroundCounters,
 }
@@ -40,6 +42,9 @@ impl Sink for Queues {
     fn tick(&mut self, time_ms: u64) {
         self.tick = Some(time_ms);
     }
+    fn route(&mut self, r: Route) {
+        self.route = Some(r);
+    }
 }
 
 impl Inputs for Queues {
@@ -54,6 +59,9 @@ impl Inputs for Queues {
     }
     fn link_counters(&mut self) -> (RxCounters, BackgroundCounters) {
         (self.rx, self.bg)
+    }
+    fn route(&mut self) -> Option<Route> {
+        self.route.take()
     }
 }
 
@@ -75,12 +83,11 @@ impl SingleContext {
         cost_unit: CostUnit,
     ) -> Result<Self, crate::params::ParamError> {
         let periodic = Periodic::new(params, config, cost_unit)?;
-        let background = Background::new(ExtractorConfig::default(), params.a_plus).ok_or(
-            crate::params::ParamError {
-                name: "sonar",
-                problem: crate::params::ParamProblem::OutOfRange,
-            },
-        )?;
+        let background = Background::new(ExtractorConfig::default(), config.route, params.a_plus)
+            .ok_or(crate::params::ParamError {
+            name: "sonar",
+            problem: crate::params::ParamProblem::OutOfRange,
+        })?;
         Ok(SingleContext {
             background,
             periodic,
@@ -89,6 +96,7 @@ impl SingleContext {
                 sightings: Deque::new(),
                 controls: Deque::new(),
                 tick: None,
+                route: None,
                 rx: RxCounters::default(),
                 bg: BackgroundCounters::default(),
             },
@@ -100,6 +108,11 @@ impl SingleContext {
     /// The periodic half (planner, world, counters).
     pub fn periodic(&self) -> &Periodic {
         &self.periodic
+    }
+
+    /// The background half (decoder, extractor, route layer).
+    pub fn background(&self) -> &Background {
+        &self.background
     }
 
     /// The evidence map the sonar builds.

@@ -265,6 +265,8 @@ struct Context<'a> {
     nav: &'a NavState,
     world: &'a World,
     mission: Mission,
+    /// Where the strategy steers for: the route layer's goal-point, else the mission goal.
+    aim: Vec2,
     /// Where each obstacle is planned against, relative to where it is.
     shifts: &'a Shifts,
     /// Signed distance to the nearest obstacle or vehicle circle as they are now, m.
@@ -294,6 +296,8 @@ pub struct Planner {
     /// Stator of the evidence map (A_s⁺ = `params.a_plus`, as sensed obstacles).
     map_stator: Stator,
     mission: Option<Mission>,
+    /// The route layer's goal-point for the next step, if it has one (`set_route`).
+    route: Option<Vec2>,
     motion: Motion,
     /// Refused-input counters.
     pub counters: PlannerCounters,
@@ -328,6 +332,7 @@ impl Planner {
             agent_stator: Stator::new(params.agent_a_plus),
             map_stator: Stator::new(params.a_plus),
             mission: None,
+            route: None,
             motion: Motion::new(params.seed),
             counters: PlannerCounters::default(),
         })
@@ -377,6 +382,13 @@ impl Planner {
         self.motion.arc = ArcState::default();
         self.motion.arrived = false;
         Ok(())
+    }
+
+    /// The route layer's intermediate goal-point for this step (`crate::route`), or `None` to
+    /// head for the mission goal. Set by the runtime before each step; arrival is still judged
+    /// at the mission goal.
+    pub fn set_route(&mut self, aim: Option<Vec2>) {
+        self.route = aim.filter(|a| finite_coord(*a));
     }
 
     /// Drops the mission: the planner holds.
@@ -457,6 +469,7 @@ impl Planner {
             nav,
             world,
             mission,
+            aim: self.route.unwrap_or(mission.goal),
             shifts: &shifts,
             clearance,
         };
@@ -506,7 +519,6 @@ impl Planner {
             force: f_bar,
             velocity: v_bar,
         };
-        let goal = cx.mission.goal;
         // The speed set-point is v̄ along the commanded heading: below V_EPS the heading is
         // kept (setpoints.rs), and a small v̄ pointing elsewhere — back to the goal after an
         // overshoot — must not push the vehicle on along the old heading.
@@ -522,7 +534,7 @@ impl Planner {
             mode: self.mode(m, cx),
             force: f_bar,
             velocity: v_bar,
-            target: m.escape.active_target(goal),
+            target: m.escape.active_target(cx.aim),
             ghost_depth: m.escape.ghosts().len() as u8,
             clearance_m: cx.clearance,
         }

@@ -68,7 +68,7 @@ impl Planner {
     pub(super) fn plan_multipoint(&self, m: &mut Motion, cx: &Context<'_>) -> Command {
         let prm = &self.params;
         let p = cx.nav.position;
-        let goal = cx.mission.goal;
+        let goal = cx.aim;
         let speed = self.cruise_speed(m, cx);
         let arc = &mut m.arc;
         let reached = arc
@@ -117,7 +117,7 @@ impl Planner {
     /// navigation function and it heads straight at the goal.
     pub(super) fn plan_navfn(&self, m: &mut Motion, cx: &Context<'_>) -> Command {
         let p = cx.nav.position;
-        let straight = (cx.mission.goal - p).normalized(1e-6).unwrap_or(Vec2::ZERO);
+        let straight = (cx.aim - p).normalized(1e-6).unwrap_or(Vec2::ZERO);
         let direction = match self.sphere_world(cx) {
             Ok(world) => match world.eval(p) {
                 Ok(e) => e.descent,
@@ -138,15 +138,16 @@ impl Planner {
     /// the vehicle is [`ARRIVAL_RELEASE`] arrival radii away.
     fn cruise_speed(&self, m: &mut Motion, cx: &Context<'_>) -> f32 {
         let prm = &self.params;
-        let to_goal = cx.mission.goal - cx.nav.position;
-        let d = to_goal.norm();
+        let d = (cx.mission.goal - cx.nav.position).norm();
+        // The turn is onto the route's goal-point when there is one (it is where we steer).
+        let to_goal = cx.aim - cx.nav.position;
         let bow = Vec2::from_angle(cx.nav.heading);
         let sin_theta = if bow.dot(to_goal) < 0.0 {
             1.0
         } else {
-            bow.cross(to_goal).abs() / max(d, 1e-6)
+            bow.cross(to_goal).abs() / max(to_goal.norm(), 1e-6)
         };
-        let turn = sqrt(prm.f_max * d / (2.0 * max(sin_theta, 1e-6)));
+        let turn = sqrt(prm.f_max * to_goal.norm() / (2.0 * max(sin_theta, 1e-6)));
         m.arrived = if m.arrived {
             d <= ARRIVAL_RELEASE * prm.arrival_radius_m
         } else {
@@ -168,7 +169,7 @@ impl Planner {
 
     fn sphere_world(&self, cx: &Context<'_>) -> Result<SphereWorld, NavfnError> {
         let prm = &self.params;
-        let goal = cx.mission.goal;
+        let goal = cx.aim;
         let mut world = SphereWorld::new(goal, prm.nf_workspace_m, goal, 1.0)?;
         for shape in cx.predicted_shapes() {
             let (c, r) = navfn::enclosing_circle(&shape);

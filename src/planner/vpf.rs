@@ -21,29 +21,29 @@ const MAX_NORMALS: usize = MAX_OBSTACLES + 1;
 /// Step of the central differences for obstacle normals, m.
 const NORMAL_STEP_M: f32 = 0.01;
 
-/// How far ahead the goal-point is carried, in attractor reaches σ.
-pub const CARROT_SIGMAS: f32 = 2.0;
-
-/// Where seed 000's goal-point PDF (eq. 13) is centred for a vehicle at `p` heading for
-/// `target`: the target itself within [`CARROT_SIGMAS`]·σ, else the point that far along the
-/// straight line to it — a "carrot on a stick" (000 §III's own image for the ghost
-/// goal-points).
+/// Seed 000's goal-point PDF (eq. 13) for a vehicle at `p` heading for `target`.
 ///
-/// **Departure from the paper, and why.** Eq. 13 is a Gaussian of reach σ: its pull
-/// A⁻·d/σ²·e^{−d²/2σ²} at distance d is 0.27·A⁻/σ at 2σ and below one thousandth of that
-/// at 5σ, under friction and rounding, so a goal 150 m away with the default σ = 40 m does not
-/// move the vehicle at all. Carried to 2σ ahead, the goal-point pulls with its 2σ strength
-/// until the real goal is within 2σ, and from there on the field is the paper's. Every paper
-/// experiment starts within 2σ of its goal, so their runs are unchanged.
-pub fn carrot(p: Vec2, target: Vec2, sigma: f32) -> Vec2 {
+/// **Departure from the paper, and why.** The force is the drop of the potential across the
+/// sample circle (eq. 2–4), so eq. 13 pulls with A⁻·ε·d/σ²·e^{−d²/2σ²} at distance d: a
+/// Gaussian's tail, 0.27·A⁻ε/σ at 2σ and nothing 150 m out with the default σ = 40 m. So a
+/// target farther than σ is replaced by a goal-point σ ahead on the straight line to it — a
+/// "carrot on a stick" (000 §III's own image for ghost goal-points) — where eq. 13, with the
+/// paper's A⁻ and σ, pulls hardest: A⁻·ε·e^{−1/2}/σ, whatever the distance. Within σ of the
+/// target the field is the paper's. A route layer's intermediate goal-point (`detour`,
+/// `crate::route`) is a waypoint to pass, not to stop on: it gets the goal-point σ out along
+/// the line to it even when it is nearer.
+///
+/// The settled speed is then A⁻·ε·e^{−1/2}/(σ·μ) (0.47 m/s with the defaults) or v_max if
+/// less. A smaller σ for the carrot would cruise at v_max, and was measured (`hil bench`): at
+/// 1 m/s the vehicle outruns its 9-second sonar sweep and grazes structure not yet seen.
+pub fn goal_point(p: Vec2, target: Vec2, detour: bool, prm: &crate::params::Params) -> GoalPdf {
+    let sigma = prm.sigma_m;
     let d = target - p;
-    let reach = CARROT_SIGMAS * sigma;
     let n2 = d.norm2();
-    if n2 <= reach * reach {
-        target
-    } else {
-        p + d * (reach / crate::math::sqrt(n2))
+    if (n2 <= sigma * sigma && !detour) || n2 < 1e-12 {
+        return GoalPdf::new(target, prm.a_minus, sigma);
     }
+    GoalPdf::new(p + d * (sigma / crate::math::sqrt(n2)), prm.a_minus, sigma)
 }
 
 impl Planner {
@@ -53,11 +53,12 @@ impl Planner {
         let p = cx.nav.position;
         let prm = self.params;
         let world = cx.world;
-        let target = m.escape.active_target(cx.mission.goal);
+        let target = m.escape.active_target(cx.aim);
+        let detour = target == cx.aim && cx.aim != cx.mission.goal;
 
-        // Attractors: the active goal-point — carried within reach — and the virtual leader
-        // (001 Table 1).
-        let goal = GoalPdf::new(carrot(p, target, prm.sigma_m), prm.a_minus, prm.sigma_m);
+        // Attractors: the active goal-point — as a cruise goal-point when far — and the
+        // virtual leader (001 Table 1).
+        let goal = goal_point(p, target, detour, &prm);
         let formation = cx
             .mission
             .formation
@@ -142,9 +143,8 @@ impl Planner {
             }
         };
         let speed = cmd.velocity.norm();
-        m.escape
-            .update(cx.now_ms, p, speed, cx.mission.goal, &prm, cause);
-        cmd.target = m.escape.active_target(cx.mission.goal);
+        m.escape.update(cx.now_ms, p, speed, cx.aim, &prm, cause);
+        cmd.target = m.escape.active_target(cx.aim);
         cmd.ghost_depth = m.escape.ghosts().len() as u8;
         cmd.mode = self.mode(m, cx);
         cmd
@@ -156,11 +156,23 @@ mod tests {
     use super::*;
 
     #[test]
-    fn the_goal_point_is_carried_within_reach_and_never_past_the_goal() {
-        let g = Vec2::new(300.0, 0.0);
-        assert!((carrot(Vec2::ZERO, g, 40.0) - Vec2::new(80.0, 0.0)).norm() < 1e-3);
-        assert_eq!(carrot(Vec2::new(250.0, 0.0), g, 40.0), g);
-        let c = carrot(Vec2::new(0.0, 100.0), Vec2::ZERO, 10.0);
-        assert!((c - Vec2::new(0.0, 80.0)).norm() < 1e-4, "{c:?}");
+    fn a_far_goal_pulls_as_hard_as_eq_13_can_and_a_near_one_as_the_paper() {
+        let prm = crate::params::Params::default();
+        let sigma = prm.sigma_m;
+        let e = Vec2::new(prm.epsilon_m, 0.0);
+        let drop = |g: GoalPdf| g.potential(Vec2::ZERO) - g.potential(e);
+        // 300 m away: the drop across ε is eq. 13's largest, A⁻·ε·e^{−1/2}/σ.
+        let far = goal_point(Vec2::ZERO, Vec2::new(300.0, 0.0), false, &prm);
+        let best = prm.a_minus * prm.epsilon_m * libm::expf(-0.5) / sigma;
+        assert!((drop(far) - best).abs() < 0.02 * best, "{}", drop(far));
+        // Within σ: eq. 13 as published.
+        let near = Vec2::new(0.5 * sigma, 0.0);
+        assert_eq!(
+            goal_point(Vec2::ZERO, near, false, &prm),
+            GoalPdf::new(near, prm.a_minus, sigma)
+        );
+        // A route's goal-point 3 m off pulls as hard as a far goal.
+        let via = goal_point(Vec2::ZERO, Vec2::new(3.0, 0.0), true, &prm);
+        assert!((drop(via) - best).abs() < 0.02 * best);
     }
 }

@@ -1,0 +1,386 @@
+//! The route layer: where to go next when the straight line to the goal is blocked by
+//! structure a local method cannot escape — a harbour's piers, a long wall with a distant gap,
+//! a trap's walls.
+//!
+//! The local planners (VPF, multipoint, navfn) see a few metres around the vehicle and follow a
+//! field to the goal-point; a wall across the way is a local minimum, and ghost goal-points
+//! (seed 000 §III) find the way round only by trial. This layer runs in the **background**
+//! (slow, preemptible, never delaying the periodic task): once per `replan_ms` of navigation
+//! time it
+//! 1. moves its [`grid::Grid`] with the vehicle and takes in the evidence map (charted
+//!    obstacles and still contacts are marked as they arrive);
+//! 2. spreads a [`wavefront::Wavefront`] from the goal (or the window cell nearest a goal
+//!    beyond the window) through free cells — first with the obstacles grown by one cell, so
+//!    the route keeps its distance; if that finds no way, without;
+//! 3. walks down the wavefront from the vehicle and takes the farthest cell of the walk it can
+//!    see in a straight line (`aim`);
+//! 4. publishes a [`Route`] through a lock-free [`RouteSlot`].
+//!
+//! The periodic task then gives the planner `aim` as its goal-point while the route is a
+//! [`RouteStatus::Detour`] for its own goal and fresh; arrival is still judged at the goal
+//! (`crate::planner::Planner::set_route`). When the straight line is clear, or no route exists
+//! (the goal is enclosed as far as the grid knows), it gets nothing: the planner runs exactly as
+//! without this layer, ghost goal-points included. [`RouteConfig::enabled`] off gives the
+//! papers' planner unchanged.
+
+pub mod grid;
+pub mod handoff;
+pub mod wavefront;
+
+pub use grid::{Grid, Rows, ROUTE_SIDE};
+pub use handoff::RouteSlot;
+pub use wavefront::Wavefront;
+
+use crate::field::Shape;
+use crate::math::Vec2;
+use crate::sonar::EvidenceMap;
+use wavefront::Cell;
+
+/// Tuning of the route layer.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct RouteConfig {
+    /// Whether the layer runs at all (off: the planner as published).
+    pub enabled: bool,
+    /// Route cell size, m: a whole multiple (1 ..= 8) of the evidence map's cell. The window
+    /// is [`ROUTE_SIDE`] cells wide (128 m at the default 2 m).
+    pub cell_m: f32,
+    /// Navigation time between replans, ms.
+    pub replan_ms: u32,
+    /// A route older than this is not used (the background has stalled), ms.
+    pub stale_ms: u32,
+}
+
+impl Default for RouteConfig {
+    fn default() -> Self {
+        RouteConfig {
+            enabled: true,
+            cell_m: 2.0,
+            replan_ms: 1000,
+            stale_ms: 5000,
+        }
+    }
+}
+
+/// What the route says.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum RouteStatus {
+    /// The goal (or the window's edge towards it) is in plain sight: go straight.
+    Clear,
+    /// Go to `aim` first.
+    Detour,
+    /// No way to the goal through what is believed: the local planner is on its own.
+    Blocked,
+}
+
+impl RouteStatus {
+    fn code(self) -> u8 {
+        match self {
+            RouteStatus::Clear => 1,
+            RouteStatus::Detour => 2,
+            RouteStatus::Blocked => 3,
+        }
+    }
+
+    fn from_code(c: u8) -> Option<Self> {
+        match c {
+            1 => Some(RouteStatus::Clear),
+            2 => Some(RouteStatus::Detour),
+            3 => Some(RouteStatus::Blocked),
+            _ => None,
+        }
+    }
+}
+
+/// One replan's result.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Route {
+    /// The intermediate goal-point, m (the goal itself when `Clear`).
+    pub aim: Vec2,
+    /// The goal this route leads to, m.
+    pub goal: Vec2,
+    /// Navigation time of the replan, ms.
+    pub time_ms: u64,
+    /// What it says.
+    pub status: RouteStatus,
+}
+
+impl Route {
+    /// The goal-point the planner should head for at `now_ms` with goal `goal`: `aim` for a
+    /// fresh detour to that goal, else `None` (head for the goal).
+    pub fn aim_for(&self, goal: Vec2, now_ms: u64, cfg: &RouteConfig) -> Option<Vec2> {
+        let fresh = now_ms.saturating_sub(self.time_ms) <= u64::from(cfg.stale_ms);
+        (cfg.enabled && fresh && self.goal == goal && self.status == RouteStatus::Detour)
+            .then_some(self.aim)
+    }
+}
+
+/// Route counters.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct RouteCounters {
+    /// Replans run.
+    pub replans: u32,
+    /// Replans that found no way.
+    pub blocked: u32,
+}
+
+/// Most wavefront layers per spread: enough for any simple path in the window.
+const MAX_LAYERS: u32 = (ROUTE_SIDE * ROUTE_SIDE / 2) as u32;
+/// Longest walk down the wavefront looking for the farthest visible cell.
+const MAX_WALK: usize = 2 * ROUTE_SIDE;
+/// Contacts slower than this are marked as still structure, m/s.
+const STILL_SPEED: f32 = 0.1;
+
+/// The background's route planner.
+#[derive(Clone, Debug)]
+pub struct Router {
+    cfg: RouteConfig,
+    grid: Grid,
+    wave: Wavefront,
+    goal: Option<Vec2>,
+    last_ms: Option<u64>,
+    /// Counters.
+    pub counters: RouteCounters,
+}
+
+impl Router {
+    /// A router with `cfg` (a cell size that is not a whole multiple of the evidence map's is
+    /// not refused here: the map is then not taken in, and only contacts and charts count).
+    pub const fn new(cfg: RouteConfig) -> Self {
+        Router {
+            cfg,
+            grid: Grid::new(cfg.cell_m),
+            wave: Wavefront::new(),
+            goal: None,
+            last_ms: None,
+            counters: RouteCounters {
+                replans: 0,
+                blocked: 0,
+            },
+        }
+    }
+
+    /// The grid (for tests and tools).
+    pub fn grid(&self) -> &Grid {
+        &self.grid
+    }
+
+    /// A new mission goal (replanned at the next navigation), or none.
+    pub fn set_goal(&mut self, goal: Option<Vec2>) {
+        if self.goal != goal {
+            self.goal = goal;
+            self.last_ms = None;
+        }
+    }
+
+    /// A charted or sensed obstacle: still ones are marked.
+    pub fn obstacle(&mut self, shape: &Shape, velocity: Vec2) {
+        if self.cfg.enabled && velocity.norm2() <= STILL_SPEED * STILL_SPEED {
+            self.grid.mark(shape);
+        }
+    }
+
+    /// The chart was cleared.
+    pub fn forget_charts(&mut self) {
+        self.grid.forget_known();
+    }
+
+    /// New navigation: replans when `replan_ms` has passed since the last replan (or the goal
+    /// changed) and returns the route to publish.
+    pub fn on_nav(&mut self, p: Vec2, now_ms: u64, map: Option<&EvidenceMap>) -> Option<Route> {
+        if !self.cfg.enabled || !p.is_finite() {
+            return None;
+        }
+        self.grid.follow(p);
+        let goal = self.goal?;
+        let due = self
+            .last_ms
+            .is_none_or(|t| now_ms < t || now_ms - t >= u64::from(self.cfg.replan_ms));
+        if !due {
+            return None;
+        }
+        self.last_ms = Some(now_ms);
+        if let Some(m) = map {
+            self.grid.absorb(m);
+        }
+        self.counters.replans = self.counters.replans.saturating_add(1);
+        let (status, aim) = self.plan(p, goal);
+        if status == RouteStatus::Blocked {
+            self.counters.blocked = self.counters.blocked.saturating_add(1);
+        }
+        Some(Route {
+            aim,
+            goal,
+            time_ms: now_ms,
+            status,
+        })
+    }
+
+    /// Steps 2–3 of the module notes.
+    fn plan(&mut self, p: Vec2, goal: Vec2) -> (RouteStatus, Vec2) {
+        let Some(start) = self.grid.cell_of(p) else {
+            return (RouteStatus::Blocked, goal);
+        };
+        let inside = self.grid.cell_of(goal);
+        let source = inside.unwrap_or_else(|| self.grid.clamp(goal));
+        let occupied = self.grid.occupied();
+        let grown = grow(&grow(&occupied));
+        let grown = free_around(&free_around(&grown, &occupied, start), &occupied, source);
+        let mut tight = occupied;
+        if let Some(row) = tight.get_mut(start.1) {
+            *row &= !1u64.checked_shl(start.0 as u32).unwrap_or(0);
+        }
+        for blocked in [grown, tight] {
+            if self.wave.spread(&blocked, source, start, MAX_LAYERS) {
+                let end = if inside.is_some() {
+                    goal
+                } else {
+                    self.grid.center(source.0, source.1)
+                };
+                return self.aim(&blocked, p, start, source, end, goal);
+            }
+        }
+        (RouteStatus::Blocked, goal)
+    }
+
+    /// Walks down from `start` and returns the farthest cell seen in a straight line from `p`;
+    /// `Clear` with the goal itself when the walk's end (`end`) is in sight.
+    fn aim(
+        &self,
+        blocked: &Rows,
+        p: Vec2,
+        start: Cell,
+        source: Cell,
+        end: Vec2,
+        goal: Vec2,
+    ) -> (RouteStatus, Vec2) {
+        let g = &self.grid;
+        let mut cell = start;
+        let mut aim = None;
+        for _ in 0..MAX_WALK {
+            let Some(next) = self.wave.downhill(cell, source) else {
+                break;
+            };
+            if !g.line_clear(blocked, p, g.center(next.0, next.1), start) {
+                break;
+            }
+            cell = next;
+            aim = Some(g.center(cell.0, cell.1));
+        }
+        if cell == source && g.line_clear(blocked, p, end, start) {
+            return (RouteStatus::Clear, goal);
+        }
+        match aim {
+            Some(a) => (RouteStatus::Detour, a),
+            // Not even the first step is in sight (the vehicle is at a cell's corner): aim at
+            // the first step anyway.
+            None => self
+                .wave
+                .downhill(start, source)
+                .map_or((RouteStatus::Blocked, goal), |n| {
+                    (RouteStatus::Detour, g.center(n.0, n.1))
+                }),
+        }
+    }
+}
+
+/// Occupied cells grown by one cell in all eight directions.
+fn grow(rows: &Rows) -> Rows {
+    let wide = |r: Option<&u64>| r.map_or(0, |&b| b | (b << 1) | (b >> 1));
+    let mut out = [0u64; ROUTE_SIDE];
+    for (r, o) in out.iter_mut().enumerate() {
+        let above = r.checked_sub(1).and_then(|a| rows.get(a));
+        *o = wide(above) | wide(rows.get(r)) | wide(rows.get(r + 1));
+    }
+    out
+}
+
+/// `blocked` with the 3 × 3 cells around `cell` set back to `keep` (the vehicle and the goal
+/// are never shut in by the growing itself).
+fn free_around(blocked: &Rows, keep: &Rows, (c, r): Cell) -> Rows {
+    let mut out = *blocked;
+    let cols = (0b111u64 << c) >> 1;
+    for rr in r.saturating_sub(1)..=r + 1 {
+        if let (Some(o), Some(k)) = (out.get_mut(rr), keep.get(rr)) {
+            *o = (*o & !cols) | (k & cols);
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn router_with_wall() -> Router {
+        let mut r = Router::new(RouteConfig::default());
+        r.grid.follow(Vec2::ZERO);
+        // A wall 40 m long across the straight line, from y = −30 to +10: the way round is
+        // over its northern end.
+        let wall = Shape::rectangle(Vec2::new(20.0, -10.0), Vec2::new(0.5, 20.0), 0.0).unwrap();
+        r.obstacle(&wall, Vec2::ZERO);
+        r
+    }
+
+    #[test]
+    fn a_wall_across_the_way_gives_a_detour_round_its_open_end() {
+        let mut r = router_with_wall();
+        r.set_goal(Some(Vec2::new(50.0, 0.0)));
+        let route = r.on_nav(Vec2::ZERO, 0, None).unwrap();
+        assert_eq!(route.status, RouteStatus::Detour);
+        assert!(
+            route.aim.y > 10.0,
+            "round the northern end: {:?}",
+            route.aim
+        );
+        assert!(route.aim.x < 20.0 + 4.0, "{:?}", route.aim);
+        // The aim is seen from the vehicle: the wall is not between them.
+        assert!(route.aim.x < 19.0 || route.aim.y > 12.0);
+        // No replan before `replan_ms`.
+        assert_eq!(r.on_nav(Vec2::ZERO, 500, None), None);
+        assert!(r.on_nav(Vec2::ZERO, 1000, None).is_some());
+    }
+
+    #[test]
+    fn open_water_and_an_enclosed_goal_leave_the_planner_alone() {
+        let mut r = Router::new(RouteConfig::default());
+        r.set_goal(Some(Vec2::new(500.0, 80.0)));
+        let route = r.on_nav(Vec2::ZERO, 0, None).unwrap();
+        assert_eq!(route.status, RouteStatus::Clear);
+        assert_eq!(route.aim, Vec2::new(500.0, 80.0));
+        assert_eq!(route.aim_for(route.goal, 0, &RouteConfig::default()), None);
+
+        let mut r = Router::new(RouteConfig::default());
+        r.grid.follow(Vec2::ZERO);
+        let ring = [
+            Shape::rectangle(Vec2::new(30.0, 0.0), Vec2::new(10.0, 0.5), 0.0).unwrap(),
+            Shape::rectangle(Vec2::new(30.0, 20.0), Vec2::new(10.0, 0.5), 0.0).unwrap(),
+            Shape::rectangle(Vec2::new(20.0, 10.0), Vec2::new(0.5, 10.0), 0.0).unwrap(),
+            Shape::rectangle(Vec2::new(40.0, 10.0), Vec2::new(0.5, 10.0), 0.0).unwrap(),
+        ];
+        ring.iter().for_each(|s| r.obstacle(s, Vec2::ZERO));
+        r.set_goal(Some(Vec2::new(30.0, 10.0)));
+        let route = r.on_nav(Vec2::new(-10.0, 10.0), 0, None).unwrap();
+        assert_eq!(route.status, RouteStatus::Blocked);
+        assert_eq!(r.counters.blocked, 1);
+    }
+
+    #[test]
+    fn a_moving_contact_is_not_structure_and_off_means_nothing() {
+        let mut r = router_with_wall();
+        let boat = Shape::circle(Vec2::new(5.0, 0.0), 3.0).unwrap();
+        r.obstacle(&boat, Vec2::new(1.0, 0.0));
+        let (c, row) = r.grid.cell_of(Vec2::new(5.0, 0.0)).unwrap();
+        assert_eq!(r.grid.occupied()[row] & (1 << c), 0);
+
+        let mut off = Router::new(RouteConfig {
+            enabled: false,
+            ..RouteConfig::default()
+        });
+        off.set_goal(Some(Vec2::new(50.0, 0.0)));
+        assert_eq!(off.on_nav(Vec2::ZERO, 0, None), None);
+    }
+}
