@@ -34,7 +34,7 @@ use vpf::guidance::{
 };
 use vpf::link::RxCounters;
 use vpf::params::Params;
-use vpf::route::{Route, RouteSlot};
+use vpf::route::{Route, RouteConfig, RouteSlot, Router};
 use vpf::sonar::{EvidenceMap, ExtractorConfig};
 
 use crate::board::active as board;
@@ -133,6 +133,9 @@ static STATS: Mutex<Cell<Stats>> = Mutex::new(Cell::new(Stats {
 }));
 
 static RUNTIME: Owned<Periodic> = Owned::new();
+/// The route layer, the background's: built at compile time (in `.data`), so its 2.5 KiB never
+/// pass through the stack.
+static ROUTER: Owned<Router> = Owned::ready(Router::new(RouteConfig::DEFAULT));
 static PERIODIC: Owned<PeriodicCtx> = Owned::new();
 
 fn take<T>(slot: &Slot<T>) -> Option<T> {
@@ -156,6 +159,14 @@ impl<T> Owned<T> {
         Owned {
             ready: core::sync::atomic::AtomicBool::new(false),
             value: core::cell::UnsafeCell::new(core::mem::MaybeUninit::uninit()),
+        }
+    }
+
+    /// Holding `v` from the start (for values a `const fn` can build).
+    pub const fn ready(v: T) -> Self {
+        Owned {
+            ready: core::sync::atomic::AtomicBool::new(true),
+            value: core::cell::UnsafeCell::new(core::mem::MaybeUninit::new(v)),
         }
     }
 
@@ -215,8 +226,9 @@ pub fn init(params: Params) -> Option<Idle> {
         RUNTIME.get()?
     };
     // Contacts get the planner's A_s⁺ when the periodic task admits them.
-    let route = RuntimeConfig::default().route;
-    let background = Background::new(ExtractorConfig::default(), route, params.a_plus)?;
+    let background = Background::new(ExtractorConfig::default(), params.a_plus)?;
+    // SAFETY: the background (thread mode) is the router's only user, and takes it once, here.
+    let router = unsafe { ROUTER.get()? };
     let ctx = PeriodicCtx {
         periodic,
         tx: tx_p,
@@ -233,6 +245,7 @@ pub fn init(params: Params) -> Option<Idle> {
     }
     Some(Idle {
         background,
+        router,
         rx: rx_c,
         sink: IdleSink {
             sightings: s_p,
@@ -407,6 +420,7 @@ impl Sink for IdleSink {
 /// The background (thread mode) state.
 pub struct Idle {
     background: Background,
+    router: &'static mut Router,
     rx: Consumer<'static, u8, RXN>,
     sink: IdleSink,
 }
@@ -430,9 +444,13 @@ impl Idle {
         };
         while !rest.is_empty() {
             let now = critical_section::with(|cs| NOW_MS.borrow(cs).get());
-            rest = self
-                .background
-                .on_bytes(rest, now, &mut self.sink, Some(&EVIDENCE));
+            rest = self.background.on_bytes(
+                rest,
+                now,
+                &mut self.sink,
+                Some(&EVIDENCE),
+                Some(self.router),
+            );
             let ticked = critical_section::with(|cs| LOCKSTEP.borrow(cs).get().1.is_some());
             if ticked {
                 // Run the requested period now, before later bytes are decoded.
@@ -459,9 +477,13 @@ impl Idle {
         let now = critical_section::with(|cs| NOW_MS.borrow(cs).get());
         let mut rest = bytes;
         while !rest.is_empty() {
-            rest = self
-                .background
-                .on_bytes(rest, now, &mut self.sink, Some(&EVIDENCE));
+            rest = self.background.on_bytes(
+                rest,
+                now,
+                &mut self.sink,
+                Some(&EVIDENCE),
+                Some(self.router),
+            );
         }
     }
 }

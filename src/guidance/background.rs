@@ -7,7 +7,7 @@
 //! leaves through a [`Sink`], which the board implements with lock-free queues.
 
 use crate::link::{Decoder, Direction, Message, Outcome, ReplyRepr, RxCounters};
-use crate::route::{Route, RouteConfig, Router};
+use crate::route::{Route, Router};
 use crate::sonar::{EvidenceMap, Extractor, ExtractorConfig, Pose};
 
 use super::{Control, NavSample, Sighting};
@@ -43,11 +43,10 @@ pub struct BackgroundCounters {
     pub contacts_rejected: u32,
 }
 
-/// The decoder, the sonar extractor, the route layer and the newest pose they need.
+/// The decoder, the sonar extractor and the newest pose they need.
 pub struct Background {
     decoder: Decoder,
     extractor: Extractor,
-    router: Router,
     pose: Option<Pose>,
     /// Set by the first `Tick`: firmware time is then the host's, and navigation is stamped
     /// with its own time of validity instead of its arrival.
@@ -59,13 +58,12 @@ pub struct Background {
 
 impl Background {
     /// A background with the sonar extractor configured by `sonar` (`None` if it is refused,
-    /// which cannot happen for `ExtractorConfig::default()`), the route layer by `route`, and
-    /// host contacts given repulsiveness `contact_a_plus`.
-    pub fn new(sonar: ExtractorConfig, route: RouteConfig, contact_a_plus: f32) -> Option<Self> {
+    /// which cannot happen for `ExtractorConfig::default()`), and host contacts given
+    /// repulsiveness `contact_a_plus`.
+    pub fn new(sonar: ExtractorConfig, contact_a_plus: f32) -> Option<Self> {
         Some(Background {
             decoder: Decoder::accepting(Direction::ToFirmware),
             extractor: Extractor::new(sonar).ok()?,
-            router: Router::new(route),
             pose: None,
             lockstep: false,
             counters: BackgroundCounters::default(),
@@ -78,11 +76,6 @@ impl Background {
         self.lockstep
     }
 
-    /// The route layer.
-    pub fn router(&self) -> &Router {
-        &self.router
-    }
-
     /// The decoder's counters.
     pub fn rx_counters(&self) -> &RxCounters {
         self.decoder.counters()
@@ -92,13 +85,15 @@ impl Background {
     /// the caller runs that period before later bytes land) and returns the bytes not yet fed.
     ///
     /// Scanlines also go into `map`, the evidence map shared with the periodic task (this is
-    /// its only writer), when one is given.
+    /// its only writer), when one is given; missions, charts, contacts and navigation into the
+    /// route layer `router` (which replans on navigation, at most once per `replan_ms`).
     pub fn on_bytes<'b>(
         &mut self,
         bytes: &'b [u8],
         now_ms: u64,
         sink: &mut impl Sink,
         map: Option<&EvidenceMap>,
+        mut router: Option<&mut Router>,
     ) -> &'b [u8] {
         let mut rest = bytes;
         while !rest.is_empty() {
@@ -114,7 +109,7 @@ impl Background {
                         now_ms,
                         self.lockstep,
                         &mut self.extractor,
-                        &mut self.router,
+                        router.as_deref_mut(),
                         &mut self.pose,
                         &mut self.counters,
                         self.contact_a_plus,
@@ -160,7 +155,7 @@ fn dispatch(
     now_ms: u64,
     lockstep: bool,
     extractor: &mut Extractor,
-    router: &mut Router,
+    mut router: Option<&mut Router>,
     pose: &mut Option<Pose>,
     counters: &mut BackgroundCounters,
     contact_a_plus: f32,
@@ -183,7 +178,7 @@ fn dispatch(
                 time_ms,
             });
             // The slow part of the route layer runs here, at most once per `replan_ms`.
-            if let Some(r) = router.on_nav(n.nav.position, time_ms, map) {
+            if let Some(r) = router.and_then(|r| r.on_nav(n.nav.position, time_ms, map)) {
                 sink.route(r);
             }
         }
@@ -215,8 +210,8 @@ fn dispatch(
                         contact.to_agent(now_ms).map(Sighting::Agent)
                     }
                 };
-                if let Ok(Sighting::Obstacle(o)) = &s {
-                    router.obstacle(&o.shape, o.velocity);
+                if let (Ok(Sighting::Obstacle(o)), Some(r)) = (&s, router.as_deref_mut()) {
+                    r.obstacle(&o.shape, o.velocity);
                 }
                 match s {
                     Ok(s) => {
@@ -228,13 +223,17 @@ fn dispatch(
             }
         }
         Message::Mission(m) => {
-            router.set_goal(m.goal.is_finite().then_some(m.goal));
+            if let Some(r) = router {
+                r.set_goal(m.goal.is_finite().then_some(m.goal));
+            }
             queue_control(Control::Mission(header, m), counters)
         }
         Message::Params(p) => queue_control(Control::Params(header, p), counters),
         Message::ChartObstacle(c) => match c.to_obstacle(now_ms) {
             Ok(o) => {
-                router.obstacle(&o.shape, o.velocity);
+                if let Some(r) = router {
+                    r.obstacle(&o.shape, o.velocity);
+                }
                 queue_control(Control::Chart(header, o), counters)
             }
             Err(e) => queue_control(
@@ -245,7 +244,9 @@ fn dispatch(
         Message::ChartClear(c) => {
             // The route grid does not know which cells one chart entry made: all go (still
             // contacts are marked again as they are seen).
-            router.forget_charts();
+            if let Some(r) = router {
+                r.forget_charts();
+            }
             queue_control(Control::ChartClear(header, c), counters)
         }
         Message::Tick(t) => sink.tick(t.time_ms),

@@ -405,9 +405,10 @@ mod tests {
 
     #[test]
     fn a_crossing_obstacle_is_met_where_it_will_be() {
-        // 1.2 m to starboard of the track, 1 m ahead: clear if it stays, in the way at 1 m/s
-        // towards the track (both get to x = 1 m in a second).
-        let rock = Shape::circle(Vec2::new(1.0, -1.2), 0.5).unwrap();
+        // 1.4 m to starboard of the track, 1 m ahead: clear if it stays (0.9 m from the track,
+        // beyond hull and margin), in the way at 1.4 m/s towards the track (both get to x = 1 m
+        // in a second).
+        let rock = Shape::circle(Vec2::new(1.0, -1.4), 0.5).unwrap();
         let still = Obstacle::new(1, rock, 2.5, Origin::Sensed, 0).unwrap();
         let mut w = World::new();
         w.upsert_obstacle(still).unwrap();
@@ -417,7 +418,7 @@ mod tests {
             check(&g, &p, &nav(Vec2::ZERO), &w, cmd(0.0, 1.0)).1,
             Verdict::Clear
         );
-        w.upsert_obstacle(still.moving(Vec2::new(0.0, 1.0)).unwrap())
+        w.upsert_obstacle(still.moving(Vec2::new(0.0, 1.4)).unwrap())
             .unwrap();
         assert_ne!(
             check(&g, &p, &nav(Vec2::ZERO), &w, cmd(0.0, 1.0)).1,

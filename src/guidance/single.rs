@@ -10,7 +10,7 @@ use heapless::Deque;
 use crate::link::{CostUnit, RxCounters};
 use crate::params::Params;
 use crate::planner::Command;
-use crate::route::Route;
+use crate::route::{Route, Router};
 use crate::sonar::{EvidenceMap, ExtractorConfig};
 
 use super::{
@@ -71,6 +71,7 @@ pub struct SingleContext {
     periodic: Periodic,
     queues: Queues,
     map: EvidenceMap,
+    router: Router,
     now_ms: u64,
 }
 
@@ -83,11 +84,12 @@ impl SingleContext {
         cost_unit: CostUnit,
     ) -> Result<Self, crate::params::ParamError> {
         let periodic = Periodic::new(params, config, cost_unit)?;
-        let background = Background::new(ExtractorConfig::default(), config.route, params.a_plus)
-            .ok_or(crate::params::ParamError {
-            name: "sonar",
-            problem: crate::params::ParamProblem::OutOfRange,
-        })?;
+        let background = Background::new(ExtractorConfig::default(), params.a_plus).ok_or(
+            crate::params::ParamError {
+                name: "sonar",
+                problem: crate::params::ParamProblem::OutOfRange,
+            },
+        )?;
         Ok(SingleContext {
             background,
             periodic,
@@ -101,6 +103,7 @@ impl SingleContext {
                 bg: BackgroundCounters::default(),
             },
             map: EvidenceMap::empty(),
+            router: Router::new(config.route),
             now_ms: 0,
         })
     }
@@ -110,9 +113,9 @@ impl SingleContext {
         &self.periodic
     }
 
-    /// The background half (decoder, extractor, route layer).
-    pub fn background(&self) -> &Background {
-        &self.background
+    /// The route layer.
+    pub fn router(&self) -> &Router {
+        &self.router
     }
 
     /// The evidence map the sonar builds.
@@ -141,9 +144,13 @@ impl SingleContext {
         let mut ran = heapless::Vec::new();
         let mut rest = bytes;
         while !rest.is_empty() {
-            rest = self
-                .background
-                .on_bytes(rest, self.now_ms, &mut self.queues, Some(&self.map));
+            rest = self.background.on_bytes(
+                rest,
+                self.now_ms,
+                &mut self.queues,
+                Some(&self.map),
+                Some(&mut self.router),
+            );
             if let Some(t) = self.queues.tick.take() {
                 // More than 4 ticks in one call: the later commands are still sent, not returned.
                 let _ = ran.push(self.on_tick(t, cost, tx));

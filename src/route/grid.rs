@@ -119,13 +119,14 @@ impl Grid {
         (c as usize, r as usize)
     }
 
-    /// Both layers OR-ed: what blocks a route.
-    pub fn occupied(&self) -> Rows {
-        let mut out = self.sensed;
-        for (o, k) in out.iter_mut().zip(&self.known) {
-            *o |= k;
-        }
-        out
+    /// Row `r` of both layers OR-ed: what blocks a route.
+    pub fn occupied_row(&self, r: usize) -> u64 {
+        self.sensed.get(r).copied().unwrap_or(0) | self.known.get(r).copied().unwrap_or(0)
+    }
+
+    /// Whether window cell (column, row) is occupied in either layer.
+    pub fn is_occupied(&self, (c, r): (usize, usize)) -> bool {
+        self.occupied_row(r) & 1u64.checked_shl(c as u32).unwrap_or(0) != 0
     }
 
     /// Keeps the window around `p`: placed centred on the first call, re-centred (scrolling
@@ -215,8 +216,10 @@ impl Grid {
         }
         let n = ratio as i32;
         // Route cells whose map cells all lie in the map's window.
-        let first = |a0: i32| a0.div_euclid(n) + i32::from(a0.rem_euclid(n) != 0);
-        let last = |a0: i32| (a0 + MAP_SIDE as i32).div_euclid(n) - 1;
+        // (`n` ≥ 1 here; the checked forms keep the division's panic path out of the image.)
+        let div = |a: i32| a.checked_div_euclid(n).unwrap_or(0);
+        let first = |a0: i32| div(a0) + i32::from(a0.checked_rem_euclid(n) != Some(0));
+        let last = |a0: i32| div(a0 + MAP_SIDE as i32) - 1;
         let block = 1u64.checked_shl(n as u32).map_or(u64::MAX, |b| b - 1);
         for j in first(w.y0)..=last(w.y0) {
             let Some(row) = usize::try_from(j.wrapping_sub(self.y0))
@@ -257,18 +260,18 @@ mod tests {
         let wall = Shape::rectangle(Vec2::new(10.0, 0.0), Vec2::new(0.5, 20.0), 0.0).unwrap();
         g.mark(&wall);
         let (c, r) = g.cell_of(Vec2::new(10.0, 5.0)).unwrap();
-        assert!(g.occupied()[r] & (1 << c) != 0);
+        assert!(g.is_occupied((c, r)));
         let (c, r) = g.cell_of(Vec2::new(14.0, 5.0)).unwrap();
-        assert!(g.occupied()[r] & (1 << c) == 0);
+        assert!(!g.is_occupied((c, r)));
         // Move 40 m east and 20 m north: the wall is still where it was in the world.
         g.follow(Vec2::new(40.0, 20.0));
         let (c, r) = g.cell_of(Vec2::new(10.0, 15.0)).unwrap();
-        assert!(g.occupied()[r] & (1 << c) != 0);
+        assert!(g.is_occupied((c, r)));
         let (c, r) = g.cell_of(Vec2::new(10.0, 25.0)).unwrap();
-        assert!(g.occupied()[r] & (1 << c) == 0, "beyond the wall's end");
+        assert!(!g.is_occupied((c, r)), "beyond the wall's end");
         // Far away: forgotten.
         g.follow(Vec2::new(400.0, 0.0));
-        assert!(g.occupied().iter().all(|&r| r == 0));
+        assert!((0..ROUTE_SIDE).all(|r| g.occupied_row(r) == 0));
     }
 
     #[test]
@@ -291,7 +294,7 @@ mod tests {
         map.observe(&beam);
         g.absorb(&map);
         let (c, r) = g.cell_of(Vec2::new(6.1, 0.1)).unwrap();
-        assert!(g.occupied()[r] & (1 << c) != 0);
+        assert!(g.is_occupied((c, r)));
         // Looked through many times: cleared in the map, so here too.
         let clear = Beam {
             echoes: &[],
@@ -301,6 +304,6 @@ mod tests {
             map.observe(&clear);
         }
         g.absorb(&map);
-        assert!(g.occupied()[r] & (1 << c) == 0);
+        assert!(!g.is_occupied((c, r)));
     }
 }

@@ -51,14 +51,19 @@ pub struct RouteConfig {
     pub stale_ms: u32,
 }
 
+impl RouteConfig {
+    /// The defaults, as a constant (for a board's `static` router).
+    pub const DEFAULT: RouteConfig = RouteConfig {
+        enabled: true,
+        cell_m: 2.0,
+        replan_ms: 1000,
+        stale_ms: 5000,
+    };
+}
+
 impl Default for RouteConfig {
     fn default() -> Self {
-        RouteConfig {
-            enabled: true,
-            cell_m: 2.0,
-            replan_ms: 1000,
-            stale_ms: 5000,
-        }
+        Self::DEFAULT
     }
 }
 
@@ -140,6 +145,9 @@ pub struct Router {
     cfg: RouteConfig,
     grid: Grid,
     wave: Wavefront,
+    /// What blocks the wavefront in the current pass (a field, not a local: 512 bytes off the
+    /// background's stack).
+    blocked: Rows,
     goal: Option<Vec2>,
     last_ms: Option<u64>,
     /// Counters.
@@ -154,6 +162,7 @@ impl Router {
             cfg,
             grid: Grid::new(cfg.cell_m),
             wave: Wavefront::new(),
+            blocked: [0; ROUTE_SIDE],
             goal: None,
             last_ms: None,
             counters: RouteCounters {
@@ -226,21 +235,15 @@ impl Router {
         };
         let inside = self.grid.cell_of(goal);
         let source = inside.unwrap_or_else(|| self.grid.clamp(goal));
-        let occupied = self.grid.occupied();
-        let grown = grow(&grow(&occupied));
-        let grown = free_around(&free_around(&grown, &occupied, start), &occupied, source);
-        let mut tight = occupied;
-        if let Some(row) = tight.get_mut(start.1) {
-            *row &= !1u64.checked_shl(start.0 as u32).unwrap_or(0);
-        }
-        for blocked in [grown, tight] {
-            if self.wave.spread(&blocked, source, start, MAX_LAYERS) {
+        for grown in [true, false] {
+            self.fill_blocked(grown, start, source);
+            if self.wave.spread(&self.blocked, source, start, MAX_LAYERS) {
                 let end = if inside.is_some() {
                     goal
                 } else {
                     self.grid.center(source.0, source.1)
                 };
-                return self.aim(&blocked, p, start, source, end, goal);
+                return self.aim(p, start, source, end, goal);
             }
         }
         (RouteStatus::Blocked, goal)
@@ -250,14 +253,13 @@ impl Router {
     /// `Clear` with the goal itself when the walk's end (`end`) is in sight.
     fn aim(
         &self,
-        blocked: &Rows,
         p: Vec2,
         start: Cell,
         source: Cell,
         end: Vec2,
         goal: Vec2,
     ) -> (RouteStatus, Vec2) {
-        let g = &self.grid;
+        let (g, blocked) = (&self.grid, &self.blocked);
         let mut cell = start;
         let mut aim = None;
         for _ in 0..MAX_WALK {
@@ -287,28 +289,47 @@ impl Router {
     }
 }
 
-/// Occupied cells grown by one cell in all eight directions.
-fn grow(rows: &Rows) -> Rows {
-    let wide = |r: Option<&u64>| r.map_or(0, |&b| b | (b << 1) | (b >> 1));
-    let mut out = [0u64; ROUTE_SIDE];
-    for (r, o) in out.iter_mut().enumerate() {
-        let above = r.checked_sub(1).and_then(|a| rows.get(a));
-        *o = wide(above) | wide(rows.get(r)) | wide(rows.get(r + 1));
-    }
-    out
-}
-
-/// `blocked` with the 3 × 3 cells around `cell` set back to `keep` (the vehicle and the goal
-/// are never shut in by the growing itself).
-fn free_around(blocked: &Rows, keep: &Rows, (c, r): Cell) -> Rows {
-    let mut out = *blocked;
-    let cols = (0b111u64 << c) >> 1;
-    for rr in r.saturating_sub(1)..=r + 1 {
-        if let (Some(o), Some(k)) = (out.get_mut(rr), keep.get(rr)) {
-            *o = (*o & !cols) | (k & cols);
+impl Router {
+    /// Fills `blocked` for a pass: the occupied cells grown by two cells (the route keeps its
+    /// distance), but never round the vehicle and the goal themselves; or, `grown` false, the
+    /// occupied cells as they are, the vehicle's own cell excepted.
+    fn fill_blocked(&mut self, grown: bool, start: Cell, source: Cell) {
+        for (r, row) in self.blocked.iter_mut().enumerate() {
+            *row = self.grid.occupied_row(r);
+        }
+        if !grown {
+            if let Some(row) = self.blocked.get_mut(start.1) {
+                *row &= !1u64.checked_shl(start.0 as u32).unwrap_or(0);
+            }
+            return;
+        }
+        grow(&mut self.blocked);
+        grow(&mut self.blocked);
+        for (c, r) in [start, source] {
+            // The 3 × 3 cells round it, set back to what is occupied there.
+            let cols = (0b111u64 << c) >> 1;
+            for rr in r.saturating_sub(1)..=r + 1 {
+                let keep = self.grid.occupied_row(rr);
+                if let Some(o) = self.blocked.get_mut(rr) {
+                    *o = (*o & !cols) | (keep & cols);
+                }
+            }
         }
     }
-    out
+}
+
+/// Grows the set cells by one cell in all eight directions, in place.
+fn grow(rows: &mut Rows) {
+    let wide = |b: u64| b | (b << 1) | (b >> 1);
+    let mut above = 0u64;
+    for r in 0..ROUTE_SIDE {
+        let below = rows.get(r + 1).copied().unwrap_or(0);
+        if let Some(row) = rows.get_mut(r) {
+            let here = *row;
+            *row = wide(above) | wide(here) | wide(below);
+            above = here;
+        }
+    }
 }
 
 #[cfg(test)]
@@ -373,8 +394,8 @@ mod tests {
         let mut r = router_with_wall();
         let boat = Shape::circle(Vec2::new(5.0, 0.0), 3.0).unwrap();
         r.obstacle(&boat, Vec2::new(1.0, 0.0));
-        let (c, row) = r.grid.cell_of(Vec2::new(5.0, 0.0)).unwrap();
-        assert_eq!(r.grid.occupied()[row] & (1 << c), 0);
+        let cell = r.grid.cell_of(Vec2::new(5.0, 0.0)).unwrap();
+        assert!(!r.grid.is_occupied(cell));
 
         let mut off = Router::new(RouteConfig {
             enabled: false,

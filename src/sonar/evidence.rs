@@ -25,12 +25,13 @@
 //!
 //! **Contexts.** One writer, the background (scanlines, [`EvidenceMap::observe`]), and one
 //! reader, the periodic task ([`EvidenceMap::nearest`], [`EvidenceMap::row_bits`]). Cells are
-//! `AtomicU8` (plain byte loads and stores on a Cortex-M4), the window origin is published under
-//! a sequence counter, so neither side ever waits: a reader that catches the origin mid-move
-//! simply uses no map for that period.
+//! packed two to an `AtomicU8` (plain byte loads and stores on a Cortex-M4; the one writer
+//! rewrites a byte whole), the window origin is published under a sequence counter, so neither
+//! side ever waits: a reader that catches the origin mid-move simply uses no map for that period.
 //!
-//! **Capacity.** Fixed: [`MAP_SIDE`]² bytes. Echoes outside the window are not stored (the
-//! window follows the vehicle, re-centring when it is a quarter of the side off centre).
+//! **Capacity.** Fixed: [`MAP_SIDE`]² half-bytes (counts 0 ..= 15, two cells to a byte). Echoes
+//! outside the window are not stored (the window follows the vehicle, re-centring when it is a
+//! quarter of the side off centre).
 
 use core::sync::atomic::{AtomicI32, AtomicU32, AtomicU8, Ordering};
 
@@ -59,7 +60,7 @@ pub struct EvidenceConfig {
     pub miss: u8,
     /// Evidence at which a cell is believed occupied, 1 ..= `max`.
     pub occupied: u8,
-    /// Ceiling of the evidence count, 1 ..= 255.
+    /// Ceiling of the evidence count, 1 ..= 15 (a cell is half a byte).
     pub max: u8,
     /// Free space along a beam stops this far short of its first echo, m, 0 ..= 5 (a beam
     /// grazing a surface crosses the surface's own cells before it returns).
@@ -117,7 +118,7 @@ impl EvidenceConfig {
             return Err(EvidenceError::CellSize);
         }
         let m = self.max;
-        if m == 0
+        if !(1..=15).contains(&m)
             || !(1..=m).contains(&self.hit)
             || self.miss > m
             || !(1..=m).contains(&self.occupied)
@@ -170,7 +171,8 @@ impl Window {
 /// The shared evidence grid. Put one in a `static` on a board (it is `Sync`); see the module
 /// notes for who may call what.
 pub struct EvidenceMap {
-    cells: [AtomicU8; MAP_CELLS],
+    /// Two cells per byte (a count is at most 15): the low nibble holds the even slot.
+    cells: [AtomicU8; MAP_CELLS / 2],
     x0: AtomicI32,
     y0: AtomicI32,
     /// Odd while the writer moves the window.
@@ -197,6 +199,11 @@ fn floor_i(x: f32) -> i32 {
     libm::floorf(x) as i32
 }
 
+/// Bit offset of slot `s`'s nibble in its byte.
+fn nibble(s: usize) -> u8 {
+    ((s & 1) as u8) * 4
+}
+
 fn slot(i: i32, j: i32) -> usize {
     ((j & MASK) * SIDE_I + (i & MASK)) as usize
 }
@@ -206,7 +213,7 @@ impl EvidenceMap {
     /// defaults, for statics).
     pub const fn empty() -> Self {
         EvidenceMap {
-            cells: [EMPTY; MAP_CELLS],
+            cells: [EMPTY; MAP_CELLS / 2],
             x0: AtomicI32::new(0),
             y0: AtomicI32::new(0),
             seq: AtomicU32::new(0),
@@ -259,9 +266,10 @@ impl EvidenceMap {
     }
 
     fn value(&self, i: i32, j: i32) -> u8 {
+        let s = slot(i, j);
         self.cells
-            .get(slot(i, j))
-            .map_or(0, |c| c.load(Ordering::Relaxed))
+            .get(s / 2)
+            .map_or(0, |c| (c.load(Ordering::Relaxed) >> nibble(s)) & 0xF)
     }
 
     /// Whether world cell (i, j) is believed occupied (false outside `w`).
@@ -326,8 +334,16 @@ impl EvidenceMap {
     }
 
     fn set(&self, i: i32, j: i32, v: u8) {
-        if let Some(c) = self.cells.get(slot(i, j)) {
-            c.store(v, Ordering::Relaxed);
+        let s = slot(i, j);
+        if let Some(c) = self.cells.get(s / 2) {
+            // One writer: a plain read-modify-write of the shared byte loses nothing, and a
+            // reader sees either nibble before or after, never a torn one.
+            let shift = nibble(s);
+            let old = c.load(Ordering::Relaxed);
+            c.store(
+                (old & !(0xF << shift)) | ((v & 0xF) << shift),
+                Ordering::Relaxed,
+            );
         }
     }
 
