@@ -148,6 +148,11 @@ pub struct Params {
     /// Navigation function (004): ρ₀, radius of the spherical workspace (obstacle 0), centred
     /// on the goal, m. 1 ..= 10⁵.
     pub nf_workspace_m: f32,
+    /// Cell of the background route layer's grid, m (`crate::route`): 0 turns the layer off
+    /// (the planner as published, e.g. to reproduce the papers' runs), else 0.5 ..= 8, a whole
+    /// multiple of the evidence map's 0.5 m cell (otherwise only contacts and charts are
+    /// routed round). The grid is 64 cells wide.
+    pub route_cell_m: f32,
 }
 
 impl Default for Params {
@@ -192,6 +197,7 @@ impl Default for Params {
             mp_periphery: arc.periphery,
             nf_kappa: 0.0,
             nf_workspace_m: 1000.0,
+            route_cell_m: 2.0,
         }
     }
 }
@@ -275,6 +281,9 @@ impl Params {
             check("nf_kappa", self.nf_kappa, 1.0, 64.0)?;
         }
         check("nf_workspace_m", self.nf_workspace_m, 1.0, 1e5)?;
+        if self.route_cell_m != 0.0 {
+            check("route_cell_m", self.route_cell_m, 0.5, 8.0)?;
+        }
         Ok(())
     }
 }

@@ -880,6 +880,7 @@ const PARAM_F32: &[(&str, &str)] = &[
     ("mp_influence_m", "0.1 ..= 1000 m"),
     ("nf_kappa", "0 (auto) or 1 ..= 64"),
     ("nf_workspace_m", "1 ..= 100000 m"),
+    ("route_cell_m", "0 (route layer off) or 0.5 ..= 8 m"),
 ];
 
 fn param_f32<'p>(p: &'p mut Params, name: &str) -> Option<&'p mut f32> {
@@ -910,6 +911,7 @@ fn param_f32<'p>(p: &'p mut Params, name: &str) -> Option<&'p mut f32> {
         "mp_influence_m" => &mut p.mp_influence_m,
         "nf_kappa" => &mut p.nf_kappa,
         "nf_workspace_m" => &mut p.nf_workspace_m,
+        "route_cell_m" => &mut p.route_cell_m,
         _ => return None,
     })
 }

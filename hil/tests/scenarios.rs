@@ -120,9 +120,15 @@ fn seed_000_scenarios_use_the_experiments_geometry_and_parameters() {
 
     let fig7 = shipped("seed000_fig7_four_vehicles.toml");
     assert_eq!(fig7.vehicles.len(), 4);
-    assert_eq!(fig7.params, vpf::Params::default());
+    // The papers' planner: the defaults, without the route layer.
+    let papers = vpf::Params {
+        route_cell_m: 0.0,
+        ..vpf::Params::default()
+    };
+    assert_eq!(fig7.params, papers);
 
     for s in [&fig2, &fig3, &fig4, &fig6, &fig7] {
+        assert_eq!(s.params.route_cell_m, 0.0);
         for v in &s.vehicles {
             assert_eq!(v.model, ModelKind::Kinematic);
             // Charted obstacles in the tests: contacts covering the whole theatre.

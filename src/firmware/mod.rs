@@ -73,6 +73,7 @@ static LINK: Mutex<Cell<(RxCounters, BackgroundCounters)>> = Mutex::new(Cell::ne
         sightings_dropped: 0,
         controls_dropped: 0,
         scanlines_rejected: 0,
+        scanlines: 0,
         features_extracted: 0,
         contacts_rejected: 0,
     },
@@ -229,6 +230,7 @@ pub fn init(params: Params) -> Option<Idle> {
     let background = Background::new(ExtractorConfig::default(), params.a_plus)?;
     // SAFETY: the background (thread mode) is the router's only user, and takes it once, here.
     let router = unsafe { ROUTER.get()? };
+    router.set_cell(params.route_cell_m);
     let ctx = PeriodicCtx {
         periodic,
         tx: tx_p,

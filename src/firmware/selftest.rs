@@ -99,9 +99,9 @@ fn flood(idle: &mut Idle) -> Flood {
         // One synthetic ping: a wall of echoes at a bearing-dependent range, with speckle.
         for (i, b) in bins.iter_mut().enumerate() {
             let r = (i as u32).wrapping_mul(2_654_435_761).wrapping_add(ping) >> 28;
-            // One strong echo per ping at 4–8 m: over the sweeps, the evidence map fills the
-            // planner's 32 nearest cells (full capacity) round the vehicle.
-            *b = if (40..43).contains(&(i as u32).wrapping_sub(ping % 40)) {
+            // One strong echo per ping at 4–5.5 m: over the sweeps, the evidence map fills
+            // every sector of the planner's polar scan within reach (32 cells: full capacity).
+            *b = if (40..43).contains(&(i as u32).wrapping_sub(ping % 15)) {
                 220
             } else {
                 (r * 4) as u8

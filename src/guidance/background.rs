@@ -37,6 +37,8 @@ pub struct BackgroundCounters {
     pub controls_dropped: u32,
     /// Scanlines the extractor refused.
     pub scanlines_rejected: u32,
+    /// Scanlines taken in (the periodic task watches it: a sonar gone quiet slows the vehicle).
+    pub scanlines: u32,
     /// Features extracted from scanlines.
     pub features_extracted: u32,
     /// Contacts refused when converted to table entries.
@@ -197,6 +199,7 @@ fn dispatch(
                 ok
             });
             count_if(result.is_err(), &mut counters.scanlines_rejected);
+            count_if(result.is_ok(), &mut counters.scanlines);
             counters.features_extracted = counters.features_extracted.saturating_add(emitted);
             counters.sightings_dropped = counters.sightings_dropped.saturating_add(dropped);
         }
@@ -228,7 +231,14 @@ fn dispatch(
             }
             queue_control(Control::Mission(header, m), counters)
         }
-        Message::Params(p) => queue_control(Control::Params(header, p), counters),
+        Message::Params(p) => {
+            // The periodic task answers for the parameters; the route layer takes its cell size
+            // only from a set it will accept.
+            if let (Some(r), Ok(())) = (router, p.validate()) {
+                r.set_cell(p.route_cell_m);
+            }
+            queue_control(Control::Params(header, p), counters)
+        }
         Message::ChartObstacle(c) => match c.to_obstacle(now_ms) {
             Ok(o) => {
                 if let Some(r) = router {

@@ -7,7 +7,9 @@
 //! - a collision that cannot be avoided at the current speed → all-stop. "Cannot be avoided":
 //!   braking at F_max (the most the planner ever commands) from speed v needs v²/2F_max metres,
 //!   and the nearest surface is closer than that;
-//! - frozen navigation ([`FreezeDetector`]) → hold, until a fix that differs.
+//! - frozen navigation ([`FreezeDetector`]) → hold, until a fix that differs;
+//! - a sonar gone quiet ([`SonarWatch`]) → slow down, and hold once the vehicle has gone as far
+//!   as the map it has can be trusted, until scanlines come again.
 
 use crate::math::Vec2;
 use crate::planner::{HoldReason, NavState};
@@ -19,13 +21,65 @@ pub struct FailsafeConfig {
     /// Navigation older than this holds the vehicle, ms. The default, 150 ms, is 1.5 periods at
     /// 10 Hz: a lost navigation stream stops the vehicle at the second tick after the last fix.
     pub nav_timeout_ms: u64,
+    /// A sonar that has delivered scanlines and then none for this long is quiet, ms (a
+    /// scanning sonar sends one every 50 ms or so).
+    pub sonar_quiet_ms: u64,
+    /// How far the vehicle may go on the map it has once the sonar is quiet, m: the range
+    /// within which the last sweeps are trusted to have shown everything there is (half the
+    /// evidence map's 10 m free range: thin structure seen edge-on is missed further out).
+    pub sonar_quiet_travel_m: f32,
 }
 
 impl Default for FailsafeConfig {
     fn default() -> Self {
         FailsafeConfig {
             nav_timeout_ms: 150,
+            sonar_quiet_ms: 2000,
+            sonar_quiet_travel_m: 5.0,
         }
+    }
+}
+
+/// A sonar gone quiet (issue "Faults": never drive on into what the sonar can no longer see).
+/// Obstacles stay where they were (the evidence map forgets by coverage, not age), but what the
+/// sonar has not yet seen is not in it: while the sonar is quiet the vehicle may still travel
+/// `sonar_quiet_travel_m` from where it went quiet, at a speed from which it can stop within
+/// what is left (v ≤ √(2·F_max·left)), and holds when that is spent. A vehicle whose sonar has
+/// never spoken (perception by contacts) is not watched.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct SonarWatch {
+    /// Scanlines counted by the background, and when the count last changed.
+    last: Option<(u32, u64)>,
+    /// Where the vehicle was when the sonar went quiet.
+    quiet_at: Option<Vec2>,
+}
+
+impl SonarWatch {
+    /// Takes the background's scanline count at `now_ms` with the vehicle at `p`; returns the
+    /// speed bound while the sonar is quiet (`None`: not quiet).
+    pub fn update(
+        &mut self,
+        cfg: &FailsafeConfig,
+        scanlines: u32,
+        now_ms: u64,
+        p: Vec2,
+        f_max: f32,
+    ) -> Option<f32> {
+        match self.last {
+            Some((n, _)) if n == scanlines => {}
+            _ => {
+                // Scanlines at start-up are not a change: the sonar must speak first.
+                self.last = (scanlines > 0).then_some((scanlines, now_ms));
+                self.quiet_at = None;
+            }
+        }
+        let (_, since) = self.last?;
+        if now_ms.saturating_sub(since) < cfg.sonar_quiet_ms {
+            return None;
+        }
+        let from = *self.quiet_at.get_or_insert(p);
+        let left = cfg.sonar_quiet_travel_m - (p - from).norm();
+        Some(crate::math::sqrt(2.0 * f_max * crate::math::max(0.0, left)))
     }
 }
 

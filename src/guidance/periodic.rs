@@ -15,7 +15,7 @@ use crate::planner::{Command, Planner};
 use crate::route::{Route, RouteConfig};
 use crate::world::World;
 
-use super::failsafe::{self, FailsafeConfig, FreezeDetector, Situation};
+use super::failsafe::{self, FailsafeConfig, FreezeDetector, Situation, SonarWatch};
 use super::guard::{self, GuardConfig, Verdict};
 use super::tracks::{TrackConfig, Tracks};
 use super::{BackgroundCounters, Control, NavSample, Sighting, SIGHTINGS_PER_PERIOD};
@@ -62,6 +62,20 @@ impl Default for RuntimeConfig {
     }
 }
 
+/// A quiet sonar's speed bound below which the vehicle holds instead, m/s.
+const QUIET_STOP_MPS: f32 = 0.05;
+
+/// `c` with its speed set-point and planned velocity at most `v` (the planner is then handed
+/// the velocity that went out, `Planner::override_velocity`).
+fn slowed(mut c: Command, v: f32) -> Command {
+    if c.v_set > v {
+        let k = v / c.v_set;
+        c.v_set = v;
+        c.velocity = c.velocity * k;
+    }
+    c
+}
+
 /// What the periodic task reads from the slow side each period (the board's queues).
 pub trait Inputs {
     /// The newest navigation, if any has come.
@@ -98,6 +112,7 @@ pub struct Periodic {
     freeze: FreezeDetector,
     /// Periods held because navigation had frozen.
     frozen_holds: u32,
+    sonar: SonarWatch,
     /// Periods counted for the `Belief` schedule.
     belief_tick: u32,
     /// The newest route read from the background.
@@ -125,6 +140,7 @@ impl Periodic {
             guard_count: 0,
             freeze: FreezeDetector::default(),
             frozen_holds: 0,
+            sonar: SonarWatch::default(),
             belief_tick: 0,
             route: None,
         })
@@ -208,12 +224,15 @@ impl Periodic {
             self.route = Some(r);
         }
         let aim = match (self.route, self.planner.mission()) {
-            (Some(r), Some(m)) => r.aim_for(m.goal, now_ms, &self.config.route),
+            (Some(r), Some(m)) if self.planner.params().route_cell_m > 0.0 => {
+                r.aim_for(m.goal, now_ms, self.config.route.stale_ms)
+            }
             _ => None,
         };
         self.planner.set_route(aim);
 
-        let cmd = self.plan(now_ms, nav, cost);
+        let (_, bg) = inputs.link_counters();
+        let cmd = self.plan(now_ms, nav, bg.scanlines, cost);
         self.last = Some((now_ms, cmd));
         self.last_heading = cmd.psi_set;
         let command = CommandRepr {
@@ -271,6 +290,7 @@ impl Periodic {
         &mut self,
         now_ms: u64,
         nav: Option<NavSample>,
+        scanlines: u32,
         cost: &mut impl FnMut() -> u32,
     ) -> Command {
         let params = *self.planner.params();
@@ -286,8 +306,14 @@ impl Periodic {
         let commanded = self.last.map_or(0.0, |(_, c)| c.v_set);
         let frozen = nav.is_some_and(|n| self.freeze.update(&n.nav, n.time_ms, commanded));
         self.frozen_holds = self.frozen_holds.saturating_add(u32::from(frozen));
+        let quiet = nav.and_then(|n| {
+            let (cfg, p) = (&self.config.failsafe, n.nav.position);
+            self.sonar.update(cfg, scanlines, now_ms, p, params.f_max)
+        });
+        let spent = quiet.is_some_and(|v| v < QUIET_STOP_MPS);
         let hold = failsafe::check(&self.config.failsafe, &situation)
-            .or(frozen.then_some(crate::planner::HoldReason::FrozenNav));
+            .or(frozen.then_some(crate::planner::HoldReason::FrozenNav))
+            .or(spent.then_some(crate::planner::HoldReason::SonarLost));
         let (Some(n), None) = (nav, hold) else {
             self.planner.reset_motion();
             let heading = nav.map_or(self.last_heading, |n| n.nav.heading);
@@ -301,12 +327,15 @@ impl Periodic {
         self.last_cost = cost().wrapping_sub(start);
         match result {
             Ok(c) => {
+                let c = quiet.map_or(c, |v| slowed(c, v));
                 let (c, verdict) =
                     guard::check(&self.config.guard, &params, &n.nav, &self.world, c);
-                if verdict != Verdict::Clear {
+                if verdict != Verdict::Clear || quiet.is_some() {
                     // The planner continues from the motion that was sent, so a vehicle the
                     // guard holds back is seen as stalled and escapes (ghost goal-points).
                     self.planner.override_velocity(c.velocity);
+                }
+                if verdict != Verdict::Clear {
                     self.guard_count = self.guard_count.saturating_add(1);
                 }
                 c

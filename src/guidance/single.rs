@@ -103,7 +103,11 @@ impl SingleContext {
                 bg: BackgroundCounters::default(),
             },
             map: EvidenceMap::empty(),
-            router: Router::new(config.route),
+            router: {
+                let mut r = Router::new(config.route);
+                r.set_cell(params.route_cell_m);
+                r
+            },
             now_ms: 0,
         })
     }

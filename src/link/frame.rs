@@ -251,29 +251,29 @@ mod tests {
         };
         let mut b = [0u8; 4];
         assert_eq!(h.emit(&mut b), Ok(4));
-        assert_eq!(b, [0x03, 0x08, 0x01, 0x02]);
+        assert_eq!(b, [0x04, 0x08, 0x01, 0x02]);
         assert_eq!(Header::parse(&b), Ok(h));
         assert_eq!(Header::parse(&[1, 8, 0, 0]), Err(Error::Version(1)));
         assert_eq!(
-            Header::parse(&[3, 0x42, 0, 0]),
+            Header::parse(&[4, 0x42, 0, 0]),
             Err(Error::UnknownType(0x42))
         );
         assert_eq!(Header::parse(&[3, 8, 0]), Err(Error::Truncated));
     }
 
     /// A Tick frame worked by hand (the example in docs/protocol.md):
-    /// raw = 03 08 01 00 | e8 03 00 00 00 00 00 00 | CRC. The CRC was computed independently
-    /// with Python's `binascii.crc_hqx(raw, 0xFFFF)` = 0xFACC, sent LE as cc fa.
-    /// COBS: "03 08 01" + zero → 04 03 08 01; "e8 03" + zero → 03 e8 03; five single zeros
-    /// → 01 ×5; the tail "cc fa" → 03 cc fa; then the delimiter 00.
+    /// raw = 04 08 01 00 | e8 03 00 00 00 00 00 00 | CRC. The CRC was computed independently
+    /// with Python's `binascii.crc_hqx(raw, 0xFFFF)` = 0xF287, sent LE as 87 f2.
+    /// COBS: "04 08 01" + zero → 04 04 08 01; "e8 03" + zero → 03 e8 03; five single zeros
+    /// → 01 ×5; the tail "87 f2" → 03 87 f2; then the delimiter 00.
     #[test]
     fn tick_frame_vector() {
         let raw = [
-            0x03, 0x08, 0x01, 0x00, 0xe8, 0x03, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0xcc, 0xfa,
+            0x04, 0x08, 0x01, 0x00, 0xe8, 0x03, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x87, 0xf2,
         ];
         let wire = [
-            0x04, 0x03, 0x08, 0x01, 0x03, 0xe8, 0x03, 0x01, 0x01, 0x01, 0x01, 0x01, 0x03, 0xcc,
-            0xfa, 0x00,
+            0x04, 0x04, 0x08, 0x01, 0x03, 0xe8, 0x03, 0x01, 0x01, 0x01, 0x01, 0x01, 0x03, 0x87,
+            0xf2, 0x00,
         ];
         let mut out = [0u8; 32];
         let n = encode_frame(
@@ -301,9 +301,9 @@ mod tests {
 
     #[test]
     fn split_frame_checks_in_order() {
-        assert_eq!(split_frame(&[3, 8, 0, 0, 0]), Err(Error::Truncated));
+        assert_eq!(split_frame(&[4, 8, 0, 0, 0]), Err(Error::Truncated));
         let mut raw = [
-            0x03, 0x08, 0x01, 0x00, 0xe8, 0x03, 0, 0, 0, 0, 0, 0, 0xcc, 0xfa,
+            0x04, 0x08, 0x01, 0x00, 0xe8, 0x03, 0, 0, 0, 0, 0, 0, 0x87, 0xf2,
         ];
         raw[5] ^= 0x10;
         assert_eq!(split_frame(&raw), Err(Error::Crc));
@@ -312,7 +312,7 @@ mod tests {
         let crc = crate::link::crc::crc16(&v1);
         v1.extend(crc.to_le_bytes());
         assert_eq!(split_frame(&v1), Err(Error::Version(1)));
-        let mut t: Vec<u8> = std::vec![3, 0x55, 0, 0];
+        let mut t: Vec<u8> = std::vec![4, 0x55, 0, 0];
         let crc = crate::link::crc::crc16(&t);
         t.extend(crc.to_le_bytes());
         assert_eq!(split_frame(&t), Err(Error::UnknownType(0x55)));

@@ -25,6 +25,7 @@ pub const fn mode_codes(mode: Mode) -> (u8, u8) {
                 HoldReason::InsideObstacle => 3,
                 HoldReason::CollisionImminent => 4,
                 HoldReason::FrozenNav => 5,
+                HoldReason::SonarLost => 6,
             },
         ),
         Mode::Transit => (1, 0),
@@ -44,6 +45,7 @@ fn mode_from_codes(mode: u8, reason: u8, mode_row: u8) -> Result<Mode, Error> {
             3 => HoldReason::InsideObstacle,
             4 => HoldReason::CollisionImminent,
             5 => HoldReason::FrozenNav,
+            6 => HoldReason::SonarLost,
             _ => return refuse(reason_row, Problem::UnknownCode),
         }),
         1 => Mode::Transit,
@@ -974,6 +976,7 @@ pub(crate) mod tests {
             Just(Mode::Hold(HoldReason::InsideObstacle)),
             Just(Mode::Hold(HoldReason::CollisionImminent)),
             Just(Mode::Hold(HoldReason::FrozenNav)),
+            Just(Mode::Hold(HoldReason::SonarLost)),
         ]
     }
 

@@ -95,6 +95,9 @@ pub enum HoldReason {
     /// Navigation fixes keep coming but do not change while the vehicle is commanded to move:
     /// the navigation source has frozen (`crate::guidance::failsafe::FreezeDetector`).
     FrozenNav,
+    /// The sonar has gone quiet and the vehicle has gone as far as the map it has can be
+    /// trusted (`crate::guidance::failsafe::SonarWatch`).
+    SonarLost,
 }
 
 /// What the planner is doing.

@@ -20,8 +20,8 @@
 //! [`RouteStatus::Detour`] for its own goal and fresh; arrival is still judged at the goal
 //! (`crate::planner::Planner::set_route`). When the straight line is clear, or no route exists
 //! (the goal is enclosed as far as the grid knows), it gets nothing: the planner runs exactly as
-//! without this layer, ghost goal-points included. [`RouteConfig::enabled`] off gives the
-//! papers' planner unchanged.
+//! without this layer, ghost goal-points included. `Params::route_cell_m` = 0 turns the layer
+//! off: the papers' planner unchanged.
 
 pub mod grid;
 pub mod handoff;
@@ -40,10 +40,9 @@ use wavefront::Cell;
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct RouteConfig {
-    /// Whether the layer runs at all (off: the planner as published).
-    pub enabled: bool,
-    /// Route cell size, m: a whole multiple (1 ..= 8) of the evidence map's cell. The window
-    /// is [`ROUTE_SIDE`] cells wide (128 m at the default 2 m).
+    /// Route cell size at start, m: 0 turns the layer off; else a whole multiple of the
+    /// evidence map's cell. The window is [`ROUTE_SIDE`] cells wide (128 m at the default 2 m).
+    /// The planner's `Params::route_cell_m` replaces it when parameters arrive.
     pub cell_m: f32,
     /// Navigation time between replans, ms.
     pub replan_ms: u32,
@@ -54,7 +53,6 @@ pub struct RouteConfig {
 impl RouteConfig {
     /// The defaults, as a constant (for a board's `static` router).
     pub const DEFAULT: RouteConfig = RouteConfig {
-        enabled: true,
         cell_m: 2.0,
         replan_ms: 1000,
         stale_ms: 5000,
@@ -114,11 +112,10 @@ pub struct Route {
 
 impl Route {
     /// The goal-point the planner should head for at `now_ms` with goal `goal`: `aim` for a
-    /// fresh detour to that goal, else `None` (head for the goal).
-    pub fn aim_for(&self, goal: Vec2, now_ms: u64, cfg: &RouteConfig) -> Option<Vec2> {
-        let fresh = now_ms.saturating_sub(self.time_ms) <= u64::from(cfg.stale_ms);
-        (cfg.enabled && fresh && self.goal == goal && self.status == RouteStatus::Detour)
-            .then_some(self.aim)
+    /// detour to that goal no older than `stale_ms`, else `None` (head for the goal).
+    pub fn aim_for(&self, goal: Vec2, now_ms: u64, stale_ms: u32) -> Option<Vec2> {
+        let fresh = now_ms.saturating_sub(self.time_ms) <= u64::from(stale_ms);
+        (fresh && self.goal == goal && self.status == RouteStatus::Detour).then_some(self.aim)
     }
 }
 
@@ -177,6 +174,20 @@ impl Router {
         &self.grid
     }
 
+    /// Whether the layer runs.
+    pub fn enabled(&self) -> bool {
+        self.cfg.cell_m > 0.0
+    }
+
+    /// A new cell size (`Params::route_cell_m`; 0: off). A change starts an empty grid.
+    pub fn set_cell(&mut self, cell_m: f32) {
+        if cell_m.is_finite() && cell_m >= 0.0 && cell_m != self.cfg.cell_m {
+            self.cfg.cell_m = cell_m;
+            self.grid = Grid::new(cell_m);
+            self.last_ms = None;
+        }
+    }
+
     /// A new mission goal (replanned at the next navigation), or none.
     pub fn set_goal(&mut self, goal: Option<Vec2>) {
         if self.goal != goal {
@@ -187,7 +198,7 @@ impl Router {
 
     /// A charted or sensed obstacle: still ones are marked.
     pub fn obstacle(&mut self, shape: &Shape, velocity: Vec2) {
-        if self.cfg.enabled && velocity.norm2() <= STILL_SPEED * STILL_SPEED {
+        if self.enabled() && velocity.norm2() <= STILL_SPEED * STILL_SPEED {
             self.grid.mark(shape);
         }
     }
@@ -200,7 +211,7 @@ impl Router {
     /// New navigation: replans when `replan_ms` has passed since the last replan (or the goal
     /// changed) and returns the route to publish.
     pub fn on_nav(&mut self, p: Vec2, now_ms: u64, map: Option<&EvidenceMap>) -> Option<Route> {
-        if !self.cfg.enabled || !p.is_finite() {
+        if !self.enabled() || !p.is_finite() {
             return None;
         }
         self.grid.follow(p);
@@ -249,8 +260,10 @@ impl Router {
         (RouteStatus::Blocked, goal)
     }
 
-    /// Walks down from `start` and returns the farthest cell seen in a straight line from `p`;
-    /// `Clear` with the goal itself when the walk's end (`end`) is in sight.
+    /// Walks down from `start` (at most [`MAX_WALK`] steps) and returns the farthest cell of
+    /// the walk seen in a straight line from `p` — found by bisection, a handful of line checks
+    /// instead of one per step; `Clear` with the goal itself when the walk's end (`end`) is in
+    /// sight.
     fn aim(
         &self,
         p: Vec2,
@@ -260,32 +273,41 @@ impl Router {
         goal: Vec2,
     ) -> (RouteStatus, Vec2) {
         let (g, blocked) = (&self.grid, &self.blocked);
+        // Cells as bytes (the window is 64 wide): 256 bytes of stack for the whole walk.
+        let mut walk: heapless::Vec<(u8, u8), MAX_WALK> = heapless::Vec::new();
         let mut cell = start;
-        let mut aim = None;
-        for _ in 0..MAX_WALK {
-            let Some(next) = self.wave.downhill(cell, source) else {
-                break;
-            };
-            if !g.line_clear(blocked, p, g.center(next.0, next.1), start) {
+        while let Some(next) = self.wave.downhill(cell, source) {
+            if walk.push((next.0 as u8, next.1 as u8)).is_err() {
                 break;
             }
             cell = next;
-            aim = Some(g.center(cell.0, cell.1));
         }
+        let center = |&(c, r): &(u8, u8)| g.center(usize::from(c), usize::from(r));
+        let seen = |k: usize| {
+            walk.get(k)
+                .is_some_and(|c| g.line_clear(blocked, p, center(c), start))
+        };
         if cell == source && g.line_clear(blocked, p, end, start) {
             return (RouteStatus::Clear, goal);
         }
-        match aim {
-            Some(a) => (RouteStatus::Detour, a),
-            // Not even the first step is in sight (the vehicle is at a cell's corner): aim at
-            // the first step anyway.
-            None => self
-                .wave
-                .downhill(start, source)
-                .map_or((RouteStatus::Blocked, goal), |n| {
-                    (RouteStatus::Detour, g.center(n.0, n.1))
-                }),
+        let Some(&first) = walk.first() else {
+            return (RouteStatus::Blocked, goal);
+        };
+        // The largest k with walk[k] in sight, if the first step is (a vehicle at a cell's
+        // corner may not see even that: it then aims at the first step anyway).
+        let (mut lo, mut hi) = (0, walk.len() - 1);
+        if seen(0) {
+            while lo < hi {
+                let mid = (lo + hi).div_ceil(2);
+                if seen(mid) {
+                    lo = mid;
+                } else {
+                    hi = mid - 1;
+                }
+            }
         }
+        let c = walk.get(lo).copied().unwrap_or(first);
+        (RouteStatus::Detour, center(&c))
     }
 }
 
@@ -372,7 +394,7 @@ mod tests {
         let route = r.on_nav(Vec2::ZERO, 0, None).unwrap();
         assert_eq!(route.status, RouteStatus::Clear);
         assert_eq!(route.aim, Vec2::new(500.0, 80.0));
-        assert_eq!(route.aim_for(route.goal, 0, &RouteConfig::default()), None);
+        assert_eq!(route.aim_for(route.goal, 0, 5000), None);
 
         let mut r = Router::new(RouteConfig::default());
         r.grid.follow(Vec2::ZERO);
@@ -397,10 +419,8 @@ mod tests {
         let cell = r.grid.cell_of(Vec2::new(5.0, 0.0)).unwrap();
         assert!(!r.grid.is_occupied(cell));
 
-        let mut off = Router::new(RouteConfig {
-            enabled: false,
-            ..RouteConfig::default()
-        });
+        let mut off = Router::new(RouteConfig::default());
+        off.set_cell(0.0);
         off.set_goal(Some(Vec2::new(50.0, 0.0)));
         assert_eq!(off.on_nav(Vec2::ZERO, 0, None), None);
     }

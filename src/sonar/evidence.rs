@@ -45,6 +45,8 @@ const SIDE_I: i32 = MAP_SIDE as i32;
 const MASK: i32 = SIDE_I - 1;
 /// Farthest a [`EvidenceMap::nearest`] query looks, cells (8 m at the default 0.5 m).
 pub const MAX_REACH_CELLS: i32 = 16;
+/// Sectors of bearing in a [`EvidenceMap::nearest`] scan (11.25° each).
+pub const SECTORS: usize = 32;
 /// Re-centre when the vehicle is this many cells off the window's centre.
 const RECENTRE_CELLS: i32 = SIDE_I / 4;
 
@@ -197,6 +199,24 @@ const EMPTY: AtomicU8 = AtomicU8::new(0);
 fn floor_i(x: f32) -> i32 {
     // Positions are validated to ±100 km, cells ≥ 0.1 m: within i32. `as` saturates anyway.
     libm::floorf(x) as i32
+}
+
+/// The sector (0 ..= [`SECTORS`] − 1, counter-clockwise from +x) of cell offset (di, dj),
+/// without trigonometry: the octant from the signs and which is larger, the quarter of the
+/// octant from |min|/|max| against tan 11.25°, 22.5°, 33.75° (in 1/65536).
+fn sector(di: i32, dj: i32) -> usize {
+    const TAN: [i64; 3] = [13_036, 27_146, 43_790];
+    let (ax, ay) = (i64::from(di.unsigned_abs()), i64::from(dj.unsigned_abs()));
+    let (lo, hi) = if ax >= ay { (ay, ax) } else { (ax, ay) };
+    let k = TAN.iter().filter(|&&t| (lo << 16) > t * hi).count();
+    // Within the first quadrant: 0 ..= 7 from +x.
+    let q = if ax >= ay { k } else { 7 - k };
+    match (di >= 0, dj >= 0) {
+        (true, true) => q,
+        (false, true) => 15 - q,
+        (false, false) => 16 + q,
+        (true, false) => 31 - q,
+    }
 }
 
 /// Bit offset of slot `s`'s nibble in its byte.
@@ -390,13 +410,17 @@ impl EvidenceMap {
 
     // ---- The reader's side (periodic task) ----
 
-    /// The believed-occupied cells within `radius_m` of `p` (at most [`MAX_REACH_CELLS`]
-    /// cells), nearest first, at most `out`'s capacity K of them: the nearest by whole-cell
-    /// offset from `p`'s cell (ties at the K-th distance are taken in scan order). Two passes
-    /// over the square of side 2·radius about `p`, clipped to the window — the first counts
-    /// occupied cells per squared cell distance, the second takes those under the distance
-    /// that holds K — so the cost is two byte loads per cell and no sorting of more than K.
-    /// Returns `false` (and leaves `out` empty) when there is no map to read this time.
+    /// A polar scan of the map round `p`: in each of [`SECTORS`] equal sectors of bearing, the
+    /// believed-occupied cell nearest `p` within `radius_m` (at most [`MAX_REACH_CELLS`]
+    /// cells), nearest first, at most `out`'s capacity K of them.
+    ///
+    /// Why per sector and not simply the K nearest: between two piers, in a channel or in a
+    /// corner, the nearest wall alone has more than K cells within reach, and the K nearest
+    /// would hide every other wall from the planner and the guard. One cell per bearing is what
+    /// a range scan would show — every side with something on it — and the nearest distance
+    /// overall (the stator's input) is the same. One pass over the square of side 2·radius
+    /// about `p`, clipped to the window: a nibble load per cell, a few integer comparisons per
+    /// occupied one. Returns `false` (and leaves `out` empty) when there is no map to read.
     pub fn nearest<const K: usize>(
         &self,
         p: Vec2,
@@ -420,46 +444,35 @@ impl EvidenceMap {
             cj.saturating_sub(r).max(w.y0),
             cj.saturating_add(r).min(w.y0 + MASK),
         );
-        let occupied = |i: i32, j: i32| {
-            let (di, dj) = (i - ci, j - cj);
-            let d2 = di * di + dj * dj;
-            (d2 <= r2 && self.value(i, j) >= self.cfg.occupied).then_some(d2 as usize)
-        };
-        // Pass 1: occupied cells per squared cell distance.
-        let mut count = [0u16; (MAX_REACH_CELLS * MAX_REACH_CELLS + 1) as usize];
+        // Per sector: squared cell distance and the cell (d2 = i32::MAX: none yet).
+        let mut best = [(i32::MAX, 0i32, 0i32); SECTORS];
         for j in j0..=j1 {
             for i in i0..=i1 {
-                if let Some(c) = occupied(i, j).and_then(|d2| count.get_mut(d2)) {
-                    *c = c.saturating_add(1);
+                let (di, dj) = (i - ci, j - cj);
+                let d2 = di * di + dj * dj;
+                if d2 > r2 || self.value(i, j) < self.cfg.occupied {
+                    continue;
                 }
-            }
-        }
-        // The squared distance up to which the K nearest lie.
-        let mut cut = r2 as usize;
-        let mut total = 0usize;
-        for (d2, &c) in count.iter().enumerate() {
-            total += usize::from(c);
-            if total >= K {
-                cut = d2;
-                break;
-            }
-        }
-        // Pass 2: take them.
-        for j in j0..=j1 {
-            for i in i0..=i1 {
-                if occupied(i, j).is_some_and(|d2| d2 <= cut) {
-                    let center = self.center_of(i, j);
-                    let near = Near {
-                        center,
-                        d2: (center - p).norm2(),
-                    };
-                    if out.push(near).is_err() {
-                        break;
+                if let Some(b) = best.get_mut(sector(di, dj)) {
+                    if d2 < b.0 {
+                        *b = (d2, i, j);
                     }
                 }
             }
         }
-        sort_by_distance(out);
+        let mut all: heapless::Vec<Near, SECTORS> = heapless::Vec::new();
+        for &(_, i, j) in best.iter().filter(|b| b.0 != i32::MAX) {
+            let center = self.center_of(i, j);
+            // SECTORS entries at most: never full.
+            let _ = all.push(Near {
+                center,
+                d2: (center - p).norm2(),
+            });
+        }
+        sort_by_distance(&mut all);
+        for n in all.iter().take(K) {
+            let _ = out.push(*n);
+        }
         true
     }
 
@@ -610,6 +623,53 @@ mod tests {
         // Radius bounds the search.
         m.nearest(Vec2::ZERO, 2.5, &mut near);
         assert_eq!(near.len(), 1);
+    }
+
+    #[test]
+    fn a_near_wall_does_not_hide_the_one_across_the_channel() {
+        let m = map();
+        // A wall 1 m north (long: more cells within reach than the scan keeps) and one 3 m
+        // south, each seen twice.
+        for k in -40..=40 {
+            let x = k as f32 * 0.1;
+            for _ in 0..2 {
+                m.observe(&Beam {
+                    origin: Vec2::new(x, 0.0),
+                    look: Vec2::new(0.0, 1.0),
+                    range_m: 30.0,
+                    blank_m: 0.0,
+                    echoes: &[1.0],
+                });
+                m.observe(&Beam {
+                    origin: Vec2::new(x, 0.0),
+                    look: Vec2::new(0.0, -1.0),
+                    range_m: 30.0,
+                    blank_m: 0.0,
+                    echoes: &[3.0],
+                });
+            }
+        }
+        let mut near: heapless::Vec<Near, 32> = heapless::Vec::new();
+        m.nearest(Vec2::ZERO, 6.0, &mut near);
+        assert!(near.iter().any(|n| n.center.y > 0.9), "the north wall");
+        assert!(near.iter().any(|n| n.center.y < -2.5), "the south wall too");
+        assert!(
+            near.first().is_some_and(|n| n.center.y > 0.9),
+            "nearest first"
+        );
+    }
+
+    #[test]
+    fn sectors_go_round_counter_clockwise() {
+        let angles = (0..64).map(|k| k as f32 * core::f32::consts::TAU / 64.0 + 0.01);
+        let mut last = 0;
+        for a in angles {
+            let s = sector((100.0 * a.cos()) as i32, (100.0 * a.sin()) as i32);
+            let want = (a / (core::f32::consts::TAU / 32.0)) as usize;
+            assert!(s.abs_diff(want) <= 1, "angle {a}: sector {s}, want {want}");
+            assert!(s >= last || (last == 31 && s == 0));
+            last = s;
+        }
     }
 
     #[test]
