@@ -23,8 +23,8 @@ pub const MAX_OBSTACLES: usize = 32;
 pub const MAX_AGENTS: usize = 8;
 /// Fastest an obstacle or agent may be said to move, m/s (beyond any AUV, a unit error).
 pub const MAX_OBJECT_SPEED: f32 = 20.0;
-/// Most believed evidence-map cells the planner takes per step, the nearest ones
-/// ([`World::set_map`]).
+/// Most believed evidence-map cells the planner takes per step: one per bearing sector of the
+/// map's polar scan ([`World::set_map`], `crate::sonar::EvidenceMap::nearest`).
 pub const MAX_MAP_CELLS: usize = 32;
 
 /// Where an obstacle came from, which decides its ageing and eviction.

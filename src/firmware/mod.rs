@@ -74,6 +74,7 @@ static LINK: Mutex<Cell<(RxCounters, BackgroundCounters)>> = Mutex::new(Cell::ne
         controls_dropped: 0,
         scanlines_rejected: 0,
         scanlines: 0,
+        swept_mrad: 0,
         features_extracted: 0,
         contacts_rejected: 0,
     },

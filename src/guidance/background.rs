@@ -39,6 +39,9 @@ pub struct BackgroundCounters {
     pub scanlines_rejected: u32,
     /// Scanlines taken in (the periodic task watches it: a sonar gone quiet slows the vehicle).
     pub scanlines: u32,
+    /// Bearing swept by those scanlines, mrad (saturating): the periodic task waits for the
+    /// first full sweep before it moves.
+    pub swept_mrad: u32,
     /// Features extracted from scanlines.
     pub features_extracted: u32,
     /// Contacts refused when converted to table entries.
@@ -199,7 +202,11 @@ fn dispatch(
                 ok
             });
             count_if(result.is_err(), &mut counters.scanlines_rejected);
-            count_if(result.is_ok(), &mut counters.scanlines);
+            if result.is_ok() {
+                counters.scanlines = counters.scanlines.saturating_add(1);
+                let step = (scan.step_rad.abs() * 1000.0) as u32;
+                counters.swept_mrad = counters.swept_mrad.saturating_add(step);
+            }
             counters.features_extracted = counters.features_extracted.saturating_add(emitted);
             counters.sightings_dropped = counters.sightings_dropped.saturating_add(dropped);
         }

@@ -8,8 +8,9 @@
 //!   braking at F_max (the most the planner ever commands) from speed v needs v²/2F_max metres,
 //!   and the nearest surface is closer than that;
 //! - frozen navigation ([`FreezeDetector`]) → hold, until a fix that differs;
-//! - a sonar gone quiet ([`SonarWatch`]) → slow down, and hold once the vehicle has gone as far
-//!   as the map it has can be trusted, until scanlines come again.
+//! - a sonar that cannot see ([`SonarWatch`]): not yet swept once round → hold; gone quiet →
+//!   slow down, and hold once the vehicle has gone as far as the map it has can be trusted,
+//!   until scanlines come again.
 
 use crate::math::Vec2;
 use crate::planner::{HoldReason, NavState};
@@ -40,12 +41,18 @@ impl Default for FailsafeConfig {
     }
 }
 
-/// A sonar gone quiet (issue "Faults": never drive on into what the sonar can no longer see).
-/// Obstacles stay where they were (the evidence map forgets by coverage, not age), but what the
-/// sonar has not yet seen is not in it: while the sonar is quiet the vehicle may still travel
-/// `sonar_quiet_travel_m` from where it went quiet, at a speed from which it can stop within
-/// what is left (v ≤ √(2·F_max·left)), and holds when that is spent. A vehicle whose sonar has
-/// never spoken (perception by contacts) is not watched.
+/// A sonar that cannot see (issue "Faults": never drive into what the sonar can no longer
+/// see). Two cases:
+/// - **not yet swept**: the sonar has spoken but has not yet looked once all round the vehicle
+///   since it started — the map holds only part of what is there, so the vehicle waits (one
+///   sweep: 9 s for a Micron at 30 m);
+/// - **gone quiet**: no scanline for `sonar_quiet_ms`. Obstacles stay where they were (the
+///   evidence map forgets by coverage, not age), but what the sonar has not yet seen is not in
+///   it: the vehicle may still travel `sonar_quiet_travel_m` from where it went quiet, at a
+///   speed from which it can stop within what is left (v ≤ √(2·F_max·left)), and holds when that
+///   is spent.
+///
+/// A vehicle whose sonar has never spoken (perception by contacts) is not watched.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct SonarWatch {
     /// Scanlines counted by the background, and when the count last changed.
@@ -54,13 +61,17 @@ pub struct SonarWatch {
     quiet_at: Option<Vec2>,
 }
 
+/// One full turn, mrad.
+const SWEEP_MRAD: u32 = 6283;
+
 impl SonarWatch {
-    /// Takes the background's scanline count at `now_ms` with the vehicle at `p`; returns the
-    /// speed bound while the sonar is quiet (`None`: not quiet).
+    /// Takes the background's scanline count and swept bearing (mrad) at `now_ms` with the
+    /// vehicle at `p`; returns the speed bound while the sonar cannot see (`None`: it can;
+    /// `Some(0.0)`: hold).
     pub fn update(
         &mut self,
         cfg: &FailsafeConfig,
-        scanlines: u32,
+        (scanlines, swept_mrad): (u32, u32),
         now_ms: u64,
         p: Vec2,
         f_max: f32,
@@ -74,6 +85,9 @@ impl SonarWatch {
             }
         }
         let (_, since) = self.last?;
+        if swept_mrad < SWEEP_MRAD {
+            return Some(0.0);
+        }
         if now_ms.saturating_sub(since) < cfg.sonar_quiet_ms {
             return None;
         }
@@ -163,6 +177,41 @@ pub fn check(cfg: &FailsafeConfig, s: &Situation) -> Option<HoldReason> {
 mod tests {
     extern crate std;
     use super::*;
+
+    #[test]
+    fn a_sonar_that_cannot_see_slows_or_holds_the_vehicle() {
+        let cfg = FailsafeConfig::default();
+        let mut w = SonarWatch::default();
+        let swept = (5, 7000);
+        // Never spoken: not watched.
+        assert_eq!(w.update(&cfg, (0, 0), 10_000, Vec2::ZERO, 0.5), None);
+        // Spoken, but not yet once round: hold.
+        assert_eq!(
+            w.update(&cfg, (3, 3000), 10_000, Vec2::ZERO, 0.5),
+            Some(0.0)
+        );
+        assert_eq!(w.update(&cfg, swept, 10_000, Vec2::ZERO, 0.5), None);
+        assert_eq!(
+            w.update(&cfg, swept, 11_000, Vec2::ZERO, 0.5),
+            None,
+            "not yet quiet"
+        );
+        let v = w.update(&cfg, swept, 12_000, Vec2::ZERO, 0.5).unwrap();
+        assert!((v - (2.0f32 * 0.5 * 5.0).sqrt()).abs() < 1e-3, "{v}");
+        let v = w
+            .update(&cfg, swept, 15_000, Vec2::new(4.0, 0.0), 0.5)
+            .unwrap();
+        assert!((v - 1.0).abs() < 1e-3, "1 m left: {v}");
+        assert_eq!(
+            w.update(&cfg, swept, 20_000, Vec2::new(5.5, 0.0), 0.5),
+            Some(0.0)
+        );
+        // It speaks again: released.
+        assert_eq!(
+            w.update(&cfg, (6, 7030), 20_100, Vec2::new(5.5, 0.0), 0.5),
+            None
+        );
+    }
 
     fn ok() -> Situation {
         Situation {

@@ -124,16 +124,24 @@ impl Believed<'_> {
         {
             return true;
         }
-        // The agents' circles have the vehicle's own radius (000 §III), so hull + hull.
+        let samples = (len / SAMPLE_M) as u32 + 1;
+        let per_m = 1.0 / max(speed, MIN_SPEED_MPS);
+        let t_end = min(len * per_m, MAX_LOOKAHEAD_S);
+        // The agents' circles have the vehicle's own radius (000 §III), so hull + hull; like
+        // moving obstacles they are met where they will be (two vehicles closing head-on at
+        // 1 m/s each halve each other's braking room).
         if w.agents().iter().any(|a| {
-            to_segment(a.position, p, u, len) - self.agent_r < floor && ahead(a.position, p, u)
+            let now =
+                to_segment(a.position, p, u, len) - self.agent_r < floor && ahead(a.position, p, u);
+            now || (1..=samples).any(|k| {
+                let s = min(k as f32 * SAMPLE_M, len);
+                let t = min(s * per_m, MAX_LOOKAHEAD_S);
+                (p + u * s - (a.position + a.velocity * t)).norm() - self.agent_r < floor
+            })
         }) {
             return true;
         }
         // Shapes: sampled along the segment, only those that can reach it.
-        let samples = (len / SAMPLE_M) as u32 + 1;
-        let per_m = 1.0 / max(speed, MIN_SPEED_MPS);
-        let t_end = min(len * per_m, MAX_LOOKAHEAD_S);
         for o in w.obstacles().iter().filter(|o| !w.left_to_map(o)) {
             let reach = (o.shape.center() - p).norm()
                 - o.shape.bounding_radius()

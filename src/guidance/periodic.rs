@@ -37,9 +37,9 @@ pub struct RuntimeConfig {
     /// The last-line check of every command against what is believed.
     pub guard: GuardConfig,
     /// Evidence-map cells within this distance of the vehicle enter the planner's world each
-    /// period (the nearest [`MAX_MAP_CELLS`]), m. At 6 m seed 000's stator (A⁺ = 2.5) has a
-    /// gradient of 2A⁺/r³ ≈ 0.02 m/s², a twentieth of the goal's pull at its default reach; the
-    /// snapshot's cost grows with the square of this.
+    /// period (a polar scan: the nearest in each bearing sector, `EvidenceMap::nearest`), m.
+    /// At 6 m seed 000's stator (A⁺ = 2.5) has a gradient of 2A⁺/r³ ≈ 0.02 m/s², a twentieth
+    /// of the goal's pull at its default reach; the snapshot's cost grows with its square.
     pub map_reach_m: f32,
     /// A [`BeliefRepr`] chunk of the evidence map goes out every this many periods (0: never);
     /// with 16-row chunks of the 64-row window the whole map takes four chunks.
@@ -232,7 +232,7 @@ impl Periodic {
         self.planner.set_route(aim);
 
         let (_, bg) = inputs.link_counters();
-        let cmd = self.plan(now_ms, nav, bg.scanlines, cost);
+        let cmd = self.plan(now_ms, nav, (bg.scanlines, bg.swept_mrad), cost);
         self.last = Some((now_ms, cmd));
         self.last_heading = cmd.psi_set;
         let command = CommandRepr {
@@ -290,7 +290,7 @@ impl Periodic {
         &mut self,
         now_ms: u64,
         nav: Option<NavSample>,
-        scanlines: u32,
+        sonar: (u32, u32),
         cost: &mut impl FnMut() -> u32,
     ) -> Command {
         let params = *self.planner.params();
@@ -308,12 +308,12 @@ impl Periodic {
         self.frozen_holds = self.frozen_holds.saturating_add(u32::from(frozen));
         let quiet = nav.and_then(|n| {
             let (cfg, p) = (&self.config.failsafe, n.nav.position);
-            self.sonar.update(cfg, scanlines, now_ms, p, params.f_max)
+            self.sonar.update(cfg, sonar, now_ms, p, params.f_max)
         });
         let spent = quiet.is_some_and(|v| v < QUIET_STOP_MPS);
         let hold = failsafe::check(&self.config.failsafe, &situation)
             .or(frozen.then_some(crate::planner::HoldReason::FrozenNav))
-            .or(spent.then_some(crate::planner::HoldReason::SonarLost));
+            .or(spent.then_some(crate::planner::HoldReason::SonarBlind));
         let (Some(n), None) = (nav, hold) else {
             self.planner.reset_motion();
             let heading = nav.map_or(self.last_heading, |n| n.nav.heading);

@@ -25,7 +25,7 @@ pub const fn mode_codes(mode: Mode) -> (u8, u8) {
                 HoldReason::InsideObstacle => 3,
                 HoldReason::CollisionImminent => 4,
                 HoldReason::FrozenNav => 5,
-                HoldReason::SonarLost => 6,
+                HoldReason::SonarBlind => 6,
             },
         ),
         Mode::Transit => (1, 0),
@@ -45,7 +45,7 @@ fn mode_from_codes(mode: u8, reason: u8, mode_row: u8) -> Result<Mode, Error> {
             3 => HoldReason::InsideObstacle,
             4 => HoldReason::CollisionImminent,
             5 => HoldReason::FrozenNav,
-            6 => HoldReason::SonarLost,
+            6 => HoldReason::SonarBlind,
             _ => return refuse(reason_row, Problem::UnknownCode),
         }),
         1 => Mode::Transit,
@@ -976,7 +976,7 @@ pub(crate) mod tests {
             Just(Mode::Hold(HoldReason::InsideObstacle)),
             Just(Mode::Hold(HoldReason::CollisionImminent)),
             Just(Mode::Hold(HoldReason::FrozenNav)),
-            Just(Mode::Hold(HoldReason::SonarLost)),
+            Just(Mode::Hold(HoldReason::SonarBlind)),
         ]
     }
 

@@ -95,9 +95,10 @@ pub enum HoldReason {
     /// Navigation fixes keep coming but do not change while the vehicle is commanded to move:
     /// the navigation source has frozen (`crate::guidance::failsafe::FreezeDetector`).
     FrozenNav,
-    /// The sonar has gone quiet and the vehicle has gone as far as the map it has can be
-    /// trusted (`crate::guidance::failsafe::SonarWatch`).
-    SonarLost,
+    /// The sonar has not yet swept once round the vehicle since it started, or it has gone
+    /// quiet and the vehicle has gone as far as the map it has can be trusted
+    /// (`crate::guidance::failsafe::SonarWatch`).
+    SonarBlind,
 }
 
 /// What the planner is doing.
@@ -270,6 +271,8 @@ struct Context<'a> {
     mission: Mission,
     /// Where the strategy steers for: the route layer's goal-point, else the mission goal.
     aim: Vec2,
+    /// Whether the route layer gave `aim` (VPF then cruises to it).
+    routed: bool,
     /// Where each obstacle is planned against, relative to where it is.
     shifts: &'a Shifts,
     /// Signed distance to the nearest obstacle or vehicle circle as they are now, m.
@@ -387,9 +390,10 @@ impl Planner {
         Ok(())
     }
 
-    /// The route layer's intermediate goal-point for this step (`crate::route`), or `None` to
-    /// head for the mission goal. Set by the runtime before each step; arrival is still judged
-    /// at the mission goal.
+    /// The route layer's goal-point for this step (`crate::route`: an intermediate one, or the
+    /// mission goal when it is in plain sight), or `None` when there is no route (the planner
+    /// as published). Set by the runtime before each step; arrival is still judged at the
+    /// mission goal.
     pub fn set_route(&mut self, aim: Option<Vec2>) {
         self.route = aim.filter(|a| finite_coord(*a));
     }
@@ -473,6 +477,7 @@ impl Planner {
             world,
             mission,
             aim: self.route.unwrap_or(mission.goal),
+            routed: self.route.is_some(),
             shifts: &shifts,
             clearance,
         };

@@ -16,11 +16,12 @@
 //!    see in a straight line (`aim`);
 //! 4. publishes a [`Route`] through a lock-free [`RouteSlot`].
 //!
-//! The periodic task then gives the planner `aim` as its goal-point while the route is a
-//! [`RouteStatus::Detour`] for its own goal and fresh; arrival is still judged at the goal
-//! (`crate::planner::Planner::set_route`). When the straight line is clear, or no route exists
-//! (the goal is enclosed as far as the grid knows), it gets nothing: the planner runs exactly as
-//! without this layer, ghost goal-points included. `Params::route_cell_m` = 0 turns the layer
+//! The periodic task then gives the planner `aim` as its goal-point while the route is fresh
+//! and for its own goal (the goal itself when it is in plain sight); arrival is still judged at
+//! the goal (`crate::planner::Planner::set_route`), and VPF cruises to a routed goal-point
+//! (`crate::planner::vpf::goal_point`). When no route exists (the goal is enclosed as far as
+//! the grid knows) it gets nothing: the planner runs exactly as without this layer, ghost
+//! goal-points included. `Params::route_cell_m` = 0 turns the layer
 //! off: the papers' planner unchanged.
 
 pub mod grid;
@@ -111,11 +112,13 @@ pub struct Route {
 }
 
 impl Route {
-    /// The goal-point the planner should head for at `now_ms` with goal `goal`: `aim` for a
-    /// detour to that goal no older than `stale_ms`, else `None` (head for the goal).
+    /// What the planner should head for at `now_ms` with goal `goal`, if this route (no older
+    /// than `stale_ms`, for that goal) has a way: `aim` for a detour, the goal itself when it
+    /// is in plain sight; `None` when there is no way or no fresh route (the planner is then
+    /// on its own, as published).
     pub fn aim_for(&self, goal: Vec2, now_ms: u64, stale_ms: u32) -> Option<Vec2> {
         let fresh = now_ms.saturating_sub(self.time_ms) <= u64::from(stale_ms);
-        (fresh && self.goal == goal && self.status == RouteStatus::Detour).then_some(self.aim)
+        (fresh && self.goal == goal && self.status != RouteStatus::Blocked).then_some(self.aim)
     }
 }
 
@@ -394,7 +397,8 @@ mod tests {
         let route = r.on_nav(Vec2::ZERO, 0, None).unwrap();
         assert_eq!(route.status, RouteStatus::Clear);
         assert_eq!(route.aim, Vec2::new(500.0, 80.0));
-        assert_eq!(route.aim_for(route.goal, 0, 5000), None);
+        assert_eq!(route.aim_for(route.goal, 0, 5000), Some(route.goal));
+        assert_eq!(route.aim_for(route.goal, 6000, 5000), None, "stale");
 
         let mut r = Router::new(RouteConfig::default());
         r.grid.follow(Vec2::ZERO);

@@ -18,10 +18,12 @@
 //! those that enter. Each cell holds an evidence count 0 ..= `max`: an echo's leading edge adds
 //! `hit`, a beam that passes through (nearer than its first echo, less `stop_short_m`; or up to
 //! `free_range_m` when it returns nothing) takes `miss`; a cell is believed occupied at
-//! `occupied` or more. With the defaults a cell needs two echoes before it is believed (a
-//! surface is hit again by the next rays or the next sweep; a spurious echo at a random range
-//! almost never is), and three looks through it undo one echo — so speckle and false targets
-//! fade within a sweep while a real surface, hit on every sweep, stays.
+//! `occupied` or more. With the defaults a cell beyond `near_m` (8 m) needs two echoes before
+//! it is believed (a surface is hit again by the next rays or the next sweep; a spurious echo
+//! at a random range almost never is), and three looks through it undo one echo — so speckle
+//! and false targets fade within a sweep while a real surface, hit on every sweep, stays.
+//! Within `near_m` one echo is believed: there the vehicle has no time to wait for a second
+//! look, and a false one costs only a detour until the next look clears it.
 //!
 //! **Contexts.** One writer, the background (scanlines, [`EvidenceMap::observe`]), and one
 //! reader, the periodic task ([`EvidenceMap::nearest`], [`EvidenceMap::row_bits`]). Cells are
@@ -70,6 +72,10 @@ pub struct EvidenceConfig {
     /// A beam with no echo clears cells out to this range, m, 0 ..= 200 (a surface met at a
     /// grazing angle may return nothing: far cells are not cleared on silence).
     pub free_range_m: f32,
+    /// An echo nearer than this is believed at once, m, 0 ..= 200: near the vehicle there is
+    /// no time for a second look (at 1 m/s a 9-second sweep covers 9 m), and a false one costs
+    /// a detour until the next look clears it. Farther echoes need `occupied` evidence.
+    pub near_m: f32,
 }
 
 /// The defaults, as a constant for `static` maps.
@@ -81,6 +87,7 @@ const DEFAULT: EvidenceConfig = EvidenceConfig {
     max: 12,
     stop_short_m: 1.0,
     free_range_m: 10.0,
+    near_m: 8.0,
 };
 
 impl Default for EvidenceConfig {
@@ -97,7 +104,7 @@ pub enum EvidenceError {
     CellSize,
     /// `hit`, `miss`, `occupied` or `max`.
     Counts,
-    /// `stop_short_m` or `free_range_m`.
+    /// `stop_short_m`, `free_range_m` or `near_m`.
     Ranges,
 }
 
@@ -106,7 +113,9 @@ impl core::fmt::Display for EvidenceError {
         f.write_str(match self {
             EvidenceError::CellSize => "evidence map cell size out of 0.1 ..= 5 m",
             EvidenceError::Counts => "evidence map hit/miss/occupied/max out of range",
-            EvidenceError::Ranges => "evidence map stop_short_m or free_range_m out of range",
+            EvidenceError::Ranges => {
+                "evidence map stop_short_m, free_range_m or near_m out of range"
+            }
         })
     }
 }
@@ -127,7 +136,9 @@ impl EvidenceConfig {
         {
             return Err(EvidenceError::Counts);
         }
-        if !(0.0..=5.0).contains(&self.stop_short_m) || !(0.0..=200.0).contains(&self.free_range_m)
+        if !(0.0..=5.0).contains(&self.stop_short_m)
+            || !(0.0..=200.0).contains(&self.free_range_m)
+            || !(0.0..=200.0).contains(&self.near_m)
         {
             return Err(EvidenceError::Ranges);
         }
@@ -368,7 +379,8 @@ impl EvidenceMap {
     }
 
     /// Puts one ping in the map (writer only): misses along the beam up to its first echo (less
-    /// `stop_short_m`) or to `free_range_m` when it returned nothing, a hit at every echo.
+    /// `stop_short_m`) or to `free_range_m` when it returned nothing, a hit at every echo
+    /// (enough to be believed within `near_m`).
     /// Cost: O(range / cell) byte updates.
     pub fn observe(&self, beam: &Beam<'_>) {
         let Some(w) = self.window() else { return };
@@ -402,7 +414,12 @@ impl EvidenceMap {
             }
             let (i, j) = self.cell_of(beam.origin + beam.look * r);
             if w.contains(i, j) {
-                let v = self.value(i, j).saturating_add(cfg.hit);
+                let add = if r <= cfg.near_m {
+                    cfg.hit.max(cfg.occupied)
+                } else {
+                    cfg.hit
+                };
+                let v = self.value(i, j).saturating_add(add);
                 self.set(i, j, v.min(cfg.max));
             }
         }
@@ -547,7 +564,13 @@ mod tests {
 
     #[test]
     fn two_echoes_make_a_cell_occupied_and_looks_through_it_clear_it() {
-        let m = map();
+        // Beyond `near_m` (one echo is enough nearer: see the next test).
+        let m = EvidenceMap::new(EvidenceConfig {
+            near_m: 3.0,
+            ..EvidenceConfig::default()
+        })
+        .unwrap();
+        m.follow(Vec2::ZERO);
         look(&m, Vec2::ZERO, 0.0, Some(6.1));
         let w = m.window().unwrap();
         assert!(!m.is_occupied(w, 12, 0), "one echo may be a false target");
@@ -607,6 +630,19 @@ mod tests {
             "kept: it was inside the blanking distance"
         );
         assert!(!m.is_occupied(w, 10, 0) || !m.is_occupied(w, 12, 0));
+    }
+
+    #[test]
+    fn one_echo_is_believed_within_near_m_and_only_there() {
+        let m = map();
+        let w = m.window().unwrap();
+        look(&m, Vec2::ZERO, 0.0, Some(6.1));
+        assert!(m.is_occupied(w, 12, 0), "6 m: no time for a second look");
+        look(&m, Vec2::ZERO, core::f32::consts::FRAC_PI_2, Some(9.1));
+        assert!(
+            !m.is_occupied(w, 0, 18),
+            "9 m: one echo may be a false target"
+        );
     }
 
     #[test]
