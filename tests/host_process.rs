@@ -30,8 +30,10 @@ fn host_process_plans_in_lockstep_over_stdio() {
         }),
     ));
     for k in 0..20u64 {
+        // A fix that changes (the same fix over and over while commanded to move is frozen
+        // navigation, and the firmware holds).
         let nav = NavState {
-            position: Vec2::ZERO,
+            position: Vec2::new(0.001 * k as f32, 0.0),
             heading: 0.0,
             velocity: Vec2::ZERO,
         };

@@ -21,8 +21,14 @@
 //! 9 s sweep, waiting for β to close the error let a 1 m/s target cross the track unpredicted
 //! (generated crossing worlds, own sonar). Updates less than `min_update_ms` apart leave the velocity alone, since a
 //! short Δt turns centre noise into speed. The velocity is handed to the planner
-//! (`Obstacle::velocity`) only once a track has `min_hits` updates, has moved farther than its
-//! own radius (at least 1 m) since it was first seen, and is faster than `min_speed_mps`.
+//! (`Obstacle::velocity`) only once a track has `min_hits` updates, `min_steady` of them after
+//! the velocity was set landing where it predicted (within `gate_m` plus a quarter of the
+//! predicted motion), has moved farther than its own radius (at least 1 m) since it was first
+//! seen, and is faster than `min_speed_mps`. The steady sighting is what tells a vessel from a
+//! wall: as the vehicle runs along a wall the sonar sees a different stretch of it each sweep,
+//! and the fitted circle "moves" at 0.5–2 m/s in directions that change from sweep to sweep
+//! (generated channel worlds, own sonar: hundreds of such phantom movers per run, each planned
+//! at its predicted position instead of where the wall is).
 //!
 //! The defaults are measured, not derived: α = 1 (the obstacle is where the sonar saw it last),
 //! β = 1/3 (the velocity closes a third of its error per sweep), a 0.5 m/s floor, two hits. As the
@@ -57,6 +63,10 @@ pub const SONAR_ID_BASE: u16 = 0xC000;
 /// Capacity of the track table: one per obstacle table entry.
 pub const MAX_TRACKS: usize = MAX_OBSTACLES;
 
+/// A sighting confirms a track's velocity when it lands within `gate_m` plus this fraction of
+/// the predicted motion of where the velocity put it.
+const STEADY_FRACTION: f32 = 0.25;
+
 /// Longest time a track is extrapolated over, s (beyond it the gate stops growing).
 const MAX_GAP_S: f32 = 10.0;
 
@@ -81,6 +91,9 @@ pub struct TrackConfig {
     pub min_update_ms: u64,
     /// Updates a track needs before its velocity is used.
     pub min_hits: u16,
+    /// ... of which this many, after the velocity was set, must land where it predicted
+    /// (within `gate_m` + a quarter of the predicted motion): one confirms a constant velocity.
+    pub min_steady: u16,
     /// Speeds below this are reported as zero, m/s.
     pub min_speed_mps: f32,
     /// Speeds are capped here, m/s (≤ `MAX_OBJECT_SPEED`).
@@ -98,6 +111,7 @@ impl Default for TrackConfig {
             beta: 1.0 / 3.0,
             min_update_ms: 500,
             min_hits: 2,
+            min_steady: 1,
             min_speed_mps: 0.5,
             max_speed_mps: 3.0,
         }
@@ -134,6 +148,8 @@ pub struct Track {
     pub hits: u16,
     /// Centre at the first sighting, m.
     pub first: Vec2,
+    /// Consecutive sightings since the velocity was set that fell where it predicted.
+    pub steady: u16,
 }
 
 impl Track {
@@ -155,6 +171,10 @@ impl Track {
             // The second sighting sets the velocity from the two centres (a sweep apart), the
             // usual two-point start of an alpha–beta filter; later ones correct it by β.
             let gain = if self.hits == 1 { 1.0 } else { cfg.beta };
+            if self.hits > 1 {
+                let tol = cfg.gate_m + STEADY_FRACTION * self.velocity.norm() * dt;
+                self.steady = if r.norm() <= tol { self.steady.saturating_add(1) } else { 0 };
+            }
             self.velocity = (self.velocity + r * (gain / dt)).bounded(cap);
             self.time_ms = time_ms;
         } else {
@@ -165,7 +185,7 @@ impl Track {
 
     /// The velocity the planner is given, for a target of radius `radius`.
     fn reported_velocity(&self, cfg: &TrackConfig, radius: f32) -> Vec2 {
-        let confirmed = self.hits >= cfg.min_hits;
+        let confirmed = self.hits >= cfg.min_hits && self.steady >= cfg.min_steady;
         let travelled = (self.center - self.first).norm() >= crate::math::max(radius, 1.0);
         if confirmed && travelled && self.velocity.norm2() >= cfg.min_speed_mps * cfg.min_speed_mps
         {
@@ -278,6 +298,7 @@ impl Tracks {
                     time_ms: f.time_ms,
                     hits: 1,
                     first: f.center,
+                    steady: 0,
                 });
                 Admission::Added(id)
             }
@@ -386,25 +407,21 @@ mod tests {
             "two hits: not yet confirmed"
         );
         assert_eq!(t.tracks().len(), 1);
-        // With the default two hits, the two-point start gives the velocity at once.
-        let mut w2 = World::new();
-        let mut t2 = Tracks::default();
+        // With the defaults, the two-point start sets the velocity; it is reported once a
+        // third sighting lands where it predicted, and not if the third jumps elsewhere.
         let d = TrackConfig::default();
-        t2.admit(
-            &d,
-            2.5,
-            &mut w2,
-            &at(feature(10.0, 0.0, 1.0, 0.9), 0),
-            Vec2::ZERO,
-        );
-        t2.admit(
-            &d,
-            2.5,
-            &mut w2,
-            &at(feature(13.0, 0.0, 1.0, 0.9), 4000),
-            Vec2::ZERO,
-        );
-        assert!((w2.obstacles()[0].velocity - Vec2::new(0.75, 0.0)).norm() < 1e-6);
+        let fly = |xs: &[f32]| {
+            let mut w2 = World::new();
+            let mut t2 = Tracks::default();
+            for (k, &x) in xs.iter().enumerate() {
+                let f = at(feature(x, 0.0, 1.0, 0.9), 4000 * k as u64);
+                t2.admit(&d, 2.5, &mut w2, &f, Vec2::ZERO);
+            }
+            w2.obstacles()[0].velocity
+        };
+        assert_eq!(fly(&[10.0, 13.0]), Vec2::ZERO, "two hits: not yet steady");
+        assert!((fly(&[10.0, 13.0, 16.2]) - Vec2::new(0.75, 0.0)).norm() < 0.02);
+        assert_eq!(fly(&[10.0, 13.0, 12.0]), Vec2::ZERO, "a jump back is no motion");
         // Not seen for 30 s: the world drops it, and the track goes with it.
         w.expire(40_000, 30_000);
         assert!(w.obstacles().is_empty());

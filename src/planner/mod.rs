@@ -57,6 +57,9 @@ use strategy::ArcState;
 pub const MAX_COORD_M: f32 = 100_000.0;
 /// Largest speed over ground accepted from navigation, m/s.
 pub const MAX_NAV_SPEED: f32 = 20.0;
+/// Deceleration planned for arrival, as a fraction of F_max: half, so that an autopilot that
+/// lags the speed set-point still stops in the arrival circle.
+pub const ARRIVAL_BRAKE: f32 = 0.5;
 
 /// The vehicle's navigation state, as the planner needs it.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -508,6 +511,22 @@ impl Planner {
         }
     }
 
+    /// The fastest the vehicle may go and still stop on the goal, m/s: on a route straight to
+    /// the mission's goal (no intermediate goal-point, no ghost), √(2·a·(d − r/2)) with a =
+    /// [`ARRIVAL_BRAKE`]·F_max, d the distance to go and r the arrival radius, so it stops
+    /// halfway into the arrival circle; unbounded otherwise. None of the seeds brakes: their
+    /// goal-point field slows the vehicle by itself, with the time constant μσ²/(A⁻ε) of
+    /// its Gaussian's core (≈ 50 s with the defaults), which is what makes arrivals crawl.
+    fn arrival_speed(&self, m: &Motion, cx: &Context<'_>) -> f32 {
+        let goal = cx.mission.goal;
+        if !cx.routed || cx.aim != goal || m.escape.active_target(cx.aim) != goal {
+            return f32::INFINITY;
+        }
+        let prm = &self.params;
+        let to_go = (goal - cx.nav.position).norm() - 0.5 * prm.arrival_radius_m;
+        crate::math::sqrt(2.0 * ARRIVAL_BRAKE * prm.f_max * crate::math::max(0.0, to_go))
+    }
+
     /// Steps 4–6 of the loop, shared by every strategy: bound the force F (001 eq. 5),
     /// integrate it bilinearly into the planned velocity and bound that (000 eq. 5, 001
     /// eq. 6–7), and decompose into set-points (000 eq. 6–7, 001 §2).
@@ -521,7 +540,8 @@ impl Planner {
         let e1 = Some(measured.e1());
         let f_bar = bound::bound(f, prm.f_max, e1, prm.bounding);
         let v_c = (f_bar + m.integrator.force) * (0.5 * prm.period_s) + m.integrator.velocity;
-        let v_bar = bound::bound(v_c, prm.v_max, e1, prm.bounding);
+        let v_lim = crate::math::min(prm.v_max, self.arrival_speed(m, cx));
+        let v_bar = bound::bound(v_c, v_lim, e1, prm.bounding);
         let sp = m.setpoints.decompose(prm.period_s, f_bar, v_bar, &measured);
         m.integrator = Integrator {
             force: f_bar,
@@ -537,7 +557,7 @@ impl Planner {
         };
         Command {
             psi_set: sp.phi_c,
-            v_set: v_set.min(prm.v_max),
+            v_set: v_set.min(v_lim),
             setpoints: sp,
             mode: self.mode(m, cx),
             force: f_bar,

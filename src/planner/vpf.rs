@@ -10,7 +10,7 @@ use heapless::Vec;
 use super::escape::StallCause;
 use super::gradient::Field;
 use super::{Context, Motion, Planner};
-use crate::field::{GoalPdf, RotorTerm};
+use crate::field::{GoalPdf, RotorSense, RotorTerm};
 use crate::math::Vec2;
 use crate::planner::Command;
 use crate::world::MAX_OBSTACLES;
@@ -61,8 +61,10 @@ pub enum Approach {
 /// - [`Approach::Routed`] and [`Approach::Detour`] (the route layer has a way): a **cruise
 ///   goal-point** σ_c ahead on the line, with reach σ_c ([`cruise_reach`], 19 m with the
 ///   defaults), whose pull settles the vehicle at v_max whatever the distance; for a goal in
-///   plain sight only until it is within σ_c (then the paper's field brings it in), for an
-///   intermediate goal-point all the way (it is passed, not stopped on).
+///   plain sight until it has arrived (the planned speed is capped to brake onto the goal,
+///   `Planner::arrival_speed`; the paper's field, whose final approach has the time constant
+///   μσ²/(A⁻ε) ≈ 50 s, then holds it there), for an intermediate goal-point all the way (it is
+///   passed, not stopped on).
 pub fn goal_point(p: Vec2, target: Vec2, how: Approach, prm: &crate::params::Params) -> GoalPdf {
     let d = target - p;
     let n2 = d.norm2();
@@ -70,7 +72,14 @@ pub fn goal_point(p: Vec2, target: Vec2, how: Approach, prm: &crate::params::Par
         Approach::Unrouted => (CARROT_SIGMAS * prm.sigma_m, prm.sigma_m),
         Approach::Routed | Approach::Detour => (cruise_reach(prm), cruise_reach(prm)),
     };
-    if (n2 <= ahead * ahead && how != Approach::Detour) || n2 < 1e-12 {
+    let near = match how {
+        Approach::Unrouted => ahead,
+        // Brought in at speed (`Planner::arrival_speed` brakes): the paper's field only
+        // once arrived, to hold the vehicle there.
+        Approach::Routed => prm.arrival_radius_m,
+        Approach::Detour => 0.0,
+    };
+    if n2 <= near * near || n2 < 1e-12 {
         return GoalPdf::new(target, prm.a_minus, prm.sigma_m);
     }
     GoalPdf::new(p + d * (ahead / crate::math::sqrt(n2)), prm.a_minus, sigma)
@@ -105,7 +114,8 @@ impl Planner {
             Some((f, GoalPdf::new(vl, f.attraction, f.sigma())))
         });
 
-        // The rotor terms: one normal per obstacle, one sense per encounter.
+        // The rotor terms: one normal per obstacle, and one for the map (one obstacle: its
+        // normal points away from the nearest believed cell).
         let mut normals: Vec<(Vec2, f32), MAX_NORMALS> = Vec::new();
         if prm.a_rotor > 0.0 {
             for (o, &shift) in world.obstacles().iter().zip(cx.shifts) {
@@ -119,22 +129,25 @@ impl Planner {
                     o.stator().reach(r),
                 ));
             }
-        }
-        // The map is one obstacle: its normal points away from the nearest believed cell.
-        if prm.a_rotor > 0.0 {
             if let Some((c, d)) = crate::world::nearest_cell(world.map_cells(), p) {
                 if let Some(n) = (p - c).normalized(1e-6) {
-                    let r = d - world.map_radius();
-                    let _ = normals.push((n, self.map_stator.reach(r)));
+                    let _ = normals.push((n, self.map_stator.reach(d - world.map_radius())));
                 }
             }
         }
+        // The sense: one per encounter (rotor.rs), or on a route each obstacle's own towards
+        // the goal-point (see `rotor_sense`).
         let strongest = normals.iter().copied().max_by(|a, b| a.1.total_cmp(&b.1));
-        let sense = m.rotor_sense.update(strongest, target - p);
+        let common = m.rotor_sense.update(strongest, target - p);
         let rotor_gradient = normals.iter().fold(Vec2::ZERO, |g, &(n, h)| {
+            let sense = if cx.routed {
+                RotorSense::Free.update(Some((n, 1.0)), target - p)
+            } else {
+                common
+            };
             g + RotorTerm::new(prm.a_rotor, n, h, sense).gradient
         });
-        m.rotor_sense = sense;
+        m.rotor_sense = common;
 
         let field = Field {
             obstacles: world.obstacles(),
@@ -203,10 +216,14 @@ mod tests {
         // Routed, 300 m away: the drop across ε balances friction at v_max.
         let routed = goal_point(Vec2::ZERO, far, Approach::Routed, &prm);
         assert!((drop(routed) - prm.mu * prm.v_max).abs() < 0.03 * prm.mu);
-        // Within σ_c: eq. 13 as published.
+        // Closer than σ_c it still pulls at cruise (the arrival brake slows the vehicle) ...
         let near = Vec2::new(0.5 * sigma_c, 0.0);
-        let paper = GoalPdf::new(near, prm.a_minus, prm.sigma_m);
-        assert_eq!(goal_point(Vec2::ZERO, near, Approach::Routed, &prm), paper);
+        let brought = goal_point(Vec2::ZERO, near, Approach::Routed, &prm);
+        assert!((brought.center - Vec2::new(sigma_c, 0.0)).norm() < 1e-3);
+        // ... and once arrived, eq. 13 as published holds it there.
+        let there = Vec2::new(0.9 * prm.arrival_radius_m, 0.0);
+        let paper = GoalPdf::new(there, prm.a_minus, prm.sigma_m);
+        assert_eq!(goal_point(Vec2::ZERO, there, Approach::Routed, &prm), paper);
         // A route's intermediate goal-point 3 m off pulls as hard as a far goal.
         let via = goal_point(Vec2::ZERO, Vec2::new(0.0, 3.0), Approach::Detour, &prm);
         assert!((via.center - Vec2::new(0.0, sigma_c)).norm() < 1e-3);
