@@ -173,7 +173,11 @@ impl Track {
             let gain = if self.hits == 1 { 1.0 } else { cfg.beta };
             if self.hits > 1 {
                 let tol = cfg.gate_m + STEADY_FRACTION * self.velocity.norm() * dt;
-                self.steady = if r.norm() <= tol { self.steady.saturating_add(1) } else { 0 };
+                self.steady = if r.norm() <= tol {
+                    self.steady.saturating_add(1)
+                } else {
+                    0
+                };
             }
             self.velocity = (self.velocity + r * (gain / dt)).bounded(cap);
             self.time_ms = time_ms;
@@ -421,7 +425,11 @@ mod tests {
         };
         assert_eq!(fly(&[10.0, 13.0]), Vec2::ZERO, "two hits: not yet steady");
         assert!((fly(&[10.0, 13.0, 16.2]) - Vec2::new(0.75, 0.0)).norm() < 0.02);
-        assert_eq!(fly(&[10.0, 13.0, 12.0]), Vec2::ZERO, "a jump back is no motion");
+        assert_eq!(
+            fly(&[10.0, 13.0, 12.0]),
+            Vec2::ZERO,
+            "a jump back is no motion"
+        );
         // Not seen for 30 s: the world drops it, and the track goes with it.
         w.expire(40_000, 30_000);
         assert!(w.obstacles().is_empty());
