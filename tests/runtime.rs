@@ -321,3 +321,38 @@ fn a_repeated_tick_repeats_the_command_without_planning_again() {
     reference.tick(100);
     assert_eq!(reference.tick(200), b);
 }
+
+/// Time sanity (`docs/protocol.md`): navigation stamped more than a second after the firmware's
+/// time is refused and counted, so the stale-navigation hold still comes; a `Tick` that goes
+/// back in time is refused, counted and not answered.
+#[test]
+fn navigation_from_the_future_and_ticks_that_go_back_are_refused() {
+    let mut host = Host::new(Params::default());
+    host.send(mission(Vec2::new(30.0, 0.0)));
+    host.nav(0, Vec2::ZERO, Vec2::ZERO);
+    host.tick(0);
+    // A fix stamped an hour ahead, then silence: without the rule it would look fresh forever.
+    host.nav(3_600_000, Vec2::new(0.1, 0.0), Vec2::ZERO);
+    let mut cmd = host.tick(100);
+    for t in (200..=1000).step_by(100) {
+        cmd = host.tick(t);
+    }
+    assert_eq!(cmd.mode, Mode::Hold(HoldReason::StaleNav));
+    let t = host.telemetry.last().unwrap();
+    assert_eq!(t.counters.bad_nav, 1, "refused once, counted once");
+    let bad_payload = t.counters.rx_bad_payload;
+
+    // A tick before the last one: no command, counted with the refused payloads.
+    let before = host.commands.len();
+    host.send(Message::Tick(TickRepr { time_ms: 500 }));
+    assert_eq!(
+        host.commands.len(),
+        before,
+        "a tick back in time is not answered"
+    );
+    host.nav(1100, Vec2::ZERO, Vec2::ZERO);
+    host.tick(1100);
+    let t = host.telemetry.last().unwrap();
+    assert_eq!(t.counters.rx_bad_payload, bad_payload + 1);
+    assert_eq!(t.counters.bad_nav, 1);
+}

@@ -77,6 +77,7 @@ static LINK: Mutex<Cell<(RxCounters, BackgroundCounters)>> = Mutex::new(Cell::ne
         swept_mrad: 0,
         features_extracted: 0,
         contacts_rejected: 0,
+        ticks_refused: 0,
     },
 )));
 static NOW_MS: Mutex<Cell<u64>> = Mutex::new(Cell::new(0));

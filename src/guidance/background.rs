@@ -46,6 +46,8 @@ pub struct BackgroundCounters {
     pub features_extracted: u32,
     /// Contacts refused when converted to table entries.
     pub contacts_rejected: u32,
+    /// `Tick`s refused for going back in time (telemetry counts them in `rx_bad_payload`).
+    pub ticks_refused: u32,
 }
 
 /// The decoder, the sonar extractor and the newest pose they need.
@@ -56,6 +58,8 @@ pub struct Background {
     /// Set by the first `Tick`: firmware time is then the host's, and navigation is stamped
     /// with its own time of validity instead of its arrival.
     lockstep: bool,
+    /// Time of the newest accepted `Tick`, ms.
+    last_tick_ms: Option<u64>,
     /// Counters.
     pub counters: BackgroundCounters,
     contact_a_plus: f32,
@@ -71,6 +75,7 @@ impl Background {
             extractor: Extractor::new(sonar).ok()?,
             pose: None,
             lockstep: false,
+            last_tick_ms: None,
             counters: BackgroundCounters::default(),
             contact_a_plus,
         })
@@ -107,6 +112,15 @@ impl Background {
             match outcome {
                 Outcome::Frame(header, msg) => {
                     let tick = matches!(msg, Message::Tick(_));
+                    if let Message::Tick(t) = msg {
+                        // Lockstep time never goes backwards: such a tick is refused, counted,
+                        // and not answered (a repeated tick, same time, is answered again).
+                        if self.last_tick_ms.is_some_and(|last| t.time_ms < last) {
+                            count_if(true, &mut self.counters.ticks_refused);
+                            return rest;
+                        }
+                        self.last_tick_ms = Some(t.time_ms);
+                    }
                     self.lockstep |= tick;
                     dispatch(
                         header,

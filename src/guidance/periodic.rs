@@ -62,6 +62,10 @@ impl Default for RuntimeConfig {
     }
 }
 
+/// Navigation stamped further than this after the firmware's time is refused, ms: a fix from
+/// the future would read as fresh forever and switch the stale-navigation hold off.
+pub const MAX_NAV_LEAD_MS: u64 = 1000;
+
 /// A quiet sonar's speed bound below which the vehicle holds instead, m/s.
 const QUIET_STOP_MPS: f32 = 0.05;
 
@@ -117,6 +121,12 @@ pub struct Periodic {
     belief_tick: u32,
     /// The newest route read from the background.
     route: Option<Route>,
+    /// The newest navigation accepted.
+    nav: Option<NavSample>,
+    /// Stamp of the last navigation refused for coming from the future, ms.
+    refused_nav_ms: Option<u64>,
+    /// Navigation samples refused for coming from the future.
+    future_navs: u32,
 }
 
 impl Periodic {
@@ -143,6 +153,9 @@ impl Periodic {
             sonar: SonarWatch::default(),
             belief_tick: 0,
             route: None,
+            nav: None,
+            refused_nav_ms: None,
+            future_navs: 0,
         })
     }
 
@@ -205,7 +218,7 @@ impl Periodic {
             let reply = self.apply(c);
             self.send(&Message::Reply(reply), tx);
         }
-        let nav = inputs.nav();
+        let nav = self.accept_nav(inputs.nav(), now_ms);
         let position = nav.map_or(Vec2::ZERO, |n| n.nav.position);
         for _ in 0..SIGHTINGS_PER_PERIOD {
             let Some(s) = inputs.sighting() else { break };
@@ -283,6 +296,23 @@ impl Periodic {
             bitmap: &bytes,
         };
         self.send(&Message::Belief(belief), tx);
+    }
+
+    /// The newest navigation unless it is stamped more than [`MAX_NAV_LEAD_MS`] after `now_ms`
+    /// (a clock that cannot be right: refused once, counted in `bad_nav`); then the last
+    /// accepted one, which ages into the stale-navigation hold.
+    fn accept_nav(&mut self, newest: Option<NavSample>, now_ms: u64) -> Option<NavSample> {
+        if let Some(n) = newest {
+            if n.time_ms > now_ms.saturating_add(MAX_NAV_LEAD_MS) {
+                if self.refused_nav_ms != Some(n.time_ms) {
+                    self.refused_nav_ms = Some(n.time_ms);
+                    self.future_navs = self.future_navs.saturating_add(1);
+                }
+            } else {
+                self.nav = Some(n);
+            }
+        }
+        self.nav
     }
 
     /// Fail-safes, then the planner.
@@ -398,8 +428,9 @@ impl Periodic {
     fn refresh_counters(&mut self, rx: &RxCounters, bg: &BackgroundCounters) {
         let c = &mut self.counters;
         c.set_rx(rx);
+        c.rx_bad_payload = c.rx_bad_payload.saturating_add(bg.ticks_refused);
         let p = self.planner.counters;
-        c.bad_nav = p.bad_nav;
+        c.bad_nav = p.bad_nav.saturating_add(self.future_navs);
         c.bad_params = p.bad_params;
         c.bad_mission = p.bad_mission;
         c.features_dropped = bg.sightings_dropped;

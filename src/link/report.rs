@@ -220,9 +220,9 @@ pub struct TelemetryCounters {
     pub rx_framing_errors: u32,
     /// Frames refused for an unknown version, type or direction.
     pub rx_unknown: u32,
-    /// Frames whose payload was refused (length or a field).
+    /// Frames whose payload was refused (length or a field), and `Tick`s back in time.
     pub rx_bad_payload: u32,
-    /// Nav messages the planner refused.
+    /// Nav messages the planner refused, or stamped more than a second ahead of its time.
     pub bad_nav: u32,
     /// Params messages refused (at the wire or by the planner).
     pub bad_params: u32,
