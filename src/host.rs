@@ -10,10 +10,15 @@
 //! Time: in real time the periods run on an absolute schedule from the process clock; once the
 //! host sends a `Tick`, the process switches to lockstep and runs a period per `Tick`, at the
 //! host's time. Step costs are reported in microseconds.
+//!
+//! Input is bounded like the board's UART: a reader thread queues at most 1 MiB for the event
+//! loop and drops (and counts, on stderr) what comes past it; a period that is due runs before
+//! more input is taken, so a flood neither grows memory nor stops the periods.
 
 use std::io::{Read, Write};
 use std::process::ExitCode;
-use std::sync::mpsc;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::{mpsc, Arc};
 use std::time::{Duration, Instant};
 
 use vpf::guidance::{RuntimeConfig, SingleContext};
@@ -97,9 +102,58 @@ pub fn main() -> ExitCode {
     }
 }
 
+/// Most bytes one read takes from the input (one queued chunk).
+const READ_CHUNK: usize = 4096;
+
+/// Chunks the reader may queue for the event loop: at most `RX_CHUNKS × READ_CHUNK` = 1 MiB
+/// waits (90 s of 115 200 baud; the harness's heaviest period is a few KiB). Past it the reader
+/// drops what it read and counts it, as the board's UART interrupt drops bytes when its receive
+/// queue is full (`rx_bytes_dropped`, `vpf::guidance::RX_QUEUE`): memory stays bounded however
+/// fast the input comes, and the decoder resyncs on the next frame delimiter.
+const RX_CHUNKS: usize = 256;
+
+/// How often, at most, the event loop logs that input was dropped.
+const DROP_LOG_EVERY: Duration = Duration::from_secs(1);
+
+/// What the reader thread did with the input; shared with the event loop.
+#[derive(Default)]
+struct RxStats {
+    /// Bytes read from the input.
+    read: AtomicU64,
+    /// Bytes read but dropped because the queue was full.
+    dropped: AtomicU64,
+}
+
+/// The reader thread: reads `reader` until its end and queues what it reads without ever
+/// blocking on the queue (a full queue drops the chunk and counts it), so a flood costs CPU,
+/// never memory.
+fn pump(mut reader: impl Read, tx: &mpsc::SyncSender<Vec<u8>>, stats: &RxStats, is_device: bool) {
+    let mut buf = [0u8; READ_CHUNK];
+    loop {
+        match reader.read(&mut buf) {
+            // A serial line set to time out reads returns 0 when quiet: not the end.
+            Ok(0) if is_device => std::thread::sleep(Duration::from_millis(5)),
+            Ok(0) | Err(_) => return,
+            Ok(n) => {
+                stats.read.fetch_add(n as u64, Ordering::Relaxed);
+                match tx.try_send(buf[..n].to_vec()) {
+                    Ok(()) => {}
+                    Err(mpsc::TrySendError::Full(_)) => {
+                        stats.dropped.fetch_add(n as u64, Ordering::Relaxed);
+                    }
+                    Err(mpsc::TrySendError::Disconnected(_)) => return,
+                }
+            }
+        }
+    }
+}
+
 /// The event loop: bytes from a reader thread, periods from the clock (until lockstep).
+///
+/// A period that is due runs before the next chunk of input is taken, so input that never
+/// pauses (a flood) delays a period by at most one chunk's decoding, never starves it.
 fn run(
-    mut reader: Box<dyn Read + Send>,
+    reader: Box<dyn Read + Send>,
     mut writer: Box<dyn Write>,
     is_device: bool,
 ) -> std::io::Result<()> {
@@ -110,62 +164,96 @@ fn run(
     )
     .map_err(|e| std::io::Error::other(e.to_string()))?;
 
-    let (tx, rx) = mpsc::channel::<Vec<u8>>();
-    std::thread::spawn(move || {
-        let mut buf = [0u8; 4096];
-        loop {
-            match reader.read(&mut buf) {
-                // A serial line set to time out reads returns 0 when quiet: not the end.
-                Ok(0) if is_device => std::thread::sleep(Duration::from_millis(5)),
-                Ok(0) | Err(_) => break,
-                Ok(n) => {
-                    if tx.send(buf[..n].to_vec()).is_err() {
-                        break;
-                    }
-                }
-            }
-        }
-    });
+    let (tx, rx) = mpsc::sync_channel::<Vec<u8>>(RX_CHUNKS);
+    let stats = Arc::new(RxStats::default());
+    let pump_stats = Arc::clone(&stats);
+    std::thread::spawn(move || pump(reader, &tx, &pump_stats, is_device));
 
     let start = Instant::now();
     let mut cost = || start.elapsed().as_micros() as u32;
     let mut out: Vec<u8> = Vec::with_capacity(4096);
     let mut next = Duration::from_millis(u64::from(fw.periodic().period_ms()));
+    let mut drops_logged = (0u64, start);
     loop {
-        let timeout = next.saturating_sub(start.elapsed());
-        match rx.recv_timeout(if fw.lockstep() {
-            Duration::from_secs(3600)
+        if !fw.lockstep() && start.elapsed() >= next {
+            let now = next.as_millis() as u64;
+            fw.on_tick(now, &mut cost, &mut |f: &[u8]| {
+                out.extend_from_slice(f);
+                true
+            });
+            // Absolute schedule: the next period is one period after this one was due.
+            next += Duration::from_millis(u64::from(fw.periodic().period_ms()));
         } else {
-            timeout
-        }) {
-            Ok(bytes) => {
-                fw.on_bytes(&bytes, &mut cost, &mut |f: &[u8]| {
-                    out.extend_from_slice(f);
-                    true
-                });
-            }
-            Err(mpsc::RecvTimeoutError::Timeout) => {
-                if !fw.lockstep() {
-                    let now = next.as_millis() as u64;
-                    fw.on_tick(now, &mut cost, &mut |f: &[u8]| {
+            let wait = if fw.lockstep() {
+                Duration::from_secs(3600)
+            } else {
+                next.saturating_sub(start.elapsed())
+            };
+            match rx.recv_timeout(wait) {
+                Ok(bytes) => {
+                    fw.on_bytes(&bytes, &mut cost, &mut |f: &[u8]| {
                         out.extend_from_slice(f);
                         true
                     });
-                    // Absolute schedule: the next period is one period after this one was due.
-                    next += Duration::from_millis(u64::from(fw.periodic().period_ms()));
+                }
+                Err(mpsc::RecvTimeoutError::Timeout) => {}
+                Err(mpsc::RecvTimeoutError::Disconnected) => {
+                    eprintln!(
+                        "vpf-firmware: input closed after {} bytes ({} dropped, queue full), exiting",
+                        stats.read.load(Ordering::Relaxed),
+                        stats.dropped.load(Ordering::Relaxed)
+                    );
+                    writer.write_all(&out)?;
+                    writer.flush()?;
+                    return Ok(());
                 }
             }
-            Err(mpsc::RecvTimeoutError::Disconnected) => {
-                eprintln!("vpf-firmware: input closed, exiting");
-                writer.write_all(&out)?;
-                writer.flush()?;
-                return Ok(());
-            }
+        }
+        let dropped = stats.dropped.load(Ordering::Relaxed);
+        if dropped > drops_logged.0 && drops_logged.1.elapsed() >= DROP_LOG_EVERY {
+            eprintln!("vpf-firmware: input queue full: {dropped} bytes dropped so far");
+            drops_logged = (dropped, Instant::now());
         }
         if !out.is_empty() {
             writer.write_all(&out)?;
             writer.flush()?;
             out.clear();
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_full_queue_drops_and_counts_instead_of_growing() {
+        // 10 MiB of input and an event loop that never drains: the queue holds its capacity,
+        // the rest is dropped and counted, every byte accounted for.
+        let total = 10 << 20;
+        let input = std::io::Cursor::new(vec![0x55u8; total]);
+        let (tx, rx) = mpsc::sync_channel(RX_CHUNKS);
+        let stats = RxStats::default();
+        pump(input, &tx, &stats, false);
+        drop(tx);
+        let queued: usize = rx.iter().map(|c| c.len()).sum();
+        assert_eq!(queued, RX_CHUNKS * READ_CHUNK);
+        assert_eq!(stats.read.load(Ordering::Relaxed), total as u64);
+        assert_eq!(
+            stats.dropped.load(Ordering::Relaxed),
+            (total - queued) as u64
+        );
+    }
+
+    #[test]
+    fn input_that_fits_is_queued_whole_and_in_order() {
+        let input: Vec<u8> = (0..100_000u32).map(|i| (i % 251) as u8).collect();
+        let (tx, rx) = mpsc::sync_channel(RX_CHUNKS);
+        let stats = RxStats::default();
+        pump(std::io::Cursor::new(input.clone()), &tx, &stats, false);
+        drop(tx);
+        let got: Vec<u8> = rx.iter().flatten().collect();
+        assert_eq!(got, input);
+        assert_eq!(stats.dropped.load(Ordering::Relaxed), 0);
     }
 }

@@ -2,7 +2,7 @@
 //! garbage), commands, telemetry and replies out, decoded as a host would decode them.
 
 use vpf::field::Shape;
-use vpf::guidance::{RuntimeConfig, SingleContext};
+use vpf::guidance::{FailsafeConfig, RuntimeConfig, SingleContext};
 use vpf::link::{
     ChartObstacleRepr, Contact, ContactKind, ContactList, ContactsRepr, CostUnit, Decoder,
     Direction, Message, MessageType, NavRepr, Outcome, ReplyStatus, TickRepr, MAX_FRAME,
@@ -154,10 +154,11 @@ fn lockstep_vehicle_reaches_goal_through_garbage() {
     assert_eq!(host.commands.len(), 1500);
 }
 
-/// Navigation stops: the fail-safe holds the vehicle within two periods, and planning resumes
-/// when navigation returns.
+/// Navigation stops: the late fix is carried forward and the vehicle slows, the fail-safe holds
+/// it once the fix is older than the navigation timeout, and planning resumes when navigation
+/// returns.
 #[test]
-fn stale_navigation_holds_within_two_periods() {
+fn late_navigation_is_dead_reckoned_and_slowed_then_stale_navigation_holds() {
     let mut host = Host::new(Params::default());
     host.send(mission(Vec2::new(30.0, 0.0)));
     let mut p = Vec2::ZERO;
@@ -170,12 +171,34 @@ fn stale_navigation_holds_within_two_periods() {
     }
     assert!(v.norm() > 0.1);
     // Last navigation at t = 4900 ms; ticks go on without it.
-    let after: Vec<_> = (50..53u64).map(|k| host.tick(k * 100)).collect();
+    let timeout = FailsafeConfig::default().nav_timeout_ms;
+    let after: Vec<_> = (50..=49 + (timeout / 100) + 2)
+        .map(|k| host.tick(k * 100))
+        .collect();
     assert_eq!(after[0].mode, Mode::Transit, "one period of grace");
-    assert_eq!(after[1].mode, Mode::Hold(HoldReason::StaleNav));
-    assert_eq!(after[1].v_set, 0.0);
-    host.nav(5300, p, Vec2::ZERO);
-    assert_eq!(host.tick(5300).mode, Mode::Transit);
+    // Late: still in transit, the speed bounded by a share of v_max that falls to zero.
+    let v_max = Params::default().v_max;
+    for (i, c) in after.iter().enumerate().skip(1) {
+        let age = 100 * (i as u64 + 1);
+        if age > timeout {
+            assert_eq!(c.mode, Mode::Hold(HoldReason::StaleNav), "age {age} ms");
+            assert_eq!(c.v_set, 0.0);
+        } else {
+            assert_eq!(c.mode, Mode::Transit, "age {age} ms: dead-reckoned");
+            let share = 1.0 - (age - 100) as f32 / (timeout - 100) as f32;
+            assert!(c.v_set <= share * v_max + 1e-6, "age {age}: {}", c.v_set);
+        }
+    }
+    assert!(
+        after[1].v_set > 0.0,
+        "a lost frame does not stop the vehicle"
+    );
+    // Held within two periods of the timeout.
+    assert!(after
+        .iter()
+        .any(|c| c.mode == Mode::Hold(HoldReason::StaleNav)));
+    host.nav(7000, p, Vec2::ZERO);
+    assert_eq!(host.tick(7000).mode, Mode::Transit);
 }
 
 /// A parameter set with a bad value gets a typed rejection naming the parameter, and the old
@@ -334,7 +357,8 @@ fn navigation_from_the_future_and_ticks_that_go_back_are_refused() {
     // A fix stamped an hour ahead, then silence: without the rule it would look fresh forever.
     host.nav(3_600_000, Vec2::new(0.1, 0.0), Vec2::ZERO);
     let mut cmd = host.tick(100);
-    for t in (200..=1000).step_by(100) {
+    let stale = FailsafeConfig::default().nav_timeout_ms + 100;
+    for t in (200..=stale).step_by(100) {
         cmd = host.tick(t);
     }
     assert_eq!(cmd.mode, Mode::Hold(HoldReason::StaleNav));
@@ -344,14 +368,16 @@ fn navigation_from_the_future_and_ticks_that_go_back_are_refused() {
 
     // A tick before the last one: no command, counted with the refused payloads.
     let before = host.commands.len();
-    host.send(Message::Tick(TickRepr { time_ms: 500 }));
+    host.send(Message::Tick(TickRepr {
+        time_ms: stale - 500,
+    }));
     assert_eq!(
         host.commands.len(),
         before,
         "a tick back in time is not answered"
     );
-    host.nav(1100, Vec2::ZERO, Vec2::ZERO);
-    host.tick(1100);
+    host.nav(stale + 100, Vec2::ZERO, Vec2::ZERO);
+    host.tick(stale + 100);
     let t = host.telemetry.last().unwrap();
     assert_eq!(t.counters.rx_bad_payload, bad_payload + 1);
     assert_eq!(t.counters.bad_nav, 1);

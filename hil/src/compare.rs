@@ -147,6 +147,11 @@ OUT/<scenario>/<strategy>/. Default firmware: host; default jobs: the number of 
 pub fn cli(it: impl Iterator<Item = String>) -> std::process::ExitCode {
     match cli_inner(it) {
         Ok(()) => std::process::ExitCode::SUCCESS,
+        // `--help`: the usage, on stdout, and success.
+        Err(e) if e.is_empty() => {
+            println!("{USAGE}");
+            std::process::ExitCode::SUCCESS
+        }
         Err(e) => {
             eprintln!("hil compare: {e}\n\n{USAGE}");
             std::process::ExitCode::from(2)
@@ -188,7 +193,7 @@ fn cli_inner(mut it: impl Iterator<Item = String>) -> Result<(), String> {
                     .ok_or("--jobs needs a positive integer")?;
             }
             "--out" => out = Some(PathBuf::from(value()?)),
-            "--help" | "-h" => return Err("help".into()),
+            "--help" | "-h" => return Err(String::new()),
             s if s.starts_with("--") => return Err(format!("unknown option {s}")),
             s => files.push(PathBuf::from(s)),
         }

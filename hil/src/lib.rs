@@ -17,6 +17,7 @@
 //! - [`sweep`]: parameter tuning sweeps over scenario batches, and their recipes (seed 002).
 
 pub mod bench;
+pub mod campaign;
 pub mod compare;
 pub mod faults;
 pub mod firmware;

@@ -27,6 +27,7 @@ const USAGE: &str = "usage:
   hil merge DIR...                  combine a sweep's shards (hil sweep --help)
   hil compare [SCENARIO.toml...]    fly scenarios with each strategy, print a table (hil compare --help)
   hil bench [options]               fly generated worlds, tabulate success and safety (hil bench --help)
+  hil faults SCENARIO.toml... [options]  fly each scenario under each fault, print a table (hil faults --help)
 
 options for run:
   --out DIR                 output directory
@@ -74,6 +75,7 @@ struct Args {
     params: Option<PathBuf>,
 }
 
+/// The options of `hil run`; `Err("")` for `--help`.
 fn parse_run(mut it: impl Iterator<Item = String>) -> Result<Args, String> {
     let mut args = Args {
         scenario: PathBuf::new(),
@@ -98,6 +100,7 @@ fn parse_run(mut it: impl Iterator<Item = String>) -> Result<Args, String> {
             "--port" => args.target = Target::Port(PathBuf::from(value()?)),
             "--quiet" => args.quiet = true,
             "--params" => args.params = Some(PathBuf::from(value()?)),
+            "-h" | "--help" => return Err(String::new()),
             "--bit-error-rate" | "--drop-rate" | "--nav-delay-ms" | "--nav-freeze"
             | "--nav-loss" | "--sonar-dropout" => {
                 let v = value()?;
@@ -140,6 +143,10 @@ fn default_out(name: &str) -> PathBuf {
 fn cmd_run(it: impl Iterator<Item = String>) -> ExitCode {
     let args = match parse_run(it) {
         Ok(a) => a,
+        Err(e) if e.is_empty() => {
+            println!("{USAGE}");
+            return ExitCode::SUCCESS;
+        }
         Err(e) => {
             eprintln!("hil run: {e}\n\n{USAGE}");
             return ExitCode::from(2);
@@ -234,6 +241,10 @@ fn cmd_check(files: impl Iterator<Item = String>) -> ExitCode {
     let mut ok = true;
     let mut any = false;
     for f in files {
+        if f == "-h" || f == "--help" {
+            println!("{USAGE}");
+            return ExitCode::SUCCESS;
+        }
         any = true;
         match scenario::load(std::path::Path::new(&f)) {
             Ok(s) => println!("{f}: ok ({}, {} vehicles)", s.name, s.vehicles.len()),
@@ -263,6 +274,7 @@ fn main() -> ExitCode {
         Some("merge") => hil::sweep::cli_merge(it),
         Some("compare") => hil::compare::cli(it),
         Some("bench") => hil::bench::cli(it),
+        Some("faults") => hil::campaign::cli(it),
         Some("-h" | "--help") => {
             println!("{USAGE}");
             ExitCode::SUCCESS

@@ -28,8 +28,14 @@ use crate::sim::vehicle::{new_model, ModelKind, VehicleModel};
 use crate::types::{SetPoints, VehicleRecord, VehicleState, P2};
 
 /// How long to wait for a period's command before sending its `Tick` again (a Tick lost to a
-/// link fault is otherwise never answered).
+/// link fault is otherwise never answered): the emulated board or a real one over a serial
+/// adapter.
 pub const TICK_RETRY: Duration = Duration::from_millis(200);
+/// The same for the host-process firmware, which answers in well under a millisecond: under
+/// bit errors a quarter of the Ticks are lost, and 200 ms each would make a run's wall time.
+/// A Tick sent again to a firmware that was only slow is harmless: the period is answered
+/// once and its command repeated.
+pub const TICK_RETRY_HOST: Duration = Duration::from_millis(25);
 /// How many times a `Tick` is sent before the firmware is given up on.
 pub const TICK_ATTEMPTS: u32 = 200;
 
@@ -129,9 +135,10 @@ pub struct QuietRun {
     pub socket: bool,
 }
 
-/// Runs `sc` and writes its outputs to `cfg.out_dir`.
+/// Runs `sc` and writes its outputs to `cfg.out_dir`, which is checked writable first (before
+/// the firmware is built or a vehicle flies).
 pub fn run(sc: &Scenario, cfg: &RunConfig) -> Result<RunResult, RunError> {
-    std::fs::create_dir_all(&cfg.out_dir).map_err(RunError::Output)?;
+    output::prepare_dir(&cfg.out_dir).map_err(RunError::Output)?;
     let binary = firmware::build(&cfg.target).map_err(fw_err)?;
     let how = How {
         log_dir: Some(&cfg.out_dir),
@@ -471,7 +478,12 @@ fn collect(
                         .iter()
                         .any(|r| matches!(r, Reply::Command(c) if c.time_ms == t_ms))
                 };
-                match s.fw.receive_until(TICK_RETRY, &mut s.tap, answered) {
+                let wait = if s.fw.target == Target::Host {
+                    TICK_RETRY_HOST
+                } else {
+                    TICK_RETRY
+                };
+                match s.fw.receive_until(wait, &mut s.tap, answered) {
                     Ok(got) => break got,
                     Err(e)
                         if e.kind() == std::io::ErrorKind::TimedOut && attempt < TICK_ATTEMPTS =>

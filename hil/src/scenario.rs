@@ -32,6 +32,20 @@ pub const MAX_POSITION_M: f64 = vpf::sonar::MAX_POSITION_M as f64;
 pub const MAX_VEHICLES: usize = vpf::world::MAX_AGENTS + 1;
 /// Longest scenario, s (a day: anything longer is surely a unit error).
 pub const MAX_DURATION_S: f64 = 86_400.0;
+/// How many times the firmware's obstacle table (`vpf::world::MAX_OBSTACLES`) a scenario may
+/// hold in true obstacles. The firmware sees only what its sonar or contacts show nearby, so a
+/// world may well hold more than its table; but every obstacle costs every sonar ray, every
+/// period, and the plot, and a world far past this is a generator gone wrong.
+pub const OBSTACLE_FACTOR: usize = 16;
+/// Most obstacles in a scenario: [`OBSTACLE_FACTOR`] × the firmware's table (512).
+pub const MAX_OBSTACLES: usize = OBSTACLE_FACTOR * vpf::world::MAX_OBSTACLES;
+/// Longest scenario or vehicle name, in characters. Names become directory and file names
+/// (made file-safe by `output::file_stem`, one byte per character, plus a `-<time>` suffix),
+/// and file systems refuse names past 255 bytes.
+pub const MAX_NAME_CHARS: usize = 200;
+/// Largest scenario file, bytes: far past any hand-written or generated world within
+/// [`MAX_OBSTACLES`], and refused before it is parsed, so a runaway file costs nothing.
+pub const MAX_SCENARIO_BYTES: usize = 4 << 20;
 
 // ---------------------------------------------------------------------------------------------
 // The validated scenario.
@@ -269,6 +283,12 @@ impl std::error::Error for ScenarioError {}
 /// Reads and validates the scenario file at `path`. Errors name the file as `path` displays.
 pub fn load(path: &Path) -> Result<Scenario, ScenarioError> {
     let file = path.display().to_string();
+    // Refuse a huge file before reading it (`parse` checks the text's length again).
+    if let Ok(m) = std::fs::metadata(path) {
+        if m.len() > MAX_SCENARIO_BYTES as u64 {
+            return Err(too_big(&file, m.len()));
+        }
+    }
     match std::fs::read_to_string(path) {
         Ok(text) => parse(&text, &file),
         Err(e) => Err(ScenarioError {
@@ -283,10 +303,40 @@ pub fn load(path: &Path) -> Result<Scenario, ScenarioError> {
 
 /// Parses and validates scenario `text`; `file` is the name used in errors.
 pub fn parse(text: &str, file: &str) -> Result<Scenario, ScenarioError> {
+    if text.len() > MAX_SCENARIO_BYTES {
+        return Err(too_big(file, text.len() as u64));
+    }
     let src = Src { file, text };
     let doc = DeTable::parse(text).map_err(|e| src.syntax(&e))?;
     let root = Table::new(src, String::new(), 0..0, doc.get_ref());
     build(&root)
+}
+
+fn too_big(file: &str, bytes: u64) -> ScenarioError {
+    ScenarioError {
+        file: file.to_string(),
+        line: 0,
+        column: None,
+        key: String::new(),
+        message: format!(
+            "the scenario is {bytes} bytes; at most {MAX_SCENARIO_BYTES} (a scenario holds at \
+             most {MAX_OBSTACLES} obstacles)"
+        ),
+    }
+}
+
+/// A name that will become a directory or file name: not blank, at most [`MAX_NAME_CHARS`].
+fn check_name(name: &Got<'_, &str>) -> Result<(), ScenarioError> {
+    if name.v.trim().is_empty() {
+        return Err(name.fail("must not be empty"));
+    }
+    let n = name.v.chars().count();
+    if n > MAX_NAME_CHARS {
+        return Err(name.fail(format!(
+            "{n} characters; at most {MAX_NAME_CHARS} (names become directory and file names)"
+        )));
+    }
+    Ok(())
 }
 
 /// Parses a parameter file — a document holding only a `[planner]` table, with the keys and
@@ -774,9 +824,7 @@ fn build(root: &Table<'_>) -> Result<Scenario, ScenarioError> {
     root.allow(ROOT_KEYS, "the scenario")?;
 
     let name = root.req_string("name")?;
-    if name.v.trim().is_empty() {
-        return Err(name.fail("must not be empty"));
-    }
+    check_name(&name)?;
     let dt = root.req_number("dt_s")?;
     let dt_s = dt.within(0.02, 1.0, "s")?;
     let duration = root.req_number("duration_s")?;
@@ -804,7 +852,20 @@ fn build(root: &Table<'_>) -> Result<Scenario, ScenarioError> {
 
     let mut obstacles = Vec::new();
     let mut shapes = Vec::new();
-    for t in root.tables("obstacle")? {
+    let tables = root.tables("obstacle")?;
+    if let Some(t) = tables.get(MAX_OBSTACLES) {
+        return Err(t.src.err(
+            &t.span,
+            &t.path,
+            format!(
+                "too many obstacles: {} of at most {MAX_OBSTACLES} ({OBSTACLE_FACTOR} × the \
+                 firmware's table of {})",
+                tables.len(),
+                vpf::world::MAX_OBSTACLES
+            ),
+        ));
+    }
+    for t in tables {
         let (o, s) = obstacle(&t)?;
         obstacles.push(o);
         shapes.push(s);
@@ -1369,9 +1430,7 @@ fn vehicle(
         "a [[vehicle]]",
     )?;
     let name = t.req_string("name")?;
-    if name.v.trim().is_empty() {
-        return Err(name.fail("must not be empty"));
-    }
+    check_name(&name)?;
     if let Some(i) = earlier.iter().position(|v| v.name == name.v) {
         return Err(name.fail(format!(
             "two vehicles are named \"{}\" (vehicle[{i}] too); names must be unique",

@@ -16,7 +16,8 @@
 //!    feature extraction ([`Background`]); it publishes the newest navigation in a
 //!    critical-section cell and queues sightings and requests.
 //!
-//! Shared state is only: four SPSC queues (bytes in, bytes out, sightings, requests), and four
+//! Shared state is only: five SPSC queues (bytes in, bytes out, sightings, requests, owed
+//! replies), and four
 //! small cells behind `critical_section` (newest navigation, link counters, firmware time,
 //! lockstep tick). A critical section never spans more than a copy of one of those cells.
 
@@ -30,9 +31,9 @@ use critical_section::Mutex;
 use heapless::spsc::{Consumer, Producer, Queue};
 use vpf::guidance::{
     Background, BackgroundCounters, Control, Inputs, NavSample, Periodic, RuntimeConfig, Sighting,
-    Sink, CONTROL_QUEUE, RX_QUEUE, SIGHTING_QUEUE, TX_QUEUE,
+    Sink, CONTROL_QUEUE, REPLY_QUEUE, RX_QUEUE, SIGHTING_QUEUE, TX_QUEUE,
 };
-use vpf::link::RxCounters;
+use vpf::link::{ReplyRepr, RxCounters};
 use vpf::params::Params;
 use vpf::route::{Route, RouteConfig, RouteSlot, Router};
 use vpf::sonar::{EvidenceMap, ExtractorConfig};
@@ -48,10 +49,12 @@ const RXN: usize = RX_QUEUE + 1;
 const TXN: usize = TX_QUEUE + 1;
 const SIGHTN: usize = SIGHTING_QUEUE + 1;
 const CTRLN: usize = CONTROL_QUEUE + 1;
+const REPLYN: usize = REPLY_QUEUE + 1;
 static mut RX_Q: Queue<u8, RXN> = Queue::new();
 static mut TX_Q: Queue<u8, TXN> = Queue::new();
 static mut SIGHT_Q: Queue<Sighting, SIGHTN> = Queue::new();
 static mut CTRL_Q: Queue<Control, CTRLN> = Queue::new();
+static mut REPLY_Q: Queue<ReplyRepr, REPLYN> = Queue::new();
 static SPLIT: core::sync::atomic::AtomicBool = core::sync::atomic::AtomicBool::new(false);
 
 // The ends that interrupt handlers take once.
@@ -71,10 +74,15 @@ static LINK: Mutex<Cell<(RxCounters, BackgroundCounters)>> = Mutex::new(Cell::ne
     },
     BackgroundCounters {
         sightings_dropped: 0,
-        controls_dropped: 0,
+        requests_busy: 0,
+        requests_unanswered: 0,
+        params_refused: 0,
+        mission_refused: 0,
+        charts_refused: 0,
         scanlines_rejected: 0,
         scanlines: 0,
         swept_mrad: 0,
+        head_mrad: 0,
         features_extracted: 0,
         contacts_rejected: 0,
         ticks_refused: 0,
@@ -99,6 +107,7 @@ pub struct PeriodicCtx {
     tx: Producer<'static, u8, TXN>,
     sightings: Consumer<'static, Sighting, SIGHTN>,
     controls: Consumer<'static, Control, CTRLN>,
+    replies: Consumer<'static, ReplyRepr, REPLYN>,
     /// SysTick interrupts per period, and how many have passed in this one.
     ticks_per_period: u32,
     tick: u32,
@@ -213,8 +222,15 @@ pub fn init(params: Params) -> Option<Idle> {
     // SAFETY: the queues are split exactly once (guarded above), before any interrupt that
     // uses them is enabled; afterwards each end lives in one context only.
     #[allow(static_mut_refs)]
-    let ((rx_p, rx_c), (tx_p, tx_c), (s_p, s_c), (c_p, c_c)) =
-        unsafe { (RX_Q.split(), TX_Q.split(), SIGHT_Q.split(), CTRL_Q.split()) };
+    let ((rx_p, rx_c), (tx_p, tx_c), (s_p, s_c), (c_p, c_c), (r_p, r_c)) = unsafe {
+        (
+            RX_Q.split(),
+            TX_Q.split(),
+            SIGHT_Q.split(),
+            CTRL_Q.split(),
+            REPLY_Q.split(),
+        )
+    };
     critical_section::with(|cs| {
         RX_PRODUCER.borrow(cs).replace(Some(rx_p));
         TX_CONSUMER.borrow(cs).replace(Some(tx_c));
@@ -238,6 +254,7 @@ pub fn init(params: Params) -> Option<Idle> {
         tx: tx_p,
         sightings: s_c,
         controls: c_c,
+        replies: r_c,
         ticks_per_period: 1,
         tick: 0,
         timer_period_ms: 0,
@@ -254,6 +271,7 @@ pub fn init(params: Params) -> Option<Idle> {
         sink: IdleSink {
             sightings: s_p,
             controls: c_p,
+            replies: r_p,
         },
     })
 }
@@ -273,6 +291,7 @@ pub fn take_stats() -> Stats {
 struct PeriodicInputs<'a> {
     sightings: &'a mut Consumer<'static, Sighting, SIGHTN>,
     controls: &'a mut Consumer<'static, Control, CTRLN>,
+    replies: &'a mut Consumer<'static, ReplyRepr, REPLYN>,
 }
 
 impl Inputs for PeriodicInputs<'_> {
@@ -284,6 +303,9 @@ impl Inputs for PeriodicInputs<'_> {
     }
     fn control(&mut self) -> Option<Control> {
         self.controls.dequeue()
+    }
+    fn reply(&mut self) -> Option<ReplyRepr> {
+        self.replies.dequeue()
     }
     fn link_counters(&mut self) -> (RxCounters, BackgroundCounters) {
         critical_section::with(|cs| LINK.borrow(cs).get())
@@ -323,6 +345,7 @@ pub fn on_systick(ctx: &mut PeriodicCtx) {
     let mut inputs = PeriodicInputs {
         sightings: &mut ctx.sightings,
         controls: &mut ctx.controls,
+        replies: &mut ctx.replies,
     };
     let tx = &mut ctx.tx;
     let mut send = |frame: &[u8]| {
@@ -400,6 +423,7 @@ pub type TxConsumer = Consumer<'static, u8, TXN>;
 struct IdleSink {
     sightings: Producer<'static, Sighting, SIGHTN>,
     controls: Producer<'static, Control, CTRLN>,
+    replies: Producer<'static, ReplyRepr, REPLYN>,
 }
 
 impl Sink for IdleSink {
@@ -411,6 +435,9 @@ impl Sink for IdleSink {
     }
     fn control(&mut self, c: Control) -> bool {
         self.controls.enqueue(c).is_ok()
+    }
+    fn reply(&mut self, r: ReplyRepr) -> bool {
+        self.replies.enqueue(r).is_ok()
     }
     fn tick(&mut self, time_ms: u64) {
         critical_section::with(|cs| LOCKSTEP.borrow(cs).set((true, Some(time_ms))));

@@ -3,10 +3,11 @@
 //! Received bytes go through the stream decoder (`crate::link`); each accepted frame is
 //! dispatched: navigation to the newest-navigation slot, scanlines through sonar feature
 //! extraction, contacts as sightings, missions, parameters and charts as requests, ticks to the
-//! lockstep clock. Requests refused at the wire get a reply, queued like a request. Everything
-//! leaves through a [`Sink`], which the board implements with lock-free queues.
+//! lockstep clock. Requests refused at the wire, and requests that find the request queue full
+//! ("busy"), get their reply through the ring of owed replies instead. Everything leaves
+//! through a [`Sink`], which the board implements with lock-free queues.
 
-use crate::link::{Decoder, Direction, Message, Outcome, ReplyRepr, RxCounters};
+use crate::link::{Decoder, Direction, Message, MessageType, Outcome, ReplyRepr, RxCounters};
 use crate::route::{Route, Router};
 use crate::sonar::{EvidenceMap, Extractor, ExtractorConfig, Pose};
 
@@ -21,6 +22,9 @@ pub trait Sink {
     fn sighting(&mut self, s: Sighting) -> bool;
     /// Queues a request for the periodic task.
     fn control(&mut self, c: Control) -> bool;
+    /// Queues a reply owed to a request that does not go to the periodic task (refused at the
+    /// wire, or "busy"); the periodic task sends it.
+    fn reply(&mut self, r: ReplyRepr) -> bool;
     /// Lockstep: the host says the firmware's time is now `time_ms`; run a period.
     fn tick(&mut self, time_ms: u64);
     /// Publishes the newest route (overwrites the previous one).
@@ -33,8 +37,19 @@ pub trait Sink {
 pub struct BackgroundCounters {
     /// Sightings dropped because their queue was full.
     pub sightings_dropped: u32,
-    /// Requests (and replies) dropped because their queue was full.
-    pub controls_dropped: u32,
+    /// Requests answered "busy": their queue was full.
+    pub requests_busy: u32,
+    /// Requests dropped without an answer: their queue and the reply ring were both full.
+    pub requests_unanswered: u32,
+    /// `Params` messages refused at the wire (the decoder counted them in its `bad_payload`;
+    /// telemetry moves them to `bad_params`).
+    pub params_refused: u32,
+    /// `Mission`, `ChartObstacle` and `ChartClear` messages refused at the wire (moved from
+    /// the decoder's `bad_payload` to `bad_mission` as above).
+    pub mission_refused: u32,
+    /// `ChartObstacle` messages the wire accepted but the world's checks refused
+    /// (`ChartObstacleRepr::to_obstacle`): telemetry counts them in `bad_mission`.
+    pub charts_refused: u32,
     /// Scanlines the extractor refused.
     pub scanlines_rejected: u32,
     /// Scanlines taken in (the periodic task watches it: a sonar gone quiet slows the vehicle).
@@ -42,6 +57,9 @@ pub struct BackgroundCounters {
     /// Bearing swept by those scanlines, mrad (saturating): the periodic task waits for the
     /// first full sweep before it moves.
     pub swept_mrad: u32,
+    /// How far the head turned between them, mrad (saturating): the steps of lost scanlines
+    /// too. `swept_mrad / head_mrad` over a turn is the share of pings that arrived.
+    pub head_mrad: u32,
     /// Features extracted from scanlines.
     pub features_extracted: u32,
     /// Contacts refused when converted to table entries.
@@ -60,6 +78,8 @@ pub struct Background {
     lockstep: bool,
     /// Time of the newest accepted `Tick`, ms.
     last_tick_ms: Option<u64>,
+    /// Head bearing of the newest accepted scanline, rad.
+    last_bearing: Option<f32>,
     /// Counters.
     pub counters: BackgroundCounters,
     contact_a_plus: f32,
@@ -76,6 +96,7 @@ impl Background {
             pose: None,
             lockstep: false,
             last_tick_ms: None,
+            last_bearing: None,
             counters: BackgroundCounters::default(),
             contact_a_plus,
         })
@@ -129,7 +150,7 @@ impl Background {
                         self.lockstep,
                         &mut self.extractor,
                         router.as_deref_mut(),
-                        &mut self.pose,
+                        (&mut self.pose, &mut self.last_bearing),
                         &mut self.counters,
                         self.contact_a_plus,
                         sink,
@@ -143,10 +164,16 @@ impl Background {
                     header: Some(h),
                     error,
                 } if h.msg_type.direction() == Direction::ToFirmware => {
-                    // A refused request still gets its typed reply.
+                    // A refused request still gets its typed reply, and is counted as a refused
+                    // request of its kind (not among the unanswered frames' `rx_bad_payload`).
                     if is_request(h.msg_type) {
-                        let ok = sink.control(Control::Reply(ReplyRepr::from_error(h, error)));
-                        count_if(!ok, &mut self.counters.controls_dropped);
+                        let c = &mut self.counters;
+                        if h.msg_type == MessageType::Params {
+                            count_if(true, &mut c.params_refused);
+                        } else {
+                            count_if(true, &mut c.mission_refused);
+                        }
+                        owe(sink, ReplyRepr::from_error(h, error), c);
                     }
                 }
                 Outcome::Consumed | Outcome::OverFull | Outcome::Error { .. } => {}
@@ -156,9 +183,30 @@ impl Background {
     }
 }
 
-fn is_request(t: crate::link::MessageType) -> bool {
-    use crate::link::MessageType as T;
+fn is_request(t: MessageType) -> bool {
+    use MessageType as T;
     matches!(t, T::Mission | T::Params | T::ChartObstacle | T::ChartClear)
+}
+
+/// Queues a reply owed outside the request queue; when the ring is full too the request goes
+/// unanswered, counted.
+fn owe(sink: &mut impl Sink, r: ReplyRepr, counters: &mut BackgroundCounters) {
+    let ok = sink.reply(r);
+    count_if(!ok, &mut counters.requests_unanswered);
+}
+
+/// Queues a request; a full queue answers "busy". `true` if it was queued (the request will be
+/// applied), so side effects of a request (the route layer's) happen only then.
+fn request(sink: &mut impl Sink, c: Control, counters: &mut BackgroundCounters) -> bool {
+    if sink.control(c) {
+        return true;
+    }
+    if sink.reply(ReplyRepr::busy(c.header())) {
+        count_if(true, &mut counters.requests_busy);
+    } else {
+        count_if(true, &mut counters.requests_unanswered);
+    }
+    false
 }
 
 fn count_if(cond: bool, counter: &mut u32) {
@@ -175,16 +223,12 @@ fn dispatch(
     lockstep: bool,
     extractor: &mut Extractor,
     mut router: Option<&mut Router>,
-    pose: &mut Option<Pose>,
+    (pose, last_bearing): (&mut Option<Pose>, &mut Option<f32>),
     counters: &mut BackgroundCounters,
     contact_a_plus: f32,
     sink: &mut impl Sink,
     map: Option<&EvidenceMap>,
 ) {
-    let mut queue_control = |c: Control, counters: &mut BackgroundCounters| {
-        let ok = sink.control(c);
-        count_if(!ok, &mut counters.controls_dropped);
-    };
     match msg {
         Message::Nav(n) => {
             *pose = Some(Pose {
@@ -218,8 +262,14 @@ fn dispatch(
             count_if(result.is_err(), &mut counters.scanlines_rejected);
             if result.is_ok() {
                 counters.scanlines = counters.scanlines.saturating_add(1);
-                let step = (scan.step_rad.abs() * 1000.0) as u32;
-                counters.swept_mrad = counters.swept_mrad.saturating_add(step);
+                let step = scan.step_rad.abs();
+                // Lost pings show as a longer turn since the last scanline (up to half a turn).
+                let turn = last_bearing.map_or(step, |b| {
+                    crate::math::wrap_angle(scan.bearing_rad - b).abs()
+                });
+                *last_bearing = Some(scan.bearing_rad);
+                counters.swept_mrad = counters.swept_mrad.saturating_add((step * 1000.0) as u32);
+                counters.head_mrad = counters.head_mrad.saturating_add((turn * 1000.0) as u32);
             }
             counters.features_extracted = counters.features_extracted.saturating_add(emitted);
             counters.sightings_dropped = counters.sightings_dropped.saturating_add(dropped);
@@ -246,39 +296,42 @@ fn dispatch(
                 }
             }
         }
+        // The route layer follows a request only once it is queued: one answered "busy"
+        // changes nothing anywhere.
         Message::Mission(m) => {
-            if let Some(r) = router {
+            if let (true, Some(r)) = (request(sink, Control::Mission(header, m), counters), router)
+            {
                 r.set_goal(m.goal.is_finite().then_some(m.goal));
             }
-            queue_control(Control::Mission(header, m), counters)
         }
         Message::Params(p) => {
             // The periodic task answers for the parameters; the route layer takes its cell size
             // only from a set it will accept.
-            if let (Some(r), Ok(())) = (router, p.validate()) {
+            let queued = request(sink, Control::Params(header, p), counters);
+            if let (true, Some(r), Ok(())) = (queued, router, p.validate()) {
                 r.set_cell(p.route_cell_m);
             }
-            queue_control(Control::Params(header, p), counters)
         }
         Message::ChartObstacle(c) => match c.to_obstacle(now_ms) {
             Ok(o) => {
-                if let Some(r) = router {
+                if let (true, Some(r)) =
+                    (request(sink, Control::Chart(header, o), counters), router)
+                {
                     r.obstacle(&o.shape, o.velocity);
                 }
-                queue_control(Control::Chart(header, o), counters)
             }
-            Err(e) => queue_control(
-                Control::Reply(ReplyRepr::from_object_error(header, e)),
-                counters,
-            ),
+            Err(e) => {
+                count_if(true, &mut counters.charts_refused);
+                owe(sink, ReplyRepr::from_object_error(header, e), counters);
+            }
         },
         Message::ChartClear(c) => {
             // The route grid does not know which cells one chart entry made: all go (still
             // contacts are marked again as they are seen).
-            if let Some(r) = router {
+            let queued = request(sink, Control::ChartClear(header, c), counters);
+            if let (true, Some(r)) = (queued, router) {
                 r.forget_charts();
             }
-            queue_control(Control::ChartClear(header, c), counters)
         }
         Message::Tick(t) => sink.tick(t.time_ms),
         // Firmware → host messages are refused by the decoder (Direction::ToFirmware).

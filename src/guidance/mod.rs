@@ -8,16 +8,24 @@
 //!   run sonar feature extraction on scanlines, and queue sightings and requests for the periodic
 //!   task.
 //!
-//! They meet only through three things the board provides (lock-free SPSC queues and one
+//! They meet only through what the board provides (lock-free SPSC queues and one
 //! critical-section cell on the firmware; plain values on a host): the newest [`NavSample`], a
-//! queue of [`Sighting`]s and a queue of [`Control`] requests. The board also carries the
-//! outgoing frames. Capacities, and what happens when each is full:
+//! queue of [`Sighting`]s, a queue of [`Control`] requests and a ring of replies owed to
+//! requests that never reach the periodic task (refused at the wire, or "busy"). The board also
+//! carries the outgoing frames. Capacities, and what happens when each is full:
 //!
 //! | queue | capacity | when full |
 //! | --- | --- | --- |
 //! | received bytes (board) | [`RX_QUEUE`] | byte dropped, counted (`rx_bytes_dropped`); the decoder resyncs on the next 0x00 |
 //! | sightings | [`SIGHTING_QUEUE`] | sighting dropped, counted (`features_dropped`) |
-//! | requests | [`CONTROL_QUEUE`] | request dropped, counted (`BackgroundCounters::controls_dropped`; not yet in telemetry), no reply |
+//! | requests | [`CONTROL_QUEUE`] | request answered "busy" through the reply ring (nothing changed; the host sends it again), counted (`requests_busy`) |
+//! | owed replies (6 B each) | [`REPLY_QUEUE`] | request dropped without an answer, counted (`requests_unanswered`) |
+//!
+//! Every request gets exactly one reply as long as at most [`REQUESTS_PER_PERIOD`] (a start-up
+//! burst: parameters, mission and a full chart) arrive between two periods. Requests are big
+//! (a `Params` or a polygon, 152 B a slot), so their queue stays short and a host paces a larger
+//! burst on the replies: it sends again what was answered "busy" (docs/protocol.md §9). Replies
+//! are 6 bytes, so their ring is sized for the whole burst.
 //! | transmitted bytes (board) | [`TX_QUEUE`] | whole frame dropped, counted (`tx_frames_dropped`) |
 //!
 //! Time is passed in (milliseconds); nothing here reads a clock.
@@ -36,7 +44,7 @@ pub use periodic::{Inputs, Periodic, RuntimeConfig};
 pub use single::SingleContext;
 pub use tracks::TrackConfig;
 
-use crate::link::{ChartClearRepr, Header, ReplyRepr};
+use crate::link::{ChartClearRepr, Header};
 use crate::params::Params;
 use crate::planner::{Mission, NavState};
 use crate::sonar::Feature;
@@ -46,8 +54,14 @@ use crate::world::{Agent, Obstacle};
 pub const RX_QUEUE: usize = 1024;
 /// Capacity of the sighting queue (one sonar sweep rarely yields more).
 pub const SIGHTING_QUEUE: usize = 16;
-/// Capacity of the request queue.
+/// Capacity of the request queue (a `Control` is 152 bytes: RAM, not this number, is short).
 pub const CONTROL_QUEUE: usize = 4;
+/// Most requests answered between two periods: a start-up burst of parameters, a mission and a
+/// full chart (every obstacle slot charted).
+pub const REQUESTS_PER_PERIOD: usize = 2 + crate::world::MAX_OBSTACLES;
+/// Capacity of the ring of replies owed without a request in the queue (refused at the wire, or
+/// "busy"): with the queue, one answer for each of [`REQUESTS_PER_PERIOD`] requests.
+pub const REPLY_QUEUE: usize = REQUESTS_PER_PERIOD - CONTROL_QUEUE;
 /// Capacity of the board's transmit-byte queue (a period's command, telemetry and replies).
 pub const TX_QUEUE: usize = 2048;
 /// Most sightings the periodic task takes per period (bounds its cost).
@@ -75,7 +89,7 @@ pub enum Sighting {
     Agent(Agent),
 }
 
-/// A request for the periodic task, answered with a [`ReplyRepr`] to `header`.
+/// A request for the periodic task, answered with a [`crate::link::ReplyRepr`] to its header.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum Control {
@@ -87,6 +101,16 @@ pub enum Control {
     Chart(Header, Obstacle),
     /// Remove charted obstacles.
     ChartClear(Header, ChartClearRepr),
-    /// Only a reply: the request was refused before it reached the periodic task.
-    Reply(ReplyRepr),
+}
+
+impl Control {
+    /// The header of the request, which its reply names.
+    pub const fn header(&self) -> Header {
+        match self {
+            Control::Mission(h, _)
+            | Control::Params(h, _)
+            | Control::Chart(h, _)
+            | Control::ChartClear(h, _) => *h,
+        }
+    }
 }

@@ -1,6 +1,7 @@
 //! The hard-real-time half of the runtime: one [`Periodic::on_tick`] per period.
 //!
 //! In order: apply queued requests (missions, parameters, charts; each answered with a reply),
+//! send the replies the background owes (requests refused at the wire, or "busy"),
 //! take at most [`SIGHTINGS_PER_PERIOD`] sightings into the world tables, age out stale sensed
 //! entries, check the fail-safes, run one planner step (its cost measured by the board's counter),
 //! and send the command and the telemetry. The work per period is bounded by the table and queue
@@ -18,7 +19,10 @@ use crate::world::World;
 use super::failsafe::{self, FailsafeConfig, FreezeDetector, Situation, SonarWatch};
 use super::guard::{self, GuardConfig, Verdict};
 use super::tracks::{TrackConfig, Tracks};
-use super::{BackgroundCounters, Control, NavSample, Sighting, SIGHTINGS_PER_PERIOD};
+use super::{
+    BackgroundCounters, Control, NavSample, Sighting, CONTROL_QUEUE, REPLY_QUEUE,
+    SIGHTINGS_PER_PERIOD,
+};
 use crate::link::RxCounters;
 use crate::link::{BeliefRepr, BELIEF_ROWS};
 use crate::sonar::{EvidenceMap, Near, MAP_SIDE};
@@ -88,6 +92,8 @@ pub trait Inputs {
     fn sighting(&mut self) -> Option<Sighting>;
     /// The next queued request.
     fn control(&mut self) -> Option<Control>;
+    /// The next reply the background owes (a request refused at the wire, or "busy").
+    fn reply(&mut self) -> Option<ReplyRepr>;
     /// The slow side's counters, for telemetry.
     fn link_counters(&mut self) -> (RxCounters, BackgroundCounters);
     /// The newest route the background published, if any (`None` also while it is being
@@ -214,9 +220,16 @@ impl Periodic {
             self.send(&Message::Command(command), tx);
             return cmd;
         }
-        while let Some(c) = inputs.control() {
+        // Bounded by the capacities (the background cannot add while this task runs on the
+        // firmware; the bound keeps the period's cost fixed wherever it runs).
+        for _ in 0..CONTROL_QUEUE {
+            let Some(c) = inputs.control() else { break };
             let reply = self.apply(c);
             self.send(&Message::Reply(reply), tx);
+        }
+        for _ in 0..REPLY_QUEUE {
+            let Some(r) = inputs.reply() else { break };
+            self.send(&Message::Reply(r), tx);
         }
         let nav = self.accept_nav(inputs.nav(), now_ms);
         let position = nav.map_or(Vec2::ZERO, |n| n.nav.position);
@@ -245,7 +258,12 @@ impl Periodic {
         self.planner.set_route(aim);
 
         let (_, bg) = inputs.link_counters();
-        let cmd = self.plan(now_ms, nav, (bg.scanlines, bg.swept_mrad), cost);
+        let cmd = self.plan(
+            now_ms,
+            nav,
+            (bg.scanlines, bg.swept_mrad, bg.head_mrad),
+            cost,
+        );
         self.last = Some((now_ms, cmd));
         self.last_heading = cmd.psi_set;
         let command = CommandRepr {
@@ -320,7 +338,7 @@ impl Periodic {
         &mut self,
         now_ms: u64,
         nav: Option<NavSample>,
-        sonar: (u32, u32),
+        sonar: (u32, u32, u32),
         cost: &mut impl FnMut() -> u32,
     ) -> Command {
         let params = *self.planner.params();
@@ -352,15 +370,28 @@ impl Periodic {
             c.clearance_m = situation.clearance_m;
             return c;
         };
+        // A late fix (frames lost) is carried forward to now, and slows the vehicle.
+        let age = now_ms.saturating_sub(n.time_ms);
+        let period = u64::from(self.period_ms());
+        let (state, late) = failsafe::dead_reckon(&self.config.failsafe, &n.nav, age, period);
+        // ... and so does a sonar whose pings are lost on the way.
+        let bound = [
+            quiet,
+            late.map(|k| k * params.v_max),
+            self.sonar.delivery().map(|d| d * params.v_max),
+        ]
+        .into_iter()
+        .flatten()
+        .reduce(crate::math::min);
         let start = cost();
-        let result = self.planner.step(now_ms, &n.nav, &self.world);
+        let result = self.planner.step(now_ms, &state, &self.world);
         self.last_cost = cost().wrapping_sub(start);
         match result {
             Ok(c) => {
-                let c = quiet.map_or(c, |v| slowed(c, v));
+                let c = bound.map_or(c, |v| slowed(c, v));
                 let (c, verdict) =
-                    guard::check(&self.config.guard, &params, &n.nav, &self.world, c);
-                if verdict != Verdict::Clear || quiet.is_some() {
+                    guard::check(&self.config.guard, &params, &state, &self.world, c);
+                if verdict != Verdict::Clear || bound.is_some() {
                     // The planner continues from the motion that was sent, so a vehicle the
                     // guard holds back is seen as stalled and escapes (ghost goal-points).
                     self.planner.override_velocity(c.velocity);
@@ -397,7 +428,6 @@ impl Periodic {
                 }
                 ReplyRepr::accepted(h)
             }
-            Control::Reply(r) => r,
         }
     }
 
@@ -428,11 +458,22 @@ impl Periodic {
     fn refresh_counters(&mut self, rx: &RxCounters, bg: &BackgroundCounters) {
         let c = &mut self.counters;
         c.set_rx(rx);
-        c.rx_bad_payload = c.rx_bad_payload.saturating_add(bg.ticks_refused);
+        // One counter per kind of refusal: requests refused at the wire are counted as refused
+        // requests of their kind (and answered), not with the unanswered frames.
+        let wire_requests = bg.params_refused.saturating_add(bg.mission_refused);
+        c.rx_bad_payload = c
+            .rx_bad_payload
+            .saturating_sub(wire_requests)
+            .saturating_add(bg.ticks_refused);
         let p = self.planner.counters;
         c.bad_nav = p.bad_nav.saturating_add(self.future_navs);
-        c.bad_params = p.bad_params;
-        c.bad_mission = p.bad_mission;
+        c.bad_params = p.bad_params.saturating_add(bg.params_refused);
+        c.bad_mission = p
+            .bad_mission
+            .saturating_add(bg.mission_refused)
+            .saturating_add(bg.charts_refused);
+        c.requests_busy = bg.requests_busy;
+        c.requests_unanswered = bg.requests_unanswered;
         c.features_dropped = bg.sightings_dropped;
         c.features_extracted = bg.features_extracted;
         c.table_full = self.world.counters.rejected_full;

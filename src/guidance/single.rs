@@ -7,7 +7,7 @@
 
 use heapless::Deque;
 
-use crate::link::{CostUnit, RxCounters};
+use crate::link::{CostUnit, ReplyRepr, RxCounters};
 use crate::params::Params;
 use crate::planner::Command;
 use crate::route::{Route, Router};
@@ -15,7 +15,7 @@ use crate::sonar::{EvidenceMap, ExtractorConfig};
 
 use super::{
     Background, BackgroundCounters, Control, Inputs, NavSample, Periodic, RuntimeConfig, Sighting,
-    Sink, CONTROL_QUEUE, SIGHTING_QUEUE,
+    Sink, CONTROL_QUEUE, REPLY_QUEUE, SIGHTING_QUEUE,
 };
 
 /// The queues between the halves.
@@ -23,6 +23,7 @@ struct Queues {
     nav: Option<NavSample>,
     sightings: Deque<Sighting, SIGHTING_QUEUE>,
     controls: Deque<Control, CONTROL_QUEUE>,
+    replies: Deque<ReplyRepr, REPLY_QUEUE>,
     tick: Option<u64>,
     route: Option<Route>,
     rx: RxCounters,
@@ -38,6 +39,9 @@ impl Sink for Queues {
     }
     fn control(&mut self, c: Control) -> bool {
         self.controls.push_back(c).is_ok()
+    }
+    fn reply(&mut self, r: ReplyRepr) -> bool {
+        self.replies.push_back(r).is_ok()
     }
     fn tick(&mut self, time_ms: u64) {
         self.tick = Some(time_ms);
@@ -56,6 +60,9 @@ impl Inputs for Queues {
     }
     fn control(&mut self) -> Option<Control> {
         self.controls.pop_front()
+    }
+    fn reply(&mut self) -> Option<ReplyRepr> {
+        self.replies.pop_front()
     }
     fn link_counters(&mut self) -> (RxCounters, BackgroundCounters) {
         (self.rx, self.bg)
@@ -97,6 +104,7 @@ impl SingleContext {
                 nav: None,
                 sightings: Deque::new(),
                 controls: Deque::new(),
+                replies: Deque::new(),
                 tick: None,
                 route: None,
                 rx: RxCounters::default(),

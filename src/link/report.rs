@@ -220,13 +220,18 @@ pub struct TelemetryCounters {
     pub rx_framing_errors: u32,
     /// Frames refused for an unknown version, type or direction.
     pub rx_unknown: u32,
-    /// Frames whose payload was refused (length or a field), and `Tick`s back in time.
+    /// Frames of the types that are never answered (Nav, Scanline, Contacts, Tick) whose
+    /// payload was refused (length or a field), and `Tick`s back in time. Requests refused at
+    /// the wire count in `bad_params` / `bad_mission`.
     pub rx_bad_payload: u32,
     /// Nav messages the planner refused, or stamped more than a second ahead of its time.
     pub bad_nav: u32,
-    /// Params messages refused (at the wire or by the planner).
+    /// Params messages refused, at the wire (a non-finite number, an unknown code, the length)
+    /// or by the planner (a range): each once, here and nowhere else.
     pub bad_params: u32,
-    /// Mission and chart messages refused.
+    /// Mission, ChartObstacle and ChartClear messages refused for their content, at the wire or
+    /// by the planner (a chart refused because the obstacle table is full counts in
+    /// `table_full` instead).
     pub bad_mission: u32,
     /// Received bytes lost because the receive queue was full.
     pub rx_bytes_dropped: u32,
@@ -247,10 +252,16 @@ pub struct TelemetryCounters {
     pub guard_interventions: u32,
     /// Periods held because navigation had frozen.
     pub frozen_nav_holds: u32,
+    /// Requests answered "busy" ([`ReplyStatus::Busy`]): the request queue was full, nothing
+    /// changed, the host sends them again.
+    pub requests_busy: u32,
+    /// Requests dropped without an answer: the request queue and the ring of owed replies were
+    /// both full (more requests between two periods than `REQUESTS_PER_PERIOD`).
+    pub requests_unanswered: u32,
 }
 
-/// Number of counters in [`TelemetryCounters`]'s first block (rows 2 ..= 17); the guard's and
-/// the frozen-navigation counters follow the byte fields (rows 24, 25).
+/// Number of counters in [`TelemetryCounters`]'s first block (rows 2 ..= 17); the guard's, the
+/// frozen-navigation and the two request counters follow the byte fields (rows 24 ..= 27).
 pub const TELEMETRY_COUNTERS: usize = 16;
 
 impl TelemetryCounters {
@@ -299,6 +310,8 @@ impl TelemetryCounters {
             features_extracted,
             guard_interventions: 0,
             frozen_nav_holds: 0,
+            requests_busy: 0,
+            requests_unanswered: 0,
         }
     }
 
@@ -314,15 +327,16 @@ impl TelemetryCounters {
 }
 
 /// `Telemetry` payload length.
-pub const TELEMETRY_LEN: usize = 90;
+pub const TELEMETRY_LEN: usize = 98;
 
 /// `Telemetry` (0x82): health and counters, sent periodically.
 ///
-/// Layout (90 bytes): 0 `time_ms` u64 · 1 `step_cost` u32 · 2..=17 the sixteen u32 counters
+/// Layout (98 bytes): 0 `time_ms` u64 · 1 `step_cost` u32 · 2..=17 the sixteen u32 counters
 /// of [`TelemetryCounters`] in declaration order · 18 `mode` u8 · 19 `hold_reason` u8 ·
 /// 20 `obstacles` u8 (table fill, ≤ `MAX_OBSTACLES`) · 21 `agents` u8 (≤ `MAX_AGENTS`) ·
 /// 22 `ghost_depth` u8 (≤ `MAX_GHOSTS`) · 23 `cost_unit` u8 ([`CostUnit`]) ·
-/// 24 `guard_interventions` u32 · 25 `frozen_nav_holds` u32.
+/// 24 `guard_interventions` u32 · 25 `frozen_nav_holds` u32 · 26 `requests_busy` u32 ·
+/// 27 `requests_unanswered` u32.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct TelemetryRepr {
@@ -378,6 +392,8 @@ impl<'a> Payload<'a> for TelemetryRepr {
         let unit = r.u8()?;
         let guard_interventions = r.u32()?;
         let frozen_nav_holds = r.u32()?;
+        let requests_busy = r.u32()?;
+        let requests_unanswered = r.u32()?;
         r.finish()?;
         let t = TelemetryRepr {
             time_ms,
@@ -390,6 +406,8 @@ impl<'a> Payload<'a> for TelemetryRepr {
             counters: TelemetryCounters {
                 guard_interventions,
                 frozen_nav_holds,
+                requests_busy,
+                requests_unanswered,
                 ..TelemetryCounters::from_array(counters)
             },
         };
@@ -423,6 +441,8 @@ impl<'a> Payload<'a> for TelemetryRepr {
         }
         w.u32(self.counters.guard_interventions)?;
         w.u32(self.counters.frozen_nav_holds)?;
+        w.u32(self.counters.requests_busy)?;
+        w.u32(self.counters.requests_unanswered)?;
         Ok(w.len())
     }
 }
@@ -445,14 +465,17 @@ pub enum ReplyStatus {
         /// Why.
         problem: Problem,
     },
+    /// The firmware's request queue was full: the message was not looked at and nothing
+    /// changed; send it again after the next period's replies.
+    Busy,
 }
 
 /// `Reply` (0x83, the "ParamsReply"): the firmware's answer to a `Params`, `Mission`,
 /// `ChartObstacle` or `ChartClear` message, matched by type and sequence number.
 ///
 /// Layout (6 bytes): 0 `to_type` u8 (a host → firmware type) · 1 `to_seq` u16 · 2 `status` u8
-/// (0 accepted, 1 rejected) · 3 `field` u8 · 4 `problem` u8 ([`Problem`] code); `field` and
-/// `problem` are 0 when accepted.
+/// (0 accepted, 1 rejected, 2 busy) · 3 `field` u8 · 4 `problem` u8 ([`Problem`] code); `field`
+/// and `problem` are 0 when accepted or busy.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct ReplyRepr {
@@ -480,6 +503,15 @@ impl ReplyRepr {
             to_type: to.msg_type,
             to_seq: to.seq,
             status: ReplyStatus::Rejected { field, problem },
+        }
+    }
+
+    /// The message with header `to` found the request queue full: not applied, send it again.
+    pub const fn busy(to: Header) -> Self {
+        ReplyRepr {
+            to_type: to.msg_type,
+            to_seq: to.seq,
+            status: ReplyStatus::Busy,
         }
     }
 
@@ -561,6 +593,8 @@ impl<'a> Payload<'a> for ReplyRepr {
                 problem: Problem::from_code(problem)
                     .ok_or(Error::field(4, Problem::UnknownCode))?,
             },
+            2 if field == 0 && problem == 0 => ReplyStatus::Busy,
+            2 => return refuse(3, Problem::Invalid),
             _ => return refuse(2, Problem::UnknownCode),
         };
         let reply = ReplyRepr {
@@ -581,6 +615,7 @@ impl<'a> Payload<'a> for ReplyRepr {
         let (status, field, problem) = match self.status {
             ReplyStatus::Accepted => (0, 0, 0),
             ReplyStatus::Rejected { field, problem } => (1, field, problem.code()),
+            ReplyStatus::Busy => (2, 0, 0),
         };
         let mut w = Writer::new(out);
         w.u8(self.to_type.code())?;
@@ -797,6 +832,8 @@ pub(crate) mod tests {
             counters: TelemetryCounters {
                 guard_interventions: 17,
                 frozen_nav_holds: 18,
+                requests_busy: 19,
+                requests_unanswered: 20,
                 ..TelemetryCounters::from_array(core::array::from_fn(|i| i as u32 + 1))
             },
         }
@@ -811,7 +848,7 @@ pub(crate) mod tests {
             want.extend([i, 0, 0, 0]);
         }
         want.extend([0, 2, 3, 1, 0, 2]);
-        want.extend([17, 0, 0, 0, 18, 0, 0, 0]);
+        want.extend([17, 0, 0, 0, 18, 0, 0, 0, 19, 0, 0, 0, 20, 0, 0, 0]);
         assert_eq!(want.len(), TELEMETRY_LEN);
         let mut out = [0u8; TELEMETRY_LEN];
         assert_eq!(t.emit(&mut out), Ok(TELEMETRY_LEN));
@@ -892,6 +929,10 @@ pub(crate) mod tests {
         );
         ReplyRepr::table_full(m).emit(&mut out).unwrap();
         assert_eq!(out, [0x04, 0x01, 0x00, 1, 0xff, 5]);
+        let busy = ReplyRepr::busy(m);
+        busy.emit(&mut out).unwrap();
+        assert_eq!(out, [0x04, 0x01, 0x00, 2, 0, 0]);
+        assert_eq!(ReplyRepr::parse(&out), Ok(busy));
 
         // Refusals.
         assert_eq!(
@@ -911,8 +952,12 @@ pub(crate) mod tests {
             Err(Error::field(4, Problem::UnknownCode))
         );
         assert_eq!(
-            ReplyRepr::parse(&[7, 0, 0, 2, 0, 0]),
+            ReplyRepr::parse(&[7, 0, 0, 3, 0, 0]),
             Err(Error::field(2, Problem::UnknownCode))
+        );
+        assert_eq!(
+            ReplyRepr::parse(&[7, 0, 0, 2, 0xff, 0]),
+            Err(Error::field(3, Problem::Invalid))
         );
         let to_host = ReplyRepr::accepted(Header {
             msg_type: MessageType::Log,

@@ -10,6 +10,10 @@
 //! The time is Rust's shortest round-trip form of the simulation time in seconds, so
 //! [`FrameLog::replay`] gives back exactly what was logged. Lines starting with `#` and blank
 //! lines are comments.
+//!
+//! A log stops at [`MAX_FRAME_LOG_BYTES`]: a long run of many vehicles would otherwise fill the
+//! disk (a day of 9 vehicles at 50 Hz is about 53 GB). Its last line then says where it
+//! stopped, the harness says so once on stderr, and the log replays as the run's first part.
 
 use std::fmt::Write as _;
 use std::io::{BufRead, BufWriter, Write};
@@ -34,33 +38,63 @@ impl Dir {
     }
 }
 
+/// Largest frame log, bytes, per vehicle: 256 MiB, some 200 000 periods of a VideoRay with its
+/// sonar (0.9–1.4 kB of hex per period), hours at 10 Hz. A run of [`MAX_VEHICLES`] writes at
+/// most 9 times this.
+///
+/// [`MAX_VEHICLES`]: crate::scenario::MAX_VEHICLES
+pub const MAX_FRAME_LOG_BYTES: u64 = 256 << 20;
+
 /// A writer of one vehicle's frame log.
 #[derive(Debug)]
 pub struct FrameLog {
     out: BufWriter<std::fs::File>,
     line: String,
+    path: std::path::PathBuf,
+    /// Bytes written so far, and the most this log may hold.
+    written: u64,
+    limit: u64,
+    truncated: bool,
 }
 
 impl FrameLog {
     /// Creates (truncates) `dir/frames_<vehicle>.log`, the vehicle name made file-safe with
     /// [`super::file_stem`].
+    /// The log stops at [`MAX_FRAME_LOG_BYTES`].
     pub fn create(dir: &Path, vehicle_name: &str) -> std::io::Result<FrameLog> {
+        Self::create_with_limit(dir, vehicle_name, MAX_FRAME_LOG_BYTES)
+    }
+
+    /// [`FrameLog::create`], stopping at `limit` bytes instead.
+    pub fn create_with_limit(
+        dir: &Path,
+        vehicle_name: &str,
+        limit: u64,
+    ) -> std::io::Result<FrameLog> {
         let path = dir.join(format!("frames_{}.log", super::file_stem(vehicle_name)));
-        let mut out = BufWriter::new(std::fs::File::create(path)?);
+        let mut out = BufWriter::new(std::fs::File::create(&path)?);
         // The name may hold anything; keep the comment on one line.
         let name: String = vehicle_name.chars().filter(|c| !c.is_control()).collect();
-        writeln!(
-            out,
-            "# frames of vehicle {name}: t_s, direction (> to firmware, < from firmware), bytes in hex"
-        )?;
+        let header = format!(
+            "# frames of vehicle {name}: t_s, direction (> to firmware, < from firmware), bytes in hex\n"
+        );
+        out.write_all(header.as_bytes())?;
         Ok(FrameLog {
             out,
             line: String::new(),
+            path,
+            written: header.len() as u64,
+            limit,
+            truncated: false,
         })
     }
 
-    /// Logs one chunk of bytes seen at simulation time `t_s`.
+    /// Logs one chunk of bytes seen at simulation time `t_s`; past the limit, notes once where
+    /// the log stopped and drops the rest.
     pub fn log(&mut self, t_s: f64, dir: Dir, bytes: &[u8]) -> std::io::Result<()> {
+        if self.truncated {
+            return Ok(());
+        }
         self.line.clear();
         // Writing to a String cannot fail.
         let _ = write!(self.line, "{t_s} {}", dir.symbol());
@@ -68,7 +102,22 @@ impl FrameLog {
             let _ = write!(self.line, " {b:02x}");
         }
         self.line.push('\n');
+        if self.written + self.line.len() as u64 > self.limit {
+            self.truncated = true;
+            let note = format!(
+                "reached its limit of {} bytes at t = {t_s} s; later traffic is not logged",
+                self.limit
+            );
+            eprintln!("hil: {} {note}", self.path.display());
+            return writeln!(self.out, "# truncated: this log {note}");
+        }
+        self.written += self.line.len() as u64;
         self.out.write_all(self.line.as_bytes())
+    }
+
+    /// Whether the log reached its limit and stopped.
+    pub fn truncated(&self) -> bool {
+        self.truncated
     }
 
     /// Flushes buffered lines to the file (also done on drop, where errors are lost).

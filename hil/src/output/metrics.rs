@@ -172,7 +172,7 @@ pub struct StepCost {
 
 /// The counters that indicate trouble, by name, with their values (all of them; zero ones
 /// included).
-fn trouble(c: &TelemetryCounters) -> [(&'static str, u32); 14] {
+fn trouble(c: &TelemetryCounters) -> [(&'static str, u32); 16] {
     [
         ("rx_crc_errors", c.rx_crc_errors),
         ("rx_oversize", c.rx_oversize),
@@ -188,6 +188,8 @@ fn trouble(c: &TelemetryCounters) -> [(&'static str, u32); 14] {
         ("deadline_overruns", c.deadline_overruns),
         ("table_full", c.table_full),
         ("frozen_nav_holds", c.frozen_nav_holds),
+        ("requests_busy", c.requests_busy),
+        ("requests_unanswered", c.requests_unanswered),
     ]
 }
 
@@ -652,7 +654,7 @@ mod tests {
         let json = serde_json::to_value(&m).unwrap();
         assert_eq!(json["counters"]["rx_frames"], 7);
         assert_eq!(json["counters"]["deadline_overruns"], 2);
-        assert_eq!(json["counters"].as_object().unwrap().len(), 18);
+        assert_eq!(json["counters"].as_object().unwrap().len(), 20);
         assert!(m.to_string().contains("deadline_overruns 2"));
     }
 

@@ -45,6 +45,22 @@ pub struct RunOutput {
     pub params: vpf::Params,
 }
 
+/// Makes sure the outputs can be written to `dir` before a run starts: creates it, then
+/// creates and removes a probe file in it, so a bad path, a name too long or a read-only
+/// directory fails at once instead of after the flight. The error names the directory.
+pub fn prepare_dir(dir: &Path) -> std::io::Result<()> {
+    let named = |e: std::io::Error| {
+        std::io::Error::new(
+            e.kind(),
+            format!("cannot write the outputs to {}: {e}", dir.display()),
+        )
+    };
+    std::fs::create_dir_all(dir).map_err(named)?;
+    let probe = dir.join(".hil-write-probe");
+    std::fs::write(&probe, b"").map_err(named)?;
+    std::fs::remove_file(&probe).map_err(named)
+}
+
 /// Writes the trajectories, `metrics.json`, `plot.svg` and `commands.svg` into `dir` (created
 /// if missing) and returns the metrics. Frame logs are written during the run by [`FrameLog`].
 pub fn write_all(dir: &Path, run: &RunOutput) -> std::io::Result<Summary> {

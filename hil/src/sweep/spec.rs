@@ -25,6 +25,12 @@ pub const CHECK_DT_S: f64 = 0.1;
 /// mistake).
 pub const MAX_SETS: usize = 100_000;
 
+/// Most runs a sweep may hold (parameter sets × scenarios), refused before any scenario is
+/// generated or any run allocated: each factor has its own cap, but their product could ask
+/// for billions (this cap is about 35 min on two cores at 50 runs/s). `hil bench` has the same
+/// cap (`crate::bench::MAX_RUNS`).
+pub const MAX_RUNS: usize = 100_000;
+
 /// A `[planner]` value as written: integer, float or string.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Value {
@@ -177,6 +183,22 @@ pub struct Scenarios {
     /// Generated scenarios: the generator's own sizes (obstacles, walls, free room round the
     /// start and goal) times this, for a larger craft.
     pub scale: f64,
+}
+
+impl Scenarios {
+    /// How many scenarios the batch holds: the files, then each generated family's count
+    /// (saturating: only compared against a cap).
+    pub fn count(&self) -> usize {
+        [
+            self.files.len(),
+            self.clutter,
+            self.passage,
+            self.utrap,
+            self.bench_families.len().saturating_mul(self.bench_count),
+        ]
+        .iter()
+        .fold(0usize, |a, &n| a.saturating_add(n))
+    }
 }
 
 impl Default for Scenarios {
@@ -447,6 +469,7 @@ pub fn parse(text: &str, file: &str) -> Result<Spec, ScenarioError> {
         sets: Vec::new(),
     };
     spec.sets = expand(&spec, &root)?;
+    check_runs(&spec, &root)?;
     check_sets(&spec)?;
     Ok(spec)
 }
@@ -841,6 +864,24 @@ fn round3(x: f64) -> f64 {
     let r = (x / mag).round() * mag;
     // Print-stable: through the shortest decimal spelling.
     format!("{r:.12}").parse::<f64>().unwrap_or(r)
+}
+
+/// Refuses a sweep of more than [`MAX_RUNS`] runs, naming the product.
+fn check_runs(spec: &Spec, root: &Table<'_>) -> Result<(), ScenarioError> {
+    let sets = spec.sets.len();
+    let scenarios = spec.scenarios.count();
+    match sets.checked_mul(scenarios) {
+        Some(runs) if runs <= MAX_RUNS => Ok(()),
+        runs => Err(root.src.err(
+            &root.span_of("scenarios"),
+            "scenarios",
+            format!(
+                "{sets} parameter sets × {scenarios} scenarios = {} runs; at most {MAX_RUNS} \
+                 (fewer sets, or fewer scenarios)",
+                runs.map_or_else(|| "too many".to_string(), |r| r.to_string())
+            ),
+        )),
+    }
 }
 
 /// The parameter sets: the grid's combinations, or the random draws.

@@ -1,0 +1,366 @@
+//! Requests over the wire (docs/protocol.md, issue 11 §5 and §6): every request gets exactly
+//! one reply; a full request queue answers "busy" and counts it; a host that sends again what
+//! was answered "busy" lands a whole start-up burst; every refusal is counted once, in the
+//! counter of its kind.
+
+use std::collections::HashMap;
+
+use vpf::field::Shape;
+use vpf::guidance::{
+    RuntimeConfig, SingleContext, CONTROL_QUEUE, REPLY_QUEUE, REQUESTS_PER_PERIOD,
+};
+use vpf::link::{
+    encode_frame, ChartClearRepr, ChartObstacleRepr, CostUnit, Decoder, Direction, Message,
+    MessageType, NavRepr, Outcome, Payload, Problem, ReplyRepr, ReplyStatus, TelemetryRepr,
+    TickRepr, FIELD_WHOLE_MESSAGE, MAX_FRAME,
+};
+use vpf::world::{Origin, MAX_OBSTACLES};
+use vpf::{Mission, NavState, Params, Vec2};
+
+/// A host talking to a [`SingleContext`] in lockstep, keeping what it sent by sequence number.
+struct Host {
+    fw: SingleContext,
+    seq: u16,
+    now_ms: u64,
+    decoder: Decoder,
+    replies: Vec<ReplyRepr>,
+    telemetry: Vec<TelemetryRepr>,
+    sent: HashMap<u16, Message<'static>>,
+}
+
+impl Host {
+    fn new() -> Self {
+        let fw = SingleContext::new(
+            Params::default(),
+            RuntimeConfig::default(),
+            CostUnit::Unknown,
+        );
+        Host {
+            fw: fw.unwrap(),
+            seq: 0,
+            now_ms: 0,
+            decoder: Decoder::accepting(Direction::ToHost),
+            replies: vec![],
+            telemetry: vec![],
+            sent: HashMap::new(),
+        }
+    }
+
+    fn bytes(&mut self, bytes: &[u8]) {
+        let mut out = Vec::new();
+        self.fw.on_bytes(bytes, &mut || 0, &mut |f: &[u8]| {
+            out.extend_from_slice(f);
+            true
+        });
+        for b in out {
+            if let Outcome::Frame(_, m) = self.decoder.push(b) {
+                match m {
+                    Message::Reply(r) => self.replies.push(r),
+                    Message::Telemetry(t) => self.telemetry.push(t),
+                    _ => {}
+                }
+            }
+        }
+    }
+
+    fn next_seq(&mut self) -> u16 {
+        self.seq = self.seq.wrapping_add(1);
+        self.seq
+    }
+
+    /// Sends `m`; returns its sequence number.
+    fn send(&mut self, m: Message<'static>) -> u16 {
+        let seq = self.next_seq();
+        let mut buf = [0u8; MAX_FRAME];
+        let n = m.emit_frame(seq, &mut buf).unwrap();
+        self.sent.insert(seq, m);
+        self.bytes(&buf[..n]);
+        seq
+    }
+
+    /// Sends a frame of type `t` with `payload` as it is (a host with a bug).
+    fn send_raw(&mut self, t: MessageType, payload: &[u8]) -> u16 {
+        let seq = self.next_seq();
+        let mut buf = [0u8; MAX_FRAME];
+        let n = encode_frame(
+            t,
+            seq,
+            |b| {
+                b[..payload.len()].copy_from_slice(payload);
+                Ok(payload.len())
+            },
+            &mut buf,
+        )
+        .unwrap();
+        self.bytes(&buf[..n]);
+        seq
+    }
+
+    /// Runs the next period (100 ms on); returns the replies it brought.
+    fn period(&mut self) -> Vec<ReplyRepr> {
+        let before = self.replies.len();
+        let t = self.now_ms;
+        let nav = NavState {
+            position: Vec2::ZERO,
+            heading: 0.0,
+            velocity: Vec2::ZERO,
+        };
+        self.send(Message::Nav(NavRepr {
+            time_ms: t,
+            nav,
+            body: None,
+        }));
+        self.send(Message::Tick(TickRepr { time_ms: t }));
+        self.now_ms += 100;
+        self.replies[before..].to_vec()
+    }
+
+    fn last_telemetry(&self) -> TelemetryRepr {
+        *self.telemetry.last().unwrap()
+    }
+}
+
+fn chart(id: u16) -> Message<'static> {
+    // A full table of rocks on a 4 × 8 grid well away from the vehicle.
+    let x = 20.0 + 5.0 * f32::from(id % 8);
+    let y = -10.0 + 5.0 * f32::from(id / 8);
+    Message::ChartObstacle(ChartObstacleRepr {
+        id,
+        shape: Shape::circle(Vec2::new(x, y), 1.0).unwrap(),
+        a_plus: 2.5,
+    })
+}
+
+/// Parameters that differ from the defaults, so their arrival shows.
+fn params() -> Params {
+    Params {
+        v_max: 1.5,
+        ..Params::default()
+    }
+}
+
+fn start_up_burst() -> Vec<Message<'static>> {
+    let mut burst = vec![
+        Message::Params(params()),
+        Message::Mission(Mission {
+            goal: Vec2::new(80.0, 0.0),
+            formation: None,
+        }),
+    ];
+    burst.extend((0..MAX_OBSTACLES as u16).map(chart));
+    burst
+}
+
+/// Every sequence number in `seqs` is answered exactly once among `replies`.
+fn answered_once(replies: &[ReplyRepr], seqs: &[u16]) {
+    let mut count: HashMap<u16, usize> = HashMap::new();
+    for r in replies {
+        *count.entry(r.to_seq).or_default() += 1;
+    }
+    for s in seqs {
+        assert_eq!(count.get(s), Some(&1), "request {s} answered once");
+    }
+    assert_eq!(replies.len(), seqs.len(), "no reply to anything else");
+}
+
+/// The start-up burst (parameters, mission, a full chart) between two periods: each request
+/// gets one reply in the next period — the queue's worth applied, the rest "busy" and counted,
+/// none lost. A host that sends the busy ones again, no more than the queue holds per period,
+/// lands all of them.
+#[test]
+fn a_start_up_burst_is_answered_in_full_and_lands_when_paced() {
+    let mut host = Host::new();
+    host.period();
+    let burst = start_up_burst();
+    assert_eq!(burst.len(), REQUESTS_PER_PERIOD);
+    let seqs: Vec<u16> = burst.iter().map(|m| host.send(*m)).collect();
+    let replies = host.period();
+    answered_once(&replies, &seqs);
+    let busy: Vec<u16> = replies
+        .iter()
+        .filter(|r| r.status == ReplyStatus::Busy)
+        .map(|r| r.to_seq)
+        .collect();
+    assert_eq!(busy.len(), REQUESTS_PER_PERIOD - CONTROL_QUEUE);
+    // The queue keeps arrival order: the parameters and the mission went first and landed.
+    let accepted: Vec<u16> = replies
+        .iter()
+        .filter(|r| r.status == ReplyStatus::Accepted)
+        .map(|r| r.to_seq)
+        .collect();
+    assert_eq!(accepted, seqs[..CONTROL_QUEUE]);
+    assert_eq!(host.fw.periodic().planner().params().v_max, 1.5);
+    assert!(host.fw.periodic().planner().mission().is_some());
+    let t = host.last_telemetry();
+    assert_eq!(t.counters.requests_busy, busy.len() as u32);
+    assert_eq!(t.counters.requests_unanswered, 0);
+
+    // Pacing: at most the queue's capacity in flight; what comes back "busy" goes again.
+    let mut pending: Vec<Message<'static>> = busy.iter().map(|s| host.sent[s]).collect();
+    let mut periods = 0;
+    while !pending.is_empty() {
+        let take = pending.len().min(CONTROL_QUEUE);
+        let batch: Vec<u16> = pending.drain(..take).map(|m| host.send(m)).collect();
+        let replies = host.period();
+        answered_once(&replies, &batch);
+        for r in &replies {
+            match r.status {
+                ReplyStatus::Accepted => {}
+                ReplyStatus::Busy => pending.push(host.sent[&r.to_seq]),
+                ReplyStatus::Rejected { .. } => panic!("refused: {r:?}"),
+            }
+        }
+        periods += 1;
+        assert!(periods <= MAX_OBSTACLES, "the chart never landed");
+    }
+    assert_eq!(
+        periods,
+        (REQUESTS_PER_PERIOD - CONTROL_QUEUE).div_ceil(CONTROL_QUEUE)
+    );
+    let world = host.fw.periodic().world();
+    assert_eq!(world.obstacles().len(), MAX_OBSTACLES);
+    assert!(world
+        .obstacles()
+        .iter()
+        .all(|o| o.origin == Origin::Charted));
+    let t = host.last_telemetry();
+    assert_eq!(usize::from(t.obstacles), MAX_OBSTACLES);
+    assert_eq!(
+        t.counters.requests_busy,
+        busy.len() as u32,
+        "a paced host is never busy"
+    );
+    assert_eq!(t.counters.table_full, 0);
+    assert_eq!(t.counters.bad_mission, 0);
+}
+
+/// The issue's case: parameters, a mission and six charted obstacles in one go. Two periods
+/// (the second for the busy ones, sent again) land all six.
+#[test]
+fn six_charted_obstacles_with_parameters_and_mission_all_land() {
+    let mut host = Host::new();
+    let mut burst = start_up_burst();
+    burst.truncate(2 + 6);
+    let seqs: Vec<u16> = burst.iter().map(|m| host.send(*m)).collect();
+    let replies = host.period();
+    answered_once(&replies, &seqs);
+    let again: Vec<Message<'static>> = replies
+        .iter()
+        .filter(|r| r.status == ReplyStatus::Busy)
+        .map(|r| host.sent[&r.to_seq])
+        .collect();
+    assert_eq!(again.len(), 8 - CONTROL_QUEUE);
+    let seqs: Vec<u16> = again.into_iter().map(|m| host.send(m)).collect();
+    let replies = host.period();
+    answered_once(&replies, &seqs);
+    assert!(replies.iter().all(|r| r.status == ReplyStatus::Accepted));
+    assert_eq!(host.fw.periodic().world().obstacles().len(), 6);
+}
+
+/// Beyond the queue and the reply ring, requests go unanswered — counted, never silently.
+#[test]
+fn requests_beyond_the_queue_and_the_ring_are_counted_unanswered() {
+    let mut host = Host::new();
+    let extra = 3;
+    let seqs: Vec<u16> = (0..REQUESTS_PER_PERIOD + extra)
+        .map(|_| host.send(Message::ChartClear(ChartClearRepr::All)))
+        .collect();
+    let replies = host.period();
+    assert_eq!(replies.len(), CONTROL_QUEUE + REPLY_QUEUE);
+    answered_once(&replies, &seqs[..REQUESTS_PER_PERIOD]);
+    let t = host.last_telemetry();
+    assert_eq!(t.counters.requests_busy, REPLY_QUEUE as u32);
+    assert_eq!(t.counters.requests_unanswered, extra as u32);
+    // The next period has room again.
+    let s = host.send(Message::ChartClear(ChartClearRepr::All));
+    let replies = host.period();
+    assert_eq!(replies.len(), 1);
+    assert_eq!(
+        (replies[0].to_seq, replies[0].status),
+        (s, ReplyStatus::Accepted)
+    );
+}
+
+/// A request answered "busy" changed nothing: the parameters stay until it is sent again.
+#[test]
+fn a_busy_request_changes_nothing() {
+    let mut host = Host::new();
+    for _ in 0..CONTROL_QUEUE {
+        host.send(Message::ChartClear(ChartClearRepr::All));
+    }
+    let p = host.send(Message::Params(params()));
+    let replies = host.period();
+    let r = replies.iter().find(|r| r.to_seq == p).unwrap();
+    assert_eq!(r.status, ReplyStatus::Busy);
+    assert_eq!(host.fw.periodic().planner().params().v_max, 1.0);
+    host.send(Message::Params(params()));
+    let replies = host.period();
+    assert_eq!(replies[0].status, ReplyStatus::Accepted);
+    assert_eq!(host.fw.periodic().planner().params().v_max, 1.5);
+}
+
+/// One counter per kind of refusal: a Params or Mission refused at the wire is answered and
+/// counted in `bad_params` / `bad_mission` (like one the planner refuses), not in
+/// `rx_bad_payload`, which keeps the refused frames nobody answers (here a Nav).
+#[test]
+fn refusals_at_the_wire_count_as_refused_requests() {
+    let mut host = Host::new();
+    // Params with a NaN epsilon (row 1, bytes 4..8): the wire refuses non-finite numbers.
+    let mut payload = [0u8; 118];
+    let n = Params::default().emit(&mut payload).unwrap();
+    assert_eq!(n, payload.len());
+    payload[4..8].copy_from_slice(&f32::NAN.to_le_bytes());
+    let bad_params = host.send_raw(MessageType::Params, &payload);
+    // A Mission a byte too long.
+    let mut mission = [0u8; 10];
+    Mission {
+        goal: Vec2::new(5.0, 0.0),
+        formation: None,
+    }
+    .emit(&mut mission)
+    .unwrap();
+    let bad_mission = host.send_raw(MessageType::Mission, &mission);
+    // A chart with A⁺ out of range.
+    let mut c = [0u8; 32];
+    let n = ChartObstacleRepr {
+        id: 7,
+        shape: Shape::circle(Vec2::new(10.0, 0.0), 1.0).unwrap(),
+        a_plus: 2.5,
+    }
+    .emit(&mut c)
+    .unwrap();
+    c[2..6].copy_from_slice(&500.0f32.to_le_bytes());
+    let bad_chart = host.send_raw(MessageType::ChartObstacle, &c[..n]);
+    // Parameters the planner refuses (a range): the same counter.
+    let planner_refused = host.send(Message::Params(Params {
+        v_max: 50.0,
+        ..Params::default()
+    }));
+    let replies = host.period();
+    answered_once(
+        &replies,
+        &[bad_params, bad_mission, bad_chart, planner_refused],
+    );
+    let status = |s: u16| replies.iter().find(|r| r.to_seq == s).unwrap().status;
+    let rejected = |field, problem| ReplyStatus::Rejected { field, problem };
+    assert_eq!(status(bad_params), rejected(1, Problem::NonFinite));
+    assert_eq!(
+        status(bad_mission),
+        rejected(FIELD_WHOLE_MESSAGE, Problem::Invalid)
+    );
+    assert_eq!(status(bad_chart), rejected(1, Problem::OutOfRange));
+    let v_max = vpf::link::param_index("v_max").unwrap();
+    assert_eq!(
+        status(planner_refused),
+        rejected(v_max, Problem::OutOfRange)
+    );
+    let t = host.last_telemetry().counters;
+    assert_eq!((t.bad_params, t.bad_mission, t.rx_bad_payload), (2, 2, 0));
+
+    // A Nav a byte short: not answered, counted with the refused frames.
+    host.send_raw(MessageType::Nav, &[0u8; 28]);
+    host.period();
+    let t = host.last_telemetry().counters;
+    assert_eq!((t.bad_params, t.bad_mission, t.rx_bad_payload), (2, 2, 1));
+    assert_eq!(t.bad_nav, 0);
+}
