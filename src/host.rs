@@ -174,6 +174,7 @@ fn run(
     let mut out: Vec<u8> = Vec::with_capacity(4096);
     let mut next = Duration::from_millis(u64::from(fw.periodic().period_ms()));
     let mut drops_logged = (0u64, start);
+    let mut drops_counted = 0u64;
     loop {
         if !fw.lockstep() && start.elapsed() >= next {
             let now = next.as_millis() as u64;
@@ -210,6 +211,11 @@ fn run(
             }
         }
         let dropped = stats.dropped.load(Ordering::Relaxed);
+        if dropped > drops_counted {
+            let n = u32::try_from(dropped - drops_counted).unwrap_or(u32::MAX);
+            fw.count_rx_dropped(n);
+            drops_counted = dropped;
+        }
         if dropped > drops_logged.0 && drops_logged.1.elapsed() >= DROP_LOG_EVERY {
             eprintln!("vpf-firmware: input queue full: {dropped} bytes dropped so far");
             drops_logged = (dropped, Instant::now());

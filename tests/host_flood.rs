@@ -150,6 +150,11 @@ fn host_process_stays_bounded_and_periodic_under_an_input_flood() {
     assert!(dropped <= read);
     // What was not dropped was decoded: each garbage frame refused once, none accepted.
     let c = last.unwrap();
+    // The drops reach telemetry, as the board's UART queue's do.
+    assert_eq!(
+        u64::from(c.rx_bytes_dropped),
+        dropped.min(u64::from(u32::MAX))
+    );
     let garbage_frames = (sent / GARBAGE_FRAME.len()) as u64;
     let framing = u64::from(c.rx_framing_errors);
     if dropped == 0 {

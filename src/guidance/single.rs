@@ -125,6 +125,12 @@ impl SingleContext {
         &self.periodic
     }
 
+    /// Counts received bytes the host dropped before they reached [`Self::on_bytes`] (its
+    /// input queue was full), in telemetry's `rx_bytes_dropped` as on the board.
+    pub fn count_rx_dropped(&mut self, n: u32) {
+        self.periodic.count_rx_dropped(n);
+    }
+
     /// The route layer.
     pub fn router(&self) -> &Router {
         &self.router
