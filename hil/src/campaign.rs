@@ -17,7 +17,6 @@ use std::fmt::Write as _;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use crate::firmware::{self, Target};
 use crate::output::metrics::Summary;
 use crate::output::RunOutput;
 use crate::runner::{run_quiet, QuietRun};
@@ -401,13 +400,7 @@ fn campaign(o: &Options) -> Result<String, String> {
         std::fs::create_dir_all(dir)
             .map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
     }
-    let run = QuietRun {
-        target: Target::Host,
-        binary: firmware::build(&Target::Host)
-            .map_err(|e| format!("building the firmware: {e}"))?,
-        stop_early: true,
-        socket: true,
-    };
+    let run = QuietRun::host_until_done().map_err(|e| format!("building the firmware: {e}"))?;
     let jobs = o.jobs.unwrap_or_else(|| {
         std::thread::available_parallelism().map_or(2, std::num::NonZeroUsize::get)
     });

@@ -135,6 +135,19 @@ pub struct QuietRun {
     pub socket: bool,
 }
 
+impl QuietRun {
+    /// The benchmark's and the fault campaign's runs: the host-process firmware (built here)
+    /// on a socket pair, each run ended at arrival or first contact.
+    pub fn host_until_done() -> std::io::Result<QuietRun> {
+        Ok(QuietRun {
+            target: Target::Host,
+            binary: firmware::build(&Target::Host)?,
+            stop_early: true,
+            socket: true,
+        })
+    }
+}
+
 /// Runs `sc` and writes its outputs to `cfg.out_dir`, which is checked writable first (before
 /// the firmware is built or a vehicle flies).
 pub fn run(sc: &Scenario, cfg: &RunConfig) -> Result<RunResult, RunError> {

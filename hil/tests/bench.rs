@@ -8,7 +8,6 @@
 
 use hil::bench::case::{self, Case};
 use hil::bench::worlds::FAMILIES;
-use hil::firmware::{self, Target};
 use hil::runner::QuietRun;
 use hil::scenario::Sensing;
 use hil::sim::ModelKind;
@@ -16,12 +15,7 @@ use std::path::Path;
 use vpf::Strategy;
 
 fn quiet() -> QuietRun {
-    QuietRun {
-        target: Target::Host,
-        binary: firmware::build(&Target::Host).expect("host firmware builds"),
-        stop_early: true,
-        socket: true,
-    }
+    QuietRun::host_until_done().expect("host firmware builds")
 }
 
 fn failed_dir() -> std::path::PathBuf {

@@ -4,19 +4,13 @@
 //! a sonar dropout. `cargo hil faults` flies the whole table.
 
 use hil::campaign::{fly, Kind, NAV_WINDOW};
-use hil::firmware::{self, Target};
 use hil::runner::QuietRun;
 use hil::scenario::{self, Scenario};
 use std::path::Path;
 use vpf::guidance::FailsafeConfig;
 
 fn quiet() -> QuietRun {
-    QuietRun {
-        target: Target::Host,
-        binary: firmware::build(&Target::Host).expect("host firmware builds"),
-        stop_early: true,
-        socket: true,
-    }
+    QuietRun::host_until_done().expect("host firmware builds")
 }
 
 fn shipped(name: &str) -> Scenario {

@@ -31,7 +31,6 @@ use std::process::ExitCode;
 
 use vpf::Strategy;
 
-use crate::firmware::{self, Target};
 use crate::runner::QuietRun;
 use crate::scenario::{self, Sensing};
 use crate::sim::ModelKind;
@@ -280,14 +279,7 @@ pub fn bench(o: &Options) -> Result<(PathBuf, report::Report), String> {
         );
     }
     if !pending.is_empty() {
-        let binary =
-            firmware::build(&Target::Host).map_err(|e| format!("building the firmware: {e}"))?;
-        let run = QuietRun {
-            target: Target::Host,
-            binary,
-            stop_early: true,
-            socket: true,
-        };
+        let run = QuietRun::host_until_done().map_err(|e| format!("building the firmware: {e}"))?;
         let failed = dir.join("failed");
         let file = std::fs::OpenOptions::new()
             .create(true)
