@@ -1036,6 +1036,8 @@ enum Event {
     Tick(u64),
     Request(MessageType, u16, Option<f32>, bool),
     WireRequest(MessageType, u16),
+    /// A `Nav` refused at the wire (counted in `bad_nav`, not `rx_bad_payload`).
+    WireNav,
 }
 
 struct Model {
@@ -1044,6 +1046,7 @@ struct Model {
     last_period: Option<u64>,
     wire_params: u32,
     wire_mission: u32,
+    wire_nav: u32,
     charts_refused: u32,
     ticks_refused: u32,
     /// Periods run (commands owed).
@@ -1064,6 +1067,7 @@ impl Model {
             last_period: None,
             wire_params: 0,
             wire_mission: 0,
+            wire_nav: 0,
             charts_refused: 0,
             ticks_refused: 0,
             periods: 0,
@@ -1082,7 +1086,7 @@ impl Model {
             c.framing,
             c.version + c.unknown_type,
             c.bad_payload
-                .saturating_sub(self.wire_params + self.wire_mission)
+                .saturating_sub(self.wire_params + self.wire_mission + self.wire_nav)
                 .saturating_add(self.ticks_refused),
         ]
     }
@@ -1137,6 +1141,8 @@ impl Model {
                                 && is_request(h.msg_type)
                             {
                                 Event::WireRequest(h.msg_type, h.seq)
+                            } else if h.msg_type == MessageType::Nav {
+                                Event::WireNav
                             } else {
                                 Event::None
                             }
@@ -1162,6 +1168,7 @@ impl Model {
                     }
                     self.charts_refused += u32::from(chart_refused);
                 }
+                Event::WireNav => self.wire_nav += 1,
                 Event::WireRequest(ty, seq) => {
                     self.outstanding.push((ty, seq));
                     if ty == MessageType::Params {

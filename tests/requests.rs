@@ -301,7 +301,8 @@ fn a_busy_request_changes_nothing() {
 
 /// One counter per kind of refusal: a Params or Mission refused at the wire is answered and
 /// counted in `bad_params` / `bad_mission` (like one the planner refuses), not in
-/// `rx_bad_payload`, which keeps the refused frames nobody answers (here a Nav).
+/// `rx_bad_payload`, which keeps the refused frames nobody answers (here a Contacts); a Nav
+/// refused at the wire counts in `bad_nav`, with those the planner refuses.
 #[test]
 fn refusals_at_the_wire_count_as_refused_requests() {
     let mut host = Host::new();
@@ -357,10 +358,15 @@ fn refusals_at_the_wire_count_as_refused_requests() {
     let t = host.last_telemetry().counters;
     assert_eq!((t.bad_params, t.bad_mission, t.rx_bad_payload), (2, 2, 0));
 
-    // A Nav a byte short: not answered, counted with the refused frames.
+    // A Nav a byte short: not answered, counted as refused navigation.
     host.send_raw(MessageType::Nav, &[0u8; 28]);
     host.period();
     let t = host.last_telemetry().counters;
-    assert_eq!((t.bad_params, t.bad_mission, t.rx_bad_payload), (2, 2, 1));
-    assert_eq!(t.bad_nav, 0);
+    assert_eq!((t.bad_params, t.bad_mission, t.rx_bad_payload), (2, 2, 0));
+    assert_eq!(t.bad_nav, 1);
+    // A Contacts a byte short: not answered, counted with the refused frames.
+    host.send_raw(MessageType::Contacts, &[0u8; 8]);
+    host.period();
+    let t = host.last_telemetry().counters;
+    assert_eq!((t.rx_bad_payload, t.bad_nav), (1, 1));
 }

@@ -78,6 +78,7 @@ static LINK: Mutex<Cell<(RxCounters, BackgroundCounters)>> = Mutex::new(Cell::ne
         requests_unanswered: 0,
         params_refused: 0,
         mission_refused: 0,
+        nav_refused: 0,
         charts_refused: 0,
         scanlines_rejected: 0,
         scanlines: 0,

@@ -47,6 +47,8 @@ pub struct BackgroundCounters {
     /// `Mission`, `ChartObstacle` and `ChartClear` messages refused at the wire (moved from
     /// the decoder's `bad_payload` to `bad_mission` as above).
     pub mission_refused: u32,
+    /// `Nav` messages refused at the wire (moved from `bad_payload` to `bad_nav`).
+    pub nav_refused: u32,
     /// `ChartObstacle` messages the wire accepted but the world's checks refused
     /// (`ChartObstacleRepr::to_obstacle`): telemetry counts them in `bad_mission`.
     pub charts_refused: u32,
@@ -166,6 +168,9 @@ impl Background {
                 } if h.msg_type.direction() == Direction::ToFirmware => {
                     // A refused request still gets its typed reply, and is counted as a refused
                     // request of its kind (not among the unanswered frames' `rx_bad_payload`).
+                    if h.msg_type == MessageType::Nav {
+                        count_if(true, &mut self.counters.nav_refused);
+                    }
                     if is_request(h.msg_type) {
                         let c = &mut self.counters;
                         if h.msg_type == MessageType::Params {

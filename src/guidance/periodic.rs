@@ -459,14 +459,21 @@ impl Periodic {
         let c = &mut self.counters;
         c.set_rx(rx);
         // One counter per kind of refusal: requests refused at the wire are counted as refused
-        // requests of their kind (and answered), not with the unanswered frames.
-        let wire_requests = bg.params_refused.saturating_add(bg.mission_refused);
+        // requests of their kind (and answered), not with the unanswered frames; navigation
+        // refused at the wire with the navigation the planner refused.
+        let wire_requests = bg
+            .params_refused
+            .saturating_add(bg.mission_refused)
+            .saturating_add(bg.nav_refused);
         c.rx_bad_payload = c
             .rx_bad_payload
             .saturating_sub(wire_requests)
             .saturating_add(bg.ticks_refused);
         let p = self.planner.counters;
-        c.bad_nav = p.bad_nav.saturating_add(self.future_navs);
+        c.bad_nav = p
+            .bad_nav
+            .saturating_add(self.future_navs)
+            .saturating_add(bg.nav_refused);
         c.bad_params = p.bad_params.saturating_add(bg.params_refused);
         c.bad_mission = p
             .bad_mission

@@ -220,11 +220,12 @@ pub struct TelemetryCounters {
     pub rx_framing_errors: u32,
     /// Frames refused for an unknown version, type or direction.
     pub rx_unknown: u32,
-    /// Frames of the types that are never answered (Nav, Scanline, Contacts, Tick) whose
-    /// payload was refused (length or a field), and `Tick`s back in time. Requests refused at
-    /// the wire count in `bad_params` / `bad_mission`.
+    /// Scanline, Contacts and Tick frames whose payload was refused (length or a field), and
+    /// `Tick`s back in time. Requests refused at the wire count in `bad_params` /
+    /// `bad_mission`, Nav in `bad_nav`.
     pub rx_bad_payload: u32,
-    /// Nav messages the planner refused, or stamped more than a second ahead of its time.
+    /// Nav messages refused: at the wire (length or a field), by the planner, or stamped more
+    /// than a second ahead of its time.
     pub bad_nav: u32,
     /// Params messages refused, at the wire (a non-finite number, an unknown code, the length)
     /// or by the planner (a range): each once, here and nowhere else.
