@@ -518,11 +518,22 @@ fn collect(
     for r in &got {
         match r {
             Reply::Reply(rep) if !*replies_checked => {
-                if let ReplyStatus::Rejected { field, problem } = rep.status {
-                    return Err(RunError::Refused(format!(
-                        "the scenario's {:?} message (field {field}: {problem:?})",
-                        rep.to_type
-                    )));
+                match rep.status {
+                    ReplyStatus::Rejected { field, problem } => {
+                        return Err(RunError::Refused(format!(
+                            "the scenario's {:?} message (field {field}: {problem:?})",
+                            rep.to_type
+                        )));
+                    }
+                    // Two requests never fill the firmware's queue of four: a busy answer
+                    // (another host talking to it?) means the set-up did not land.
+                    ReplyStatus::Busy => {
+                        return Err(RunError::Refused(format!(
+                            "the scenario's {:?} message (the firmware answered busy)",
+                            rep.to_type
+                        )));
+                    }
+                    _ => {}
                 }
             }
             Reply::Belief(c) => {
