@@ -11,7 +11,7 @@
 //! all of them at once. Every run is in lockstep with the host-process firmware and ends at
 //! arrival, at the first contact or at the scenario's duration. A cell says whether the vehicle
 //! reached its goal, its least clearance, and for navigation loss how long after the loss the
-//! firmware held (it must within two periods).
+//! firmware held (within two periods of the navigation timeout, 1 s by default).
 
 use std::fmt::Write as _;
 use std::path::PathBuf;
