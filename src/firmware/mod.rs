@@ -17,9 +17,8 @@
 //!    critical-section cell and queues sightings and requests.
 //!
 //! Shared state is only: five SPSC queues (bytes in, bytes out, sightings, requests, owed
-//! replies), and four
-//! small cells behind `critical_section` (newest navigation, link counters, firmware time,
-//! lockstep tick). A critical section never spans more than a copy of one of those cells.
+//! replies), and four small cells behind `critical_section` (newest navigation, link counters,
+//! firmware time, lockstep tick). A critical section never spans more than a copy of one of those cells.
 
 #[cfg(feature = "selftest")]
 pub mod selftest;

@@ -166,8 +166,8 @@ impl Background {
                     header: Some(h),
                     error,
                 } if h.msg_type.direction() == Direction::ToFirmware => {
-                    // A refused request still gets its typed reply, and is counted as a refused
-                    // request of its kind (not among the unanswered frames' `rx_bad_payload`).
+                    // A refused Nav or request is counted as a refusal of its kind (not among the
+                    // unanswered frames' `rx_bad_payload`); a request still gets its typed reply.
                     if h.msg_type == MessageType::Nav {
                         count_if(true, &mut self.counters.nav_refused);
                     }

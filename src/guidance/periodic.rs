@@ -371,7 +371,7 @@ impl Periodic {
             return c;
         };
         // A late fix (frames lost) is carried forward to now, and slows the vehicle.
-        let age = now_ms.saturating_sub(n.time_ms);
+        let age = situation.nav_age_ms.unwrap_or(0);
         let period = u64::from(self.period_ms());
         let (state, late) = failsafe::dead_reckon(&self.config.failsafe, &n.nav, age, period);
         // ... and so does a sonar whose pings are lost on the way.
