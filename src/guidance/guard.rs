@@ -26,20 +26,31 @@
 //! 4. a lower speed (halving down to `min_speed`) is clear on the commanded heading → **slow**;
 //! 5. otherwise → **stop**.
 //!
-//! Cost: one point-to-segment distance per map cell and agent per heading tried, and samples
-//! every [`SAMPLE_M`] along the segment for the table's obstacles near enough to matter.
+//! **Movers** (obstacles and other vehicles with a velocity) are judged by their closest point
+//! of approach instead: each is carried from its last sighting to now on its velocity, and a
+//! motion is blocked when, held for [`CPA_HORIZON_S`], it brings the two closer than the hull
+//! (and closer than they are now) — the velocity-obstacle test of Fiorini and Shiller
+//! (*Motion planning in dynamic environments using velocity obstacles*, IJRR 1998). A mover
+//! can run into a vehicle that stops, so stopping is checked the same way, and when every
+//! motion above is blocked and stopping is too, the guard **evades**: the clear heading nearest
+//! the commanded one, all round, at the fastest speed it may ask for (the present speed plus
+//! one period at F_max, within `speed_cap`: v_max, or less while navigation is late or the
+//! sonar loses pings), then half of it.
+//!
+//! Cost: one point-to-segment distance per map cell and still agent per heading tried, samples
+//! every [`SAMPLE_M`] along the segment for the table's still obstacles near enough to matter,
+//! and one closest-approach per mover.
 
 use crate::math::{cos, max, min, sin, wrap_angle, Vec2};
 use crate::params::Params;
 use crate::planner::{Command, Mode, NavState};
-use crate::world::{World, MAX_MAP_CELLS};
+use crate::world::{World, MAX_AGENTS, MAX_MAP_CELLS, MAX_OBSTACLES};
 
 /// Spacing of the clearance samples along the segment for table obstacles, m.
 pub const SAMPLE_M: f32 = 0.25;
-/// Slowest speed assumed when timing a moving obstacle against the vehicle, m/s.
-const MIN_SPEED_MPS: f32 = 0.2;
-/// Farthest ahead a moving obstacle is predicted, s.
-const MAX_LOOKAHEAD_S: f32 = 10.0;
+/// How long a motion is held when it is judged against movers, s: about a sonar sweep (9 s for
+/// a Micron at 30 m), the longest a mover goes unseen.
+pub const CPA_HORIZON_S: f32 = 10.0;
 
 /// The guard's settings.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -87,9 +98,22 @@ pub enum Verdict {
     Stopped,
 }
 
+/// Something believed to move, carried to now.
+#[derive(Clone, Copy)]
+struct Mover {
+    /// Centre now, m.
+    center: Vec2,
+    /// Velocity, m/s.
+    velocity: Vec2,
+    /// Radius of a circle that covers it, m.
+    radius: f32,
+}
+
 /// Everything believed, seen from one position.
 struct Believed<'a> {
     world: &'a World,
+    /// The obstacles and vehicles with a velocity, at their positions now.
+    movers: heapless::Vec<Mover, { MAX_OBSTACLES + MAX_AGENTS }>,
     /// The map cells that a segment of the longest length tried can reach.
     cells: heapless::Vec<Vec2, MAX_MAP_CELLS>,
     hull: f32,
@@ -110,12 +134,18 @@ fn to_segment(c: Vec2, a: Vec2, u: Vec2, len: f32) -> f32 {
 
 impl Believed<'_> {
     /// Whether moving from `p` along unit `u` for `len` m at `speed` m/s goes below the hull
-    /// radius and below the clearance we have now. A moving obstacle is taken where it will be
-    /// when the vehicle gets to each sample (its velocity times the time to get there).
+    /// radius and below the clearance we have now, against what stands still; and whether
+    /// holding that velocity meets a mover (see [`Believed::meets_mover`]).
     fn blocked(&self, p: Vec2, u: Vec2, len: f32, speed: f32) -> bool {
+        self.blocked_still(p, u, len) || self.meets_mover(p, u * speed)
+    }
+
+    /// The still part of [`Believed::blocked`].
+    fn blocked_still(&self, p: Vec2, u: Vec2, len: f32) -> bool {
         let floor = min(self.hull, self.here - 1e-3);
         let w = self.world;
-        // Points: map cells (discs covering the whole square cell) and agents (circles).
+        // Points: map cells (discs covering the whole square cell) and still agents (circles of
+        // the vehicle's own radius, 000 §III, so hull + hull).
         let r_map = self.r_map;
         if self
             .cells
@@ -124,40 +154,55 @@ impl Believed<'_> {
         {
             return true;
         }
-        let samples = (len / SAMPLE_M) as u32 + 1;
-        let per_m = 1.0 / max(speed, MIN_SPEED_MPS);
-        let t_end = min(len * per_m, MAX_LOOKAHEAD_S);
-        // The agents' circles have the vehicle's own radius (000 §III), so hull + hull; like
-        // moving obstacles they are met where they will be (two vehicles closing head-on at
-        // 1 m/s each halve each other's braking room).
-        if w.agents().iter().any(|a| {
-            let now =
-                to_segment(a.position, p, u, len) - self.agent_r < floor && ahead(a.position, p, u);
-            now || (1..=samples).any(|k| {
-                let s = min(k as f32 * SAMPLE_M, len);
-                let t = min(s * per_m, MAX_LOOKAHEAD_S);
-                (p + u * s - (a.position + a.velocity * t)).norm() - self.agent_r < floor
+        if w.agents()
+            .iter()
+            .filter(|a| a.velocity == Vec2::ZERO)
+            .any(|a| {
+                to_segment(a.position, p, u, len) - self.agent_r < floor && ahead(a.position, p, u)
             })
-        }) {
+        {
             return true;
         }
         // Shapes: sampled along the segment, only those that can reach it.
-        for o in w.obstacles().iter().filter(|o| !w.left_to_map(o)) {
-            let reach = (o.shape.center() - p).norm()
-                - o.shape.bounding_radius()
-                - o.velocity.norm() * t_end;
+        let samples = (len / SAMPLE_M) as u32 + 1;
+        let still = |o: &&crate::world::Obstacle| o.velocity == Vec2::ZERO && !w.left_to_map(o);
+        for o in w.obstacles().iter().filter(still) {
+            let reach = (o.shape.center() - p).norm() - o.shape.bounding_radius();
             if reach > len + self.hull {
                 continue;
             }
             if (1..=samples).any(|k| {
                 let s = min(k as f32 * SAMPLE_M, len);
-                let t = min(s * per_m, MAX_LOOKAHEAD_S);
-                o.shape.signed_distance(p + u * s - o.velocity * t) < floor
+                o.shape.signed_distance(p + u * s) < floor
             }) {
                 return true;
             }
         }
         false
+    }
+
+    /// Whether holding velocity `v` from `p` for [`CPA_HORIZON_S`] brings a mover within the
+    /// hull, and nearer than it is now (so moving away from one already close is allowed).
+    fn meets_mover(&self, p: Vec2, v: Vec2) -> bool {
+        self.mover_margin(p, v) < 0.0
+    }
+
+    /// How far, at the worst, holding `v` keeps clear of that limit over the movers, m
+    /// (`INFINITY` with none).
+    fn mover_margin(&self, p: Vec2, v: Vec2) -> f32 {
+        self.movers.iter().fold(f32::INFINITY, |worst, m| {
+            let d = m.center - p;
+            let w = m.velocity - v;
+            let w2 = w.norm2();
+            let t = if w2 > 1e-9 {
+                max(0.0, min(-d.dot(w) / w2, CPA_HORIZON_S))
+            } else {
+                0.0
+            };
+            let now = d.norm() - m.radius;
+            let closest = (d + w * t).norm() - m.radius;
+            min(worst, closest - min(self.hull, now - 1e-3))
+        })
     }
 }
 
@@ -188,14 +233,17 @@ fn with_motion(mut cmd: Command, heading: f32, speed: f32, verdict: Verdict) -> 
     cmd
 }
 
-/// Checks `cmd` for the vehicle at `nav` against `world` (see the module notes) and returns
-/// the command to send with the verdict. Holds pass through unchanged.
+/// Checks `cmd` for the vehicle at `nav` at time `now_ms` against `world` (see the module
+/// notes) and returns the command to send with the verdict; an evasion asks for no more than
+/// `speed_cap` m/s. Holds pass through unchanged.
 pub fn check(
     cfg: &GuardConfig,
     prm: &Params,
+    now_ms: u64,
     nav: &NavState,
     world: &World,
     cmd: Command,
+    speed_cap: f32,
 ) -> (Command, Verdict) {
     if !cfg.enabled || matches!(cmd.mode, Mode::Hold(_)) {
         return (cmd, Verdict::Clear);
@@ -204,7 +252,10 @@ pub fn check(
     let speed = nav.velocity.norm();
     // No segment tried is longer than this: cells farther than it (and the hull and a cell)
     // cannot block any, so they are left out once here rather than per heading.
-    let longest = max(reach(cmd.v_set, prm, cfg), reach(speed, prm, cfg));
+    let longest = max(
+        max(reach(cmd.v_set, prm, cfg), reach(speed, prm, cfg)),
+        reach(prm.v_max, prm, cfg),
+    );
     let r_map = world.map_radius() * core::f32::consts::SQRT_2;
     let near = longest + prm.agent_radius_m + r_map;
     let mut cells = heapless::Vec::new();
@@ -214,8 +265,30 @@ pub fn check(
             let _ = cells.push(c);
         }
     }
+    let age = |seen_ms: u64| min(now_ms.saturating_sub(seen_ms) as f32 * 1e-3, CPA_HORIZON_S);
+    let mut movers = heapless::Vec::new();
+    for o in world
+        .obstacles()
+        .iter()
+        .filter(|o| o.velocity != Vec2::ZERO)
+    {
+        // Room for every obstacle and agent: never full.
+        let _ = movers.push(Mover {
+            center: o.shape.center() + o.velocity * age(o.seen_ms),
+            velocity: o.velocity,
+            radius: o.shape.bounding_radius(),
+        });
+    }
+    for a in world.agents().iter().filter(|a| a.velocity != Vec2::ZERO) {
+        let _ = movers.push(Mover {
+            center: a.position + a.velocity * age(a.seen_ms),
+            velocity: a.velocity,
+            radius: prm.agent_radius_m,
+        });
+    }
     let b = Believed {
         world,
+        movers,
         cells,
         hull: prm.agent_radius_m + cfg.hull_margin_m,
         agent_r: prm.agent_radius_m,
@@ -225,35 +298,31 @@ pub fn check(
                 .map_or(f32::INFINITY, |(_, d)| d - r_map),
         ),
     };
+    let dir = |a: f32| Vec2::new(cos(a), sin(a));
+    // A mover may run into a vehicle that stops: then stopping is no way out.
+    let can_stop = !b.meets_mover(p, Vec2::ZERO);
+    let evasion = min(speed_cap, min(prm.v_max, speed + prm.f_max * prm.period_s));
     // 1. Where the vehicle is going now, within its braking distance.
     if let Some(u) = nav.velocity.normalized(1e-3) {
         let braking = speed * speed / (2.0 * prm.f_max) + cfg.margin_m;
-        if b.blocked(p, u, braking, speed) {
-            return (
-                with_motion(cmd, cmd.psi_set, 0.0, Verdict::Stopped),
-                Verdict::Stopped,
-            );
+        if can_stop && b.blocked_still(p, u, braking) {
+            return stopped(cmd);
         }
     }
     let v = cmd.v_set;
     if v.is_nan() || v <= 0.0 {
-        return (cmd, Verdict::Clear);
+        if can_stop {
+            return (cmd, Verdict::Clear);
+        }
+        return evade(cfg, prm, &b, p, cmd, evasion);
     }
-    let dir = |a: f32| Vec2::new(cos(a), sin(a));
     // 2. The command as planned.
     if !b.blocked(p, dir(cmd.psi_set), reach(v, prm, cfg), v) {
         return (cmd, Verdict::Clear);
     }
     // 3. The nearest clear heading at the same speed.
-    let step = max(cfg.turn_step_rad, 1e-3);
-    let turns = min(cfg.max_turn_rad / step, 64.0) as u32;
-    for k in 1..=turns {
-        for side in [1.0, -1.0] {
-            let a = cmd.psi_set + side * k as f32 * step;
-            if !b.blocked(p, dir(a), reach(v, prm, cfg), v) {
-                return (with_motion(cmd, a, v, Verdict::Turned), Verdict::Turned);
-            }
-        }
+    if let Some(a) = nearest_clear(cfg, prm, &b, p, cmd.psi_set, v, cfg.max_turn_rad) {
+        return (with_motion(cmd, a, v, Verdict::Turned), Verdict::Turned);
     }
     // 4. Slower on the planned heading.
     let mut s = 0.5 * v;
@@ -266,7 +335,76 @@ pub fn check(
         }
         s *= 0.5;
     }
-    // 5. Nothing is clear.
+    // 5. Nothing is clear: stop, unless a mover would run into the stopped vehicle.
+    if can_stop {
+        return stopped(cmd);
+    }
+    evade(cfg, prm, &b, p, cmd, evasion)
+}
+
+/// The heading within ±`max_turn` of `psi`, nearest first, that is clear at `v`.
+fn nearest_clear(
+    cfg: &GuardConfig,
+    prm: &Params,
+    b: &Believed,
+    p: Vec2,
+    psi: f32,
+    v: f32,
+    max_turn: f32,
+) -> Option<f32> {
+    let step = max(cfg.turn_step_rad, 1e-3);
+    let turns = min(max_turn / step, 64.0) as u32;
+    (1..=turns)
+        .flat_map(|k| [1.0, -1.0].map(|side| psi + side * k as f32 * step))
+        .find(|&a| !b.blocked(p, Vec2::from_angle(a), reach(v, prm, cfg), v))
+}
+
+/// A mover closes in and stopping will not do: the clear heading nearest the command, all
+/// round, at `speed` and then half of it; if none is clear, the heading at `speed` that
+/// keeps farthest from the movers without running into anything still (next period, a little
+/// faster, a clear one may be found); if that too is blocked (or `speed` is not a speed),
+/// stop.
+fn evade(
+    cfg: &GuardConfig,
+    prm: &Params,
+    b: &Believed,
+    p: Vec2,
+    cmd: Command,
+    speed: f32,
+) -> (Command, Verdict) {
+    if speed.is_nan() || speed <= 0.0 {
+        return stopped(cmd);
+    }
+    for v in [speed, 0.5 * speed] {
+        let u = Vec2::from_angle(cmd.psi_set);
+        if !b.blocked(p, u, reach(v, prm, cfg), v) {
+            return (
+                with_motion(cmd, cmd.psi_set, v, Verdict::Turned),
+                Verdict::Turned,
+            );
+        }
+        if let Some(a) = nearest_clear(cfg, prm, b, p, cmd.psi_set, v, crate::math::PI) {
+            return (with_motion(cmd, a, v, Verdict::Turned), Verdict::Turned);
+        }
+    }
+    let len = reach(speed, prm, cfg);
+    let step = max(cfg.turn_step_rad, 1e-3);
+    let best = (0..min(2.0 * crate::math::PI / step, 128.0) as u32)
+        .map(|k| cmd.psi_set + k as f32 * step)
+        .filter(|&a| !b.blocked_still(p, Vec2::from_angle(a), len))
+        .map(|a| (a, b.mover_margin(p, Vec2::from_angle(a) * speed)))
+        .fold(None, |best: Option<(f32, f32)>, (a, m)| match best {
+            Some((_, bm)) if bm >= m => best,
+            _ => Some((a, m)),
+        });
+    match best {
+        Some((a, _)) => (with_motion(cmd, a, speed, Verdict::Turned), Verdict::Turned),
+        None => stopped(cmd),
+    }
+}
+
+/// `cmd` brought to a stop on its heading (the vehicle turns while it brakes).
+fn stopped(cmd: Command) -> (Command, Verdict) {
     (
         with_motion(cmd, cmd.psi_set, 0.0, Verdict::Stopped),
         Verdict::Stopped,
@@ -315,9 +453,11 @@ mod tests {
         let (out, v) = check(
             &GuardConfig::default(),
             &Params::default(),
+            0,
             &nav(Vec2::ZERO),
             &w,
             cmd(0.0, 1.0),
+            1.0,
         );
         assert_eq!(v, Verdict::Clear);
         assert_eq!(out, cmd(0.0, 1.0));
@@ -329,9 +469,11 @@ mod tests {
         let (out, v) = check(
             &GuardConfig::default(),
             &Params::default(),
+            0,
             &nav(Vec2::ZERO),
             &w,
             cmd(0.0, 1.0),
+            1.0,
         );
         assert_eq!(v, Verdict::Turned);
         assert_eq!(out.mode, Mode::Guarded);
@@ -345,9 +487,11 @@ mod tests {
         let (out, v) = check(
             &GuardConfig::default(),
             &Params::default(),
+            0,
             &nav(Vec2::new(1.0, 0.0)),
             &w,
             cmd(0.0, 1.0),
+            1.0,
         );
         assert_eq!(v, Verdict::Stopped);
         assert_eq!(out.v_set, 0.0);
@@ -364,9 +508,11 @@ mod tests {
         let (out, v) = check(
             &GuardConfig::default(),
             &Params::default(),
+            0,
             &nav(Vec2::ZERO),
             &w,
             cmd(0.0, 1.0),
+            1.0,
         );
         assert!(matches!(v, Verdict::Slowed | Verdict::Stopped), "{v:?}");
         assert!(out.v_set <= 0.5 && out.mode == Mode::Guarded);
@@ -378,9 +524,17 @@ mod tests {
         let w = wall(0.6);
         let p = Params::default();
         let g = GuardConfig::default();
-        let (_, away) = check(&g, &p, &nav(Vec2::ZERO), &w, cmd(crate::math::PI, 1.0));
+        let (_, away) = check(
+            &g,
+            &p,
+            0,
+            &nav(Vec2::ZERO),
+            &w,
+            cmd(crate::math::PI, 1.0),
+            1.0,
+        );
         assert_eq!(away, Verdict::Clear);
-        let (_, into) = check(&g, &p, &nav(Vec2::ZERO), &w, cmd(0.0, 0.5));
+        let (_, into) = check(&g, &p, 0, &nav(Vec2::ZERO), &w, cmd(0.0, 0.5), 1.0);
         assert_ne!(into, Verdict::Clear);
     }
 
@@ -393,9 +547,11 @@ mod tests {
         let (_, v) = check(
             &GuardConfig::default(),
             &Params::default(),
+            0,
             &nav(Vec2::ZERO),
             &w,
             cmd(0.0, 1.0),
+            1.0,
         );
         assert_eq!(v, Verdict::Turned);
         let mut w = World::new();
@@ -404,9 +560,11 @@ mod tests {
         let (_, v) = check(
             &GuardConfig::default(),
             &Params::default(),
+            0,
             &nav(Vec2::ZERO),
             &w,
             cmd(0.0, 1.0),
+            1.0,
         );
         assert_eq!(v, Verdict::Turned);
     }
@@ -423,13 +581,73 @@ mod tests {
         let g = GuardConfig::default();
         let p = Params::default();
         assert_eq!(
-            check(&g, &p, &nav(Vec2::ZERO), &w, cmd(0.0, 1.0)).1,
+            check(&g, &p, 0, &nav(Vec2::ZERO), &w, cmd(0.0, 1.0), 1.0).1,
             Verdict::Clear
         );
         w.upsert_obstacle(still.moving(Vec2::new(0.0, 1.4)).unwrap())
             .unwrap();
         assert_ne!(
-            check(&g, &p, &nav(Vec2::ZERO), &w, cmd(0.0, 1.0)).1,
+            check(&g, &p, 0, &nav(Vec2::ZERO), &w, cmd(0.0, 1.0), 1.0).1,
+            Verdict::Clear
+        );
+    }
+
+    fn mover(at: Vec2, v: Vec2, seen_ms: u64) -> World {
+        let mut w = World::new();
+        let o = Obstacle::new(
+            1,
+            Shape::circle(at, 1.0).unwrap(),
+            2.5,
+            Origin::Sonar,
+            seen_ms,
+        )
+        .and_then(|o| o.moving(v))
+        .unwrap();
+        w.upsert_obstacle(o).unwrap();
+        w
+    }
+
+    #[test]
+    fn a_mover_on_a_collision_course_is_evaded_not_waited_for() {
+        // Crossing from starboard at 1 m/s, 6 m ahead and 6 m off the track: holding 1 m/s
+        // ahead meets it in 6 s. The guard turns away at speed.
+        let g = GuardConfig::default();
+        let p = Params::default();
+        let w = mover(Vec2::new(6.0, -6.0), Vec2::new(0.0, 1.0), 0);
+        let (out, v) = check(&g, &p, 0, &nav(Vec2::new(1.0, 0.0)), &w, cmd(0.0, 1.0), 1.0);
+        assert_eq!(v, Verdict::Turned);
+        assert!(out.v_set > 0.0 && out.psi_set.abs() > 0.2, "{out:?}");
+        // Aimed straight at the vehicle: stopping is no way out either.
+        let w = mover(Vec2::new(0.0, -6.0), Vec2::new(0.0, 1.0), 0);
+        let (out, v) = check(&g, &p, 0, &nav(Vec2::ZERO), &w, cmd(0.0, 0.0), 1.0);
+        assert_eq!(v, Verdict::Turned);
+        assert!(out.v_set > 0.0, "{out:?}");
+        // Moving away, or passing well astern: nothing to do.
+        let w = mover(Vec2::new(6.0, -6.0), Vec2::new(0.0, -1.0), 0);
+        assert_eq!(
+            check(&g, &p, 0, &nav(Vec2::ZERO), &w, cmd(0.0, 1.0), 1.0).1,
+            Verdict::Clear
+        );
+        let w = mover(Vec2::new(-8.0, -6.0), Vec2::new(0.0, 1.0), 0);
+        assert_eq!(
+            check(&g, &p, 0, &nav(Vec2::ZERO), &w, cmd(0.0, 1.0), 1.0).1,
+            Verdict::Clear
+        );
+    }
+
+    #[test]
+    fn a_mover_is_judged_where_it_is_now_not_where_it_was_seen() {
+        // Seen 8 s ago 14 m to starboard heading for the track at 1 m/s: now 6 m off it.
+        let g = GuardConfig::default();
+        let p = Params::default();
+        let w = mover(Vec2::new(6.0, -14.0), Vec2::new(0.0, 1.0), 0);
+        assert_ne!(
+            check(&g, &p, 8000, &nav(Vec2::ZERO), &w, cmd(0.0, 1.0), 1.0).1,
+            Verdict::Clear
+        );
+        // The same sighting, had it been made just now, is no threat within the horizon.
+        assert_eq!(
+            check(&g, &p, 0, &nav(Vec2::ZERO), &w, cmd(0.0, 1.0), 1.0).1,
             Verdict::Clear
         );
     }
@@ -442,9 +660,11 @@ mod tests {
             check(
                 &GuardConfig::default(),
                 &Params::default(),
+                0,
                 &nav(Vec2::ZERO),
                 &w,
-                hold
+                hold,
+                1.0
             )
             .0,
             hold
@@ -457,9 +677,11 @@ mod tests {
             check(
                 &off,
                 &Params::default(),
+                0,
                 &nav(Vec2::ZERO),
                 &w,
-                cmd(0.0, 1.0)
+                cmd(0.0, 1.0),
+                1.0
             )
             .1,
             Verdict::Clear

@@ -389,8 +389,15 @@ impl Periodic {
         match result {
             Ok(c) => {
                 let c = bound.map_or(c, |v| slowed(c, v));
-                let (c, verdict) =
-                    guard::check(&self.config.guard, &params, &state, &self.world, c);
+                let (c, verdict) = guard::check(
+                    &self.config.guard,
+                    &params,
+                    now_ms,
+                    &state,
+                    &self.world,
+                    c,
+                    bound.unwrap_or(params.v_max),
+                );
                 if verdict != Verdict::Clear || bound.is_some() {
                     // The planner continues from the motion that was sent, so a vehicle the
                     // guard holds back is seen as stalled and escapes (ghost goal-points).

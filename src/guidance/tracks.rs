@@ -5,48 +5,56 @@
 //!
 //! **Association.** Each sensed obstacle in the table has a track: a centre, a velocity
 //! estimate and the time of its last update. A feature belongs to the nearest track whose
-//! predicted centre (centre + reported velocity × elapsed time) lies within the gate: the
-//! larger of the two radii + `gate_m`, + `gate_speed_mps` × elapsed time once at least
-//! `revisit_ms` have passed (so a target that moved between sweeps is still recognised, even
-//! before its velocity is known). The allowance waits for `revisit_ms` because a scanning head
-//! sees a target again only a sweep later: a feature a second or two after a track's update is
-//! a *different* object further round the sweep, and must not be pulled into a neighbour's
-//! gate. It then updates that obstacle (the new feature's shape; refreshed `seen_ms`);
+//! predicted centre lies within the gate: the larger of the two radii + `gate_m`, plus an
+//! allowance for motion since the track's last update that depends on what is known of it:
+//! - a **rated** track (its velocity has been estimated) is predicted on that velocity, and the
+//!   allowance is a quarter of the predicted motion plus a slow manoeuvre (0.1 m/s): a rock
+//!   seen twice in one place does not jump to the next echo a few metres off (a mover passing
+//!   it, a neighbouring box), and a wall's echoes, which "move" differently from sweep to
+//!   sweep as the vehicle runs along it, start new tracks rather than make one a phantom mover;
+//! - an unrated track may have moved at up to `gate_speed_mps` in any direction, once at least
+//!   `revisit_ms` have passed: a scanning head sees a target again only a sweep later, so a
+//!   feature a second or two after a track's update is a *different* object further round the
+//!   sweep, and must not be pulled into a neighbour's gate.
+//!
+//! The feature then updates that obstacle (the new feature's shape; refreshed `seen_ms`);
 //! otherwise it becomes a new sensed obstacle with a fresh id from [`SONAR_ID_BASE`] upwards.
+//! (Nearest-neighbour association with an unrated gate of 1 m/s × a 9 s sweep let a box's
+//! sighting take over the track of another box 8 m away, in generated box fields: the tight
+//! gate of rated tracks is what keeps such hand-overs to the first sweep.)
 //!
 //! **Velocity.** An alpha–beta filter per track (e.g. Bar-Shalom & Li, *Estimation and
 //! Tracking*, §5.3): with the residual r = z − (x + v·Δt), x ← x + v·Δt + α·r and
 //! v ← v + (β/Δt)·r; the second sighting starts it with the two-point difference (gain 1 in
-//! place of β), so a crossing target has a velocity one sweep after it is first seen — with a
-//! 9 s sweep, waiting for β to close the error let a 1 m/s target cross the track unpredicted
-//! (generated crossing worlds, own sonar). Updates less than `min_update_ms` apart leave the velocity alone, since a
+//! place of β). Updates less than `min_update_ms` apart leave the velocity alone, since a
 //! short Δt turns centre noise into speed. The velocity is handed to the planner
-//! (`Obstacle::velocity`) only once a track has `min_hits` updates, `min_steady` of them after
-//! the velocity was set landing where it predicted (within `gate_m` plus a quarter of the
-//! predicted motion), has moved farther than its own radius (at least 1 m) since it was first
-//! seen, and is faster than `min_speed_mps`. The steady sighting is what tells a vessel from a
-//! wall: as the vehicle runs along a wall the sonar sees a different stretch of it each sweep,
-//! and the fitted circle "moves" at 0.5–2 m/s in directions that change from sweep to sweep
-//! (generated channel worlds, own sonar: hundreds of such phantom movers per run, each planned
-//! at its predicted position instead of where the wall is).
+//! (`Obstacle::velocity`) once a track has `min_hits` updates (and, if `min_steady` > 0, that
+//! many of them after the velocity was set landing where it predicted), has moved farther
+//! than its own radius (at least 1 m) since it was first seen, and is faster than
+//! `min_speed_mps`. With a 9 s sweep a target crossing at 1 m/s is often seen only twice
+//! before it reaches the track (generated crossing worlds, own sonar): the velocity is used
+//! from the second sighting, and the guard meets it where it will be
+//! (`crate::guidance::guard`).
 //!
 //! The defaults are measured, not derived: α = 1 (the obstacle is where the sonar saw it last),
-//! β = 1/3 (the velocity closes a third of its error per sweep), a 0.5 m/s floor, two hits. As the
+//! β = 1/3 (the velocity closes a third of its error per sweep), a 0.5 m/s floor, two hits, a
+//! confidence floor of 0.3 (three beams: a 1 m target at 20 m is seen by three or four beams of
+//! 1.8°, and with a floor of 0.5 such movers were dropped until they were 10 m away). As the
 //! vehicle passes a still rock the sonar sees other faces of it and the fitted centre wanders,
 //! at up to about 0.3 m/s; reported as motion and extrapolated over the planning horizon, those
 //! speeds, and equally a smoothed (α < 1) centre that lags the improving fits, led the VideoRay
-//! into rocks of the random-clutter scenario under link faults (`hil/tests/e2e.rs`). With these
-//! defaults none did, and a target crossing at 0.8 m/s is tracked within 0.1 m/s after 8
-//! sweeps (`hil/tests/tracker.rs`). Slower sonar targets are planned as still; contacts from
-//! the host carry their own velocity. Speeds are capped at `max_speed_mps`.
+//! into rocks of the random-clutter scenario under link faults (`hil/tests/e2e.rs`). A target
+//! crossing at 0.8 m/s is tracked within 0.1 m/s after 8 sweeps (`hil/tests/tracker.rs`).
+//! Slower sonar targets are planned as still; contacts from the host carry their own
+//! velocity. Speeds are capped at `max_speed_mps`.
 //!
 //! **Capacity.** One track per sensed obstacle: [`MAX_TRACKS`] = the obstacle table's size.
 //! Tracks whose obstacle has left the table (aged out by `World::expire`, evicted, removed)
 //! are dropped before a new one is opened, so the track table cannot fill while the world has
 //! room; if it ever did, the obstacle is kept without a velocity.
 //!
-//! Features below the confidence floor are dropped (a single sweep cannot tell three beams of
-//! speckle from a small target; see the sonar module). When the table is full, the sensed
+//! Features below the confidence floor are dropped (one or two beams of speckle or a false
+//! target cannot be told from a small object; see the sonar module). When the table is full, the sensed
 //! obstacle farthest from the vehicle is evicted if the newcomer is nearer
 //! ([`World::upsert_obstacle_or_evict`]); otherwise the newcomer is dropped.
 
@@ -66,6 +74,10 @@ pub const MAX_TRACKS: usize = MAX_OBSTACLES;
 /// A sighting confirms a track's velocity when it lands within `gate_m` plus this fraction of
 /// the predicted motion of where the velocity put it.
 const STEADY_FRACTION: f32 = 0.25;
+
+/// Speed change allowed to a track whose motion is known, between two sightings, m/s: it
+/// widens the gate of a rated track by this much per second since its last update.
+const MANOEUVRE_MPS: f32 = 0.1;
 
 /// Longest time a track is extrapolated over, s (beyond it the gate stops growing).
 const MAX_GAP_S: f32 = 10.0;
@@ -92,7 +104,8 @@ pub struct TrackConfig {
     /// Updates a track needs before its velocity is used.
     pub min_hits: u16,
     /// ... of which this many, after the velocity was set, must land where it predicted
-    /// (within `gate_m` + a quarter of the predicted motion): one confirms a constant velocity.
+    /// (within `gate_m` + a quarter of the predicted motion). 0: the two-point estimate is used
+    /// at once.
     pub min_steady: u16,
     /// Speeds below this are reported as zero, m/s.
     pub min_speed_mps: f32,
@@ -103,7 +116,7 @@ pub struct TrackConfig {
 impl Default for TrackConfig {
     fn default() -> Self {
         TrackConfig {
-            min_confidence: 0.5,
+            min_confidence: 0.3,
             gate_m: 1.0,
             gate_speed_mps: 1.0,
             revisit_ms: 4000,
@@ -111,7 +124,7 @@ impl Default for TrackConfig {
             beta: 1.0 / 3.0,
             min_update_ms: 500,
             min_hits: 2,
-            min_steady: 1,
+            min_steady: 0,
             min_speed_mps: 0.5,
             max_speed_mps: 3.0,
         }
@@ -150,6 +163,8 @@ pub struct Track {
     pub first: Vec2,
     /// Consecutive sightings since the velocity was set that fell where it predicted.
     pub steady: u16,
+    /// Its velocity has been estimated (two sightings far enough apart in time).
+    pub rated: bool,
 }
 
 impl Track {
@@ -181,6 +196,7 @@ impl Track {
             }
             self.velocity = (self.velocity + r * (gain / dt)).bounded(cap);
             self.time_ms = time_ms;
+            self.rated = true;
         } else {
             self.time_ms = self.time_ms.max(time_ms);
         }
@@ -249,18 +265,24 @@ impl Tracks {
             let Some(o) = world.obstacles().iter().find(|o| o.id == t.id) else {
                 continue;
             };
-            // Predicted with the velocity the planner would be given: an unconfirmed estimate
-            // must not steer the association either.
+            // A rated track moves as estimated, give or take a quarter of that motion and a
+            // slow manoeuvre: a rock seen twice in one place does not jump to the next echo
+            // that appears a few metres off (a mover passing it), and a wall's echoes, which
+            // "move" differently each sweep, start new tracks instead of making one a phantom
+            // mover. An unrated track may have moved at up to `gate_speed_mps` in any
+            // direction, once a sweep has passed (`revisit_ms`).
             let dt = min(f.time_ms.saturating_sub(t.time_ms) as f32 * 1e-3, MAX_GAP_S);
-            let predicted = t.center + t.reported_velocity(cfg, f.radius) * dt;
-            let d = (predicted - f.center).norm();
-            let reach = crate::math::max(o.shape.bounding_radius(), f.radius);
             let revisit = f.time_ms >= t.time_ms.saturating_add(cfg.revisit_ms);
-            let allowance = if revisit {
-                cfg.gate_speed_mps * dt
+            let (velocity, allowance) = if t.rated {
+                let v = t.velocity;
+                (v, (STEADY_FRACTION * v.norm() + MANOEUVRE_MPS) * dt)
+            } else if revisit {
+                (Vec2::ZERO, cfg.gate_speed_mps * dt)
             } else {
-                0.0
+                (Vec2::ZERO, 0.0)
             };
+            let d = (t.center + velocity * dt - f.center).norm();
+            let reach = crate::math::max(o.shape.bounding_radius(), f.radius);
             let gate = reach + cfg.gate_m + allowance;
             if d <= gate && best.is_none_or(|(_, b)| d < b) {
                 best = Some((i, d));
@@ -303,6 +325,7 @@ impl Tracks {
                     hits: 1,
                     first: f.center,
                     steady: 0,
+                    rated: false,
                 });
                 Admission::Added(id)
             }
@@ -411,24 +434,32 @@ mod tests {
             "two hits: not yet confirmed"
         );
         assert_eq!(t.tracks().len(), 1);
-        // With the defaults, the two-point start sets the velocity; it is reported once a
-        // third sighting lands where it predicted, and not if the third jumps elsewhere.
-        let d = TrackConfig::default();
-        let fly = |xs: &[f32]| {
+        // With the defaults the two-point start sets the velocity and it is reported at once;
+        // wanting a steady sighting (`min_steady` 1) holds it back until a third lands where it
+        // predicted, and not if the third jumps elsewhere.
+        let fly = |cfg: &TrackConfig, xs: &[f32]| {
             let mut w2 = World::new();
             let mut t2 = Tracks::default();
             for (k, &x) in xs.iter().enumerate() {
                 let f = at(feature(x, 0.0, 1.0, 0.9), 4000 * k as u64);
-                t2.admit(&d, 2.5, &mut w2, &f, Vec2::ZERO);
+                t2.admit(cfg, 2.5, &mut w2, &f, Vec2::ZERO);
             }
-            w2.obstacles()[0].velocity
+            (w2.obstacles()[0].velocity, w2.obstacles().len())
         };
-        assert_eq!(fly(&[10.0, 13.0]), Vec2::ZERO, "two hits: not yet steady");
-        assert!((fly(&[10.0, 13.0, 16.2]) - Vec2::new(0.75, 0.0)).norm() < 0.02);
+        let d = TrackConfig::default();
+        assert!((fly(&d, &[10.0, 13.0]).0 - Vec2::new(0.75, 0.0)).norm() < 1e-4);
+        let steady = TrackConfig {
+            min_steady: 1,
+            ..TrackConfig::default()
+        };
+        assert_eq!(fly(&steady, &[10.0, 13.0]).0, Vec2::ZERO, "not yet steady");
+        assert!((fly(&steady, &[10.0, 13.0, 16.2]).0 - Vec2::new(0.75, 0.0)).norm() < 0.02);
+        // A sighting 4 m behind where a rated track predicted (16) is not that track: it
+        // starts another (with a wide unrated gate it would have dragged the first back).
         assert_eq!(
-            fly(&[10.0, 13.0, 12.0]),
-            Vec2::ZERO,
-            "a jump back is no motion"
+            fly(&d, &[10.0, 13.0, 12.0]).1,
+            2,
+            "a jump back is another object"
         );
         // Not seen for 30 s: the world drops it, and the track goes with it.
         w.expire(40_000, 30_000);
@@ -480,6 +511,28 @@ mod tests {
     }
 
     #[test]
+    fn a_rock_seen_twice_is_not_taken_over_by_a_neighbour() {
+        // Two boxes 8 m apart. The first is seen in two sweeps (rated, still); the second
+        // appears in the third sweep: within the 1 m/s × 9 s of an unrated gate, outside the
+        // rated one. It becomes an obstacle of its own and the first stays put, still.
+        let cfg = TrackConfig::default();
+        let mut w = World::new();
+        let mut t = Tracks::default();
+        for k in 0..2u64 {
+            let f = at(feature(-5.0, 27.5, 1.9, 0.9), 9000 * k);
+            t.admit(&cfg, 2.5, &mut w, &f, Vec2::ZERO);
+        }
+        let b = at(feature(2.8, 23.0, 1.9, 0.9), 18_000);
+        assert_eq!(
+            t.admit(&cfg, 2.5, &mut w, &b, Vec2::ZERO),
+            Admission::Added(SONAR_ID_BASE + 1)
+        );
+        let a = w.obstacles()[0];
+        assert!((a.shape.center() - Vec2::new(-5.0, 27.5)).norm() < 1e-3);
+        assert_eq!(a.velocity, Vec2::ZERO);
+    }
+
+    #[test]
     fn the_track_table_never_outgrows_the_world() {
         let cfg = TrackConfig::default();
         let mut w = World::new();
@@ -512,7 +565,7 @@ mod tests {
         let cfg = TrackConfig::default();
         let mut w = World::new();
         let mut t = Tracks::default();
-        let weak = feature(10.0, 0.0, 1.0, 0.3);
+        let weak = feature(10.0, 0.0, 1.0, 0.2);
         assert_eq!(
             t.admit(&cfg, 2.5, &mut w, &weak, Vec2::ZERO),
             Admission::LowConfidence
