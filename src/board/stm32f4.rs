@@ -42,10 +42,8 @@ use vpf::link::CostUnit;
 
 use super::systick::PeriodTimer;
 
+mod app;
 mod rtt;
-
-/// RTIC's device: the STM32F446's peripheral access crate (interrupt numbers, priority bits).
-pub use stm32f4xx_hal::pac as device;
 
 /// Core (and SysTick) clock, Hz.
 pub const SYSCLK_HZ: u32 = 180_000_000;
@@ -171,8 +169,13 @@ fn set_pll_source(rcc: &pac::RCC, hse: bool, m: u32) -> bool {
         } else {
             w.pllsrc().hsi()
         };
-        // SAFETY: M is 2..=63 (checked by the caller, or read back from the register).
-        unsafe { w.pllm().bits(m as u8) }
+        // # Safety
+        // PLLM takes 2..=63; `m` is in that range (checked by the caller, or read back from the
+        // register the HAL configured).
+        #[allow(unsafe_code)]
+        unsafe {
+            w.pllm().bits(m as u8)
+        }
     });
     rcc.cr().modify(|_, w| w.pllon().on());
     wait_for(|| rcc.cr().read().pllrdy().is_ready())
@@ -389,7 +392,7 @@ impl embedded_io::Write for Usart2 {
             return Ok(0);
         };
         loop {
-            match self.serial.write(b) {
+            match stm32f4xx_hal::prelude::_embedded_hal_serial_nb_Write::write(&mut self.serial, b) {
                 Ok(()) => return Ok(1),
                 Err(stm32f4xx_hal::nb::Error::Other(_)) => return Err(LineError),
                 Err(stm32f4xx_hal::nb::Error::WouldBlock) => {}

@@ -85,10 +85,11 @@ where
 }
 
 /// Idle's body: polls for received bytes and sleeps until the next interrupt when there are
-/// none (the self-test image runs its own loop instead).
+/// none (the self-test and stack-check images run their own test instead).
 pub fn run(task: &mut BackgroundTask, shared: &mut impl Exchange) -> ! {
-    #[cfg(feature = "stackcheck")]
-    super::fault::overflow_the_stack();
+    if cfg!(feature = "stackcheck") {
+        super::fault::overflow_the_stack();
+    }
     #[cfg(feature = "selftest")]
     super::selftest::run(task, shared, vpf::params::Params::default());
     #[cfg(not(feature = "selftest"))]

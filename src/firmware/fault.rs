@@ -94,7 +94,7 @@ extern "C" fn HardFault() -> ! {
 extern "C" fn report(sp: u32, overflow: u32, pc: u32) -> ! {
     if overflow != 0 {
         let mut line = *b"vpf-firmware: hard fault: stack overflow (sp 0x00000000)\n";
-        hex(&mut line, 46, sp);
+        hex(&mut line, 47, sp);
         board::log(&line);
     } else {
         let mut line = *b"vpf-firmware: hard fault at pc 0x00000000\n";
@@ -113,23 +113,22 @@ fn hex(line: &mut [u8], at: usize, v: u32) {
     }
 }
 
-/// The `stackcheck` image: recurses until the stack overflows. The guard must turn that into
-/// the hard fault's report; the line after the recursion is printed only if it did not.
-#[cfg(feature = "stackcheck")]
+/// The `stackcheck` image's test (called only there): recurses until the stack overflows. The
+/// guard must turn that into the hard fault's report; the line after the recursion is printed,
+/// and the image exits successfully, only if it did not.
 pub fn overflow_the_stack() -> ! {
     board::log(b"stackcheck: recursing until the stack overflows\n");
     let mut seed = [1u32; 16];
     let depth = recurse(&mut seed, 0);
     board::log(if depth > 0 {
-        b"stackcheck: the recursion returned: no guard\n"
+        b"stackcheck: the recursion returned: no stack guard\n"
     } else {
-        b"stackcheck: the recursion returned\n"
+        b"stackcheck: the recursion returned: no stack guard (0)\n"
     });
     board::exit(true)
 }
 
 /// 64 bytes of locals a level, kept live across the call so the frames cannot be folded away.
-#[cfg(feature = "stackcheck")]
 #[inline(never)]
 fn recurse(parent: &mut [u32; 16], depth: u32) -> u32 {
     let mut local = *parent;
@@ -138,8 +137,8 @@ fn recurse(parent: &mut [u32; 16], depth: u32) -> u32 {
     }
     core::hint::black_box(&mut local);
     if depth == u32::MAX {
-        return local.iter().fold(0, |a, &v| a ^ v);
+        return local.iter().fold(0u32, |a, &v| a ^ v);
     }
     let below = recurse(&mut local, depth + 1);
-    below ^ local.iter().fold(0, |a, &v| a.wrapping_add(v))
+    below ^ local.iter().fold(0u32, |a, &v| a.wrapping_add(v))
 }
