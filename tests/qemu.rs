@@ -68,7 +68,19 @@ fn build_firmware(features: &[&str], name: &str) -> PathBuf {
         cmd.args(["--features", &features.join(",")]);
     }
     let status = cmd.status().expect("cargo runs");
-    assert!(status.success(), "firmware build failed");
+    let flip_link = Command::new("flip-link")
+        .stderr(Stdio::null())
+        .status()
+        .is_ok();
+    assert!(
+        status.success(),
+        "firmware build failed{}",
+        if flip_link {
+            ""
+        } else {
+            " (its linker, flip-link, is not installed: cargo install flip-link --locked)"
+        }
+    );
     let target_dir =
         std::env::var_os("CARGO_TARGET_DIR").map_or_else(|| root.join("target"), PathBuf::from);
     let built = target_dir.join("thumbv7em-none-eabihf/release/vpf-firmware");
@@ -234,7 +246,11 @@ fn a_stack_overflow_ends_in_the_hard_fault_report() {
         (0x1fff_e000..0x2000_0000).contains(&sp),
         "sp {sp:#x} is not in the guard"
     );
-    assert_eq!(out.status.code(), Some(1), "the hard fault exits with failure");
+    assert_eq!(
+        out.status.code(),
+        Some(1),
+        "the hard fault exits with failure"
+    );
 }
 
 /// QEMU with its UART on a pty, paused until the pty is open (bytes sent before would be lost).

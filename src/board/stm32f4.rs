@@ -237,40 +237,40 @@ pub struct Watchdog {
 }
 
 impl Watchdog {
-/// Starts the IWDG (it cannot be stopped again) or changes its timeout, and feeds it.
-fn start(&mut self, timeout_ms: u32) {
-    // Smallest prescaler 4 << pr whose 12-bit reload reaches the timeout.
-    let counts = u64::from(timeout_ms) * u64::from(LSI_HZ) / 1000;
-    let mut pr = 0u8;
-    while pr < 6 && counts >> (2 + pr) > 0x1000 {
-        pr += 1;
+    /// Starts the IWDG (it cannot be stopped again) or changes its timeout, and feeds it.
+    fn start(&mut self, timeout_ms: u32) {
+        // Smallest prescaler 4 << pr whose 12-bit reload reaches the timeout.
+        let counts = u64::from(timeout_ms) * u64::from(LSI_HZ) / 1000;
+        let mut pr = 0u8;
+        while pr < 6 && counts >> (2 + pr) > 0x1000 {
+            pr += 1;
+        }
+        let reload = (counts >> (2 + pr)).clamp(1, 0x1000) as u16 - 1;
+        let w = &self.iwdg;
+        // A previous update must finish before the registers take a new value (5 LSI cycles).
+        wait_watchdog_update(w);
+        // The unlock sequence is broken by any other key; only this owner writes keys.
+        w.kr().write(|k| k.key().start());
+        w.kr().write(|k| k.key().unlock());
+        w.pr().write(|p| p.pr().set(pr));
+        w.rlr().write(|r| r.rl().set(reload));
+        wait_watchdog_update(w);
+        w.kr().write(|k| k.key().feed());
     }
-    let reload = (counts >> (2 + pr)).clamp(1, 0x1000) as u16 - 1;
-    let w = &self.iwdg;
-    // A previous update must finish before the registers take a new value (5 LSI cycles).
-    wait_watchdog_update(w);
-    // The unlock sequence is broken by any other key; only this owner writes keys.
-    w.kr().write(|k| k.key().start());
-    w.kr().write(|k| k.key().unlock());
-    w.pr().write(|p| p.pr().set(pr));
-    w.rlr().write(|r| r.rl().set(reload));
-    wait_watchdog_update(w);
-    w.kr().write(|k| k.key().feed());
-}
 
-/// Feeds the watchdog (the periodic task, every period).
-pub fn feed(&mut self) {
-    self.iwdg.kr().write(|k| k.key().feed());
-}
-
-/// Lockstep: the watchdog waits as long as it can for the host's ticks (the first call only;
-/// the periodic task calls this on every lockstep period).
-pub fn enter_lockstep(&mut self) {
-    if !self.lockstep {
-        self.lockstep = true;
-        self.start(WATCHDOG_LOCKSTEP_MS);
+    /// Feeds the watchdog (the periodic task, every period).
+    pub fn feed(&mut self) {
+        self.iwdg.kr().write(|k| k.key().feed());
     }
-}
+
+    /// Lockstep: the watchdog waits as long as it can for the host's ticks (the first call only;
+    /// the periodic task calls this on every lockstep period).
+    pub fn enter_lockstep(&mut self) {
+        if !self.lockstep {
+            self.lockstep = true;
+            self.start(WATCHDOG_LOCKSTEP_MS);
+        }
+    }
 }
 
 /// Waits, boundedly, for the IWDG's prescaler and reload updates to finish.
@@ -282,7 +282,6 @@ fn wait_watchdog_update(w: &pac::iwdg::RegisterBlock) {
         }
     }
 }
-
 
 /// A log line over defmt-RTT (`probe-rs run` prints it), without its line break.
 pub fn log(line: &[u8]) {
@@ -392,7 +391,8 @@ impl embedded_io::Write for Usart2 {
             return Ok(0);
         };
         loop {
-            match stm32f4xx_hal::prelude::_embedded_hal_serial_nb_Write::write(&mut self.serial, b) {
+            match stm32f4xx_hal::prelude::_embedded_hal_serial_nb_Write::write(&mut self.serial, b)
+            {
                 Ok(()) => return Ok(1),
                 Err(stm32f4xx_hal::nb::Error::Other(_)) => return Err(LineError),
                 Err(stm32f4xx_hal::nb::Error::WouldBlock) => {}

@@ -125,7 +125,11 @@ impl UartTx {
     pub fn interrupt_when_ready(&mut self, on: bool) {
         let ctrl = &registers(self.base).ctrl;
         let v = ctrl.get();
-        ctrl.set(if on { v | CTRL_TX_INT } else { v & !CTRL_TX_INT });
+        ctrl.set(if on {
+            v | CTRL_TX_INT
+        } else {
+            v & !CTRL_TX_INT
+        });
     }
 }
 
