@@ -7,7 +7,8 @@
 //! chosen board's layout into OUT_DIR (on the search path) as `board-memory.x` (and as
 //! `memory.x`, used when the linker runs elsewhere than the package root).
 //! - `mps2-an386` (default): `boards/mps2-an386/memory.x`, and a `device.x` naming the handlers
-//!   of the interrupt vector that `src/board/mps2_an386.rs` defines.
+//!   of the interrupt vector that `src/board/mps2_an386/device.rs` defines (RTIC defines the
+//!   bound ones; the rest fall to cortex-m-rt's `DefaultHandler`).
 //! - `stm32f4`: `boards/stm32f446re/memory.x`; the PAC (`stm32f4`, feature `rt`) supplies the
 //!   interrupt vector and its own `device.x`, and defmt's `defmt.x` is linked.
 use std::{env, fs, path::PathBuf};
@@ -42,11 +43,12 @@ fn main() {
         fs::copy(memory, out.join(name)).expect("the board's memory.x is in the package");
     }
     // cortex-m-rt's `device` feature includes device.x; the MPS2 board's interrupt vector is
-    // defined in Rust (src/board/mps2_an386.rs), so its device.x only names the handlers.
+    // defined in Rust (src/board/mps2_an386/device.rs), so its device.x only names the handlers.
     if mps2 {
         fs::write(
             out.join("device.x"),
-            "PROVIDE(UART0RX = DefaultHandler);\nPROVIDE(UART0TX = DefaultHandler);\n",
+            "PROVIDE(UART0RX = DefaultHandler);\nPROVIDE(UART0TX = DefaultHandler);\n\
+             PROVIDE(UART1RX = DefaultHandler);\nPROVIDE(UART1TX = DefaultHandler);\n",
         )
         .expect("OUT_DIR is writable");
     }

@@ -6,7 +6,16 @@
 //! - On the host it is the same runtime as a process (`host` module), speaking the same serial
 //!   protocol over stdio or a serial device / pty: what the HIL harness runs when there is no
 //!   QEMU, and a way to try the firmware without any embedded tooling.
+//!
+//! The board image's entry point is the RTIC application in `firmware::app` (RTIC generates
+//! `main`: start-up, then idle).
 #![cfg_attr(target_os = "none", no_std, no_main)]
+// Every `unsafe` in the firmware is an item that allows it, with its `# Safety` argument.
+#![deny(unsafe_code)]
+
+// The reset handler, vector table and linker script (RTIC's `main` is what it starts).
+#[cfg(target_os = "none")]
+use cortex_m_rt as _;
 
 #[cfg(target_os = "none")]
 mod board;
@@ -14,29 +23,6 @@ mod board;
 mod firmware;
 #[cfg(not(target_os = "none"))]
 mod host;
-
-#[cfg(target_os = "none")]
-#[cortex_m_rt::entry]
-fn main() -> ! {
-    use board::active as board;
-    board::log(concat!("vpf-firmware ", env!("CARGO_PKG_VERSION"), "\n").as_bytes());
-    let Some(cp) = cortex_m::Peripherals::take() else {
-        board::exit(false)
-    };
-    let Some(mut idle) = firmware::init(vpf::Params::default()) else {
-        board::exit(false)
-    };
-    board::init(cp);
-    firmware::start();
-    #[cfg(feature = "selftest")]
-    firmware::selftest::run(&mut idle, vpf::Params::default());
-    #[cfg(not(feature = "selftest"))]
-    loop {
-        if !idle.poll() {
-            cortex_m::asm::wfi();
-        }
-    }
-}
 
 /// Release builds link no panic handler body: any panic the optimiser could not prove
 /// unreachable leaves a call to this undefined symbol, and the link fails, naming it.
@@ -46,8 +32,12 @@ fn panic(_: &core::panic::PanicInfo) -> ! {
     extern "Rust" {
         fn firmware_has_a_reachable_panic() -> !;
     }
-    // SAFETY: never linked; see above.
-    unsafe { firmware_has_a_reachable_panic() }
+    // # Safety
+    // Never runs: the symbol is defined nowhere, so an image that could call it does not link.
+    #[allow(unsafe_code)]
+    unsafe {
+        firmware_has_a_reachable_panic()
+    }
 }
 
 /// Debug builds (never flashed for a mission): stop the board with a failure status.

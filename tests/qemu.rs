@@ -2,7 +2,14 @@
 //! - the on-target self-test: planner step cost in instructions at full capacity, deadline
 //!   overruns under a sonar flood, stack high-water;
 //! - the serial link: boots the firmware, talks to its UART through a pty, sends navigation,
-//!   a mission, scanlines and garbage, and checks the commands and counters that come back.
+//!   a mission, scanlines and garbage, and checks the commands and counters that come back;
+//! - the stack guard: an image that recurses until its stack overflows must end in the hard
+//!   fault's report, with a failure exit status.
+//!
+//! The self-test's and the stack check's console output is compared line by line with
+//! `tests/expected/*.run` (as RTIC's CI does): `#` there stands for a measured number (decimal
+//! or hex digits), everything else must match exactly. A change that alters a line on purpose
+//! edits that file in the same commit.
 //!
 //! Where `qemu-system-arm` is not installed these tests say so and pass; under CI (`CI=true`)
 //! they fail instead, so CI cannot skip them.
@@ -61,7 +68,19 @@ fn build_firmware(features: &[&str], name: &str) -> PathBuf {
         cmd.args(["--features", &features.join(",")]);
     }
     let status = cmd.status().expect("cargo runs");
-    assert!(status.success(), "firmware build failed");
+    let flip_link = Command::new("flip-link")
+        .stderr(Stdio::null())
+        .status()
+        .is_ok();
+    assert!(
+        status.success(),
+        "firmware build failed{}",
+        if flip_link {
+            ""
+        } else {
+            " (its linker, flip-link, is not installed: cargo install flip-link --locked)"
+        }
+    );
     let target_dir =
         std::env::var_os("CARGO_TARGET_DIR").map_or_else(|| root.join("target"), PathBuf::from);
     let built = target_dir.join("thumbv7em-none-eabihf/release/vpf-firmware");
@@ -109,6 +128,7 @@ fn selftest_meets_the_budgets_on_the_emulated_cortex_m4() {
         .expect("qemu runs");
     let text = String::from_utf8_lossy(&out.stdout);
     println!("{text}");
+    assert_matches_expected(&text, "selftest.run");
     // One report line per strategy, each within the budget.
     for strategy in ["vpf", "multipoint", "navfn"] {
         let report = text
@@ -142,6 +162,95 @@ fn selftest_meets_the_budgets_on_the_emulated_cortex_m4() {
     assert!(stack < 20 * 1024, "stack high-water {stack} B");
     assert!(text.contains("selftest: PASS"));
     assert!(out.status.success());
+}
+
+/// Whether `line` matches `pattern`, where each `#` in the pattern stands for one or more
+/// decimal or hex digits.
+fn line_matches(pattern: &str, line: &str) -> bool {
+    let mut l = line.chars().peekable();
+    for p in pattern.chars() {
+        if p == '#' {
+            let mut n = 0;
+            while l.next_if(|c| c.is_ascii_hexdigit()).is_some() {
+                n += 1;
+            }
+            if n == 0 {
+                return false;
+            }
+        } else if l.next() != Some(p) {
+            return false;
+        }
+    }
+    l.next().is_none()
+}
+
+/// Compares the console output with `tests/expected/NAME`, line by line.
+fn assert_matches_expected(text: &str, name: &str) {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/expected")
+        .join(name);
+    let expected = std::fs::read_to_string(&path).unwrap();
+    let want: Vec<&str> = expected.lines().collect();
+    let got: Vec<&str> = text.lines().collect();
+    for (i, (w, g)) in want.iter().zip(&got).enumerate() {
+        assert!(
+            line_matches(w, g),
+            "{}:{}: the firmware printed\n  {g}\nwhere the record has\n  {w}\n(edit the record if \
+             the change is intended)",
+            path.display(),
+            i + 1
+        );
+    }
+    assert_eq!(
+        got.len(),
+        want.len(),
+        "{}: {} lines printed, {} recorded",
+        path.display(),
+        got.len(),
+        want.len()
+    );
+}
+
+#[test]
+fn expected_output_patterns_match_only_what_they_say() {
+    assert!(line_matches("sp 0x#)", "sp 0x1fffffa0)"));
+    assert!(line_matches("max # mean", "max 80320 mean"));
+    assert!(!line_matches("max # mean", "max  mean"));
+    assert!(!line_matches("overruns 0", "overruns 1"));
+    assert!(!line_matches("PASS", "PASSED"));
+}
+
+#[test]
+fn a_stack_overflow_ends_in_the_hard_fault_report() {
+    if !qemu_available() {
+        return;
+    }
+    let elf = build_firmware(&["stackcheck"], "vpf-stackcheck.elf");
+    let out = Command::new("qemu-system-arm")
+        .args(["-machine", "mps2-an386", "-cpu", "cortex-m4", "-nographic"])
+        .args(["-serial", "null", "-monitor", "none", "-icount", "shift=0"])
+        .args(["-semihosting-config", "enable=on,target=native", "-kernel"])
+        .arg(&elf)
+        .output()
+        .expect("qemu runs");
+    let text = String::from_utf8_lossy(&out.stdout);
+    println!("{text}");
+    // The guard sits below RAM (0x2000_0000); the report names a stack pointer inside it.
+    assert_matches_expected(&text, "stackcheck.run");
+    let sp = text
+        .lines()
+        .find_map(|l| l.split("(sp 0x").nth(1))
+        .and_then(|h| u32::from_str_radix(h.trim_end_matches(')'), 16).ok())
+        .expect("the report names the stack pointer");
+    assert!(
+        (0x1fff_e000..0x2000_0000).contains(&sp),
+        "sp {sp:#x} is not in the guard"
+    );
+    assert_eq!(
+        out.status.code(),
+        Some(1),
+        "the hard fault exits with failure"
+    );
 }
 
 /// QEMU with its UART on a pty, paused until the pty is open (bytes sent before would be lost).

@@ -1,7 +1,9 @@
 //! Board support: what differs between the emulated board and a real one. Target-only.
 //!
-//! A board provides the UART, the period timer, a cost counter for the planner step, a
-//! watchdog, and a log channel; [`crate::firmware`] does the rest the same way on every board.
+//! A board provides RTIC's `device` (interrupt numbers and priority bits), its UART as
+//! `embedded-io` byte streams, the period timer ([`systick::PeriodTimer`]), a cost counter for
+//! the planner step, a watchdog, and a log channel; [`crate::firmware`] does the rest the same
+//! way on every board.
 //!
 //! Exactly one board feature is on: `mps2-an386` (QEMU, the default) or `stm32f4` (the
 //! NUCLEO-F446RE; build with `--no-default-features --features stm32f4`).
@@ -15,6 +17,8 @@ compile_error!(
 compile_error!(
     "no board selected: enable feature `mps2-an386` (the default) or `stm32f4` for the firmware"
 );
+
+pub mod systick;
 
 // With both on, only the compile_error! above is reported (stm32f4 stands in as `active`).
 #[cfg(all(feature = "mps2-an386", not(feature = "stm32f4")))]

@@ -33,18 +33,16 @@
     clippy::unimplemented
 )]
 
-use core::cell::Cell;
-use core::num::NonZeroU64;
-use core::sync::atomic::{AtomicBool, AtomicU32, Ordering};
-
-use cortex_m::peripheral::{DCB, NVIC, SCB, SYST};
-use critical_section::Mutex;
-use stm32f4xx_hal::pac::{self, interrupt, Interrupt, USART2};
+use cortex_m::peripheral::{DCB, DWT, SCB, SYST};
+use stm32f4xx_hal::pac::{self, USART2};
 use stm32f4xx_hal::prelude::*;
 use stm32f4xx_hal::rcc::Config as ClockConfig;
-use stm32f4xx_hal::serial::{Event, Serial};
+use stm32f4xx_hal::serial::{Event, Flag, Serial};
 use vpf::link::CostUnit;
 
+use super::systick::PeriodTimer;
+
+mod app;
 mod rtt;
 
 /// Core (and SysTick) clock, Hz.
@@ -69,19 +67,20 @@ pub const WATCHDOG_MS: u32 = 2_000;
 pub const WATCHDOG_LOCKSTEP_MS: u32 = 32_768;
 const LSI_HZ: u32 = 32_000;
 
-/// SysTick's clock, set by [`init`] from the clocks the HAL configured.
-static SYSTICK_HZ: AtomicU32 = AtomicU32::new(0);
-/// The UART, handed from [`init`] to the USART2 interrupt, which takes it on its first run.
-static SERIAL: Mutex<Cell<Option<Serial<USART2>>>> = Mutex::new(Cell::new(None));
-static LOCKSTEP: AtomicBool = AtomicBool::new(false);
+/// What [`init`] hands to the firmware's contexts.
+pub struct Parts {
+    /// The period timer (SysTick), for the periodic task.
+    pub timer: PeriodTimer,
+    /// The independent watchdog, fed by the periodic task.
+    pub watchdog: Watchdog,
+    /// USART2, the control link (both directions in one interrupt).
+    pub control: Usart2,
+}
 
-/// Sets up the clocks, USART2 (receive interrupt on), the cycle counter, the watchdog, and the
-/// interrupt priorities. Stops the board ([`exit`]) if the device peripherals were taken or the
-/// UART cannot be configured.
-pub fn init(mut cp: cortex_m::Peripherals) {
-    let Some(dp) = pac::Peripherals::take() else {
-        exit(false)
-    };
+/// Sets up the clocks, USART2 (receive interrupt on), the cycle counter and the watchdog.
+/// `None` if the device peripherals were already taken or the UART cannot be configured.
+pub fn init(syst: SYST, mut dcb: DCB, mut dwt: DWT) -> Option<Parts> {
+    let dp = pac::Peripherals::take()?;
     report_reset_cause(&dp.RCC);
     if DCB::is_debugger_attached() {
         // Keep the bus clocked in WFI so the probe can read the RTT buffer while the idle loop
@@ -100,33 +99,28 @@ pub fn init(mut cp: cortex_m::Peripherals) {
     } else {
         defmt::warn!("vpf-firmware: no HSE clock input; 180 MHz from the internal HSI");
     }
-    SYSTICK_HZ.store(rcc.clocks.hclk().raw(), Ordering::Relaxed);
+    let hclk = rcc.clocks.hclk().raw();
 
     let gpioa = dp.GPIOA.split(&mut rcc);
-    let Ok(mut serial) = dp
+    let mut serial = dp
         .USART2
         .serial::<u8>((gpioa.pa2, gpioa.pa3), BAUD.bps(), &mut rcc)
-    else {
-        exit(false)
-    };
+        .ok()?;
     serial.listen(Event::RxNotEmpty);
-    critical_section::with(|cs| SERIAL.borrow(cs).set(Some(serial)));
 
-    cp.DCB.enable_trace();
-    cp.DWT.enable_cycle_counter();
+    dcb.enable_trace();
+    dwt.enable_cycle_counter();
 
-    watchdog_start(WATCHDOG_MS);
-
-    // Priorities (lower is more urgent; the F446 implements the top 4 bits): the byte mover
-    // above the periodic task, the periodic task above thread mode. Their bodies are O(1) per
-    // byte (module docs of `firmware`).
-    // SAFETY: priorities are set once, before the interrupts are unmasked.
-    unsafe {
-        cp.NVIC.set_priority(Interrupt::USART2, 0x00);
-        cp.SCB
-            .set_priority(cortex_m::peripheral::scb::SystemHandler::SysTick, 0x40);
-        NVIC::unmask(Interrupt::USART2);
-    }
+    let mut watchdog = Watchdog {
+        iwdg: dp.IWDG,
+        lockstep: false,
+    };
+    watchdog.start(WATCHDOG_MS);
+    Some(Parts {
+        timer: PeriodTimer::new(syst, hclk),
+        watchdog,
+        control: Usart2 { serial },
+    })
 }
 
 /// Moves the PLL, which the HAL locked from the 16 MHz HSI, onto the HSE (the ST-LINK's 8 MHz
@@ -175,8 +169,13 @@ fn set_pll_source(rcc: &pac::RCC, hse: bool, m: u32) -> bool {
         } else {
             w.pllsrc().hsi()
         };
-        // SAFETY: M is 2..=63 (checked by the caller, or read back from the register).
-        unsafe { w.pllm().bits(m as u8) }
+        // # Safety
+        // PLLM takes 2..=63; `m` is in that range (checked by the caller, or read back from the
+        // register the HAL configured).
+        #[allow(unsafe_code)]
+        unsafe {
+            w.pllm().bits(m as u8)
+        }
     });
     rcc.cr().modify(|_, w| w.pllon().on());
     wait_for(|| rcc.cr().read().pllrdy().is_ready())
@@ -219,98 +218,59 @@ fn report_reset_cause(rcc: &pac::RCC) {
     rcc.csr().modify(|_, w| w.rmvf().set_bit());
 }
 
-// SysTick control bits (ARMv7-M SYST_CSR).
-const CSR_ENABLE: u32 = 1 << 0;
-const CSR_TICKINT: u32 = 1 << 1;
-const CSR_CLKSOURCE: u32 = 1 << 2;
-
-fn syst() -> &'static cortex_m::peripheral::syst::RegisterBlock {
-    // SAFETY: SysTick's register block is always mapped; it is written only by `start_timer`
-    // and `enter_lockstep`, each from a context that cannot race the other (start-up / SysTick,
-    // and thread mode only once lockstep begins, after which SysTick runs only when pended).
-    unsafe { &*SYST::PTR }
-}
-
-/// Programs SysTick (on the core clock) for a planner period of `period_ms`: interrupts every
-/// `period / k`, with `k` the smallest count that fits SysTick's 24 bits and divides the
-/// period's cycles exactly (one always does for whole milliseconds at 180 MHz). Returns `k`,
-/// the interrupts per period.
-pub fn start_timer(period_ms: u32) -> u32 {
-    let hz = u64::from(SYSTICK_HZ.load(Ordering::Relaxed));
-    let ticks = hz * u64::from(period_ms.max(1)) / 1000;
-    let min_k = ticks.div_ceil(1 << 24).max(1);
-    let k = (min_k..min_k + 64)
-        .filter_map(NonZeroU64::new)
-        .find(|&k| ticks % k == 0)
-        .map_or(min_k, NonZeroU64::get);
-    let reload = (ticks / k.max(1)).clamp(2, 1 << 24) as u32 - 1;
-    let r = syst();
-    // SAFETY: plain writes to SysTick's reload, current-value and control registers.
-    unsafe {
-        r.csr.write(0);
-        r.rvr.write(reload);
-        r.cvr.write(0);
-        r.csr.write(CSR_ENABLE | CSR_TICKINT | CSR_CLKSOURCE);
-    }
-    k as u32
-}
-
-/// Lockstep: the timer stops raising periods, and the watchdog waits as long as it can for the
-/// host's ticks (the first call only; the firmware calls this on every `Tick`).
-pub fn enter_lockstep() {
-    let r = syst();
-    // SAFETY: as above; clears only the interrupt enable.
-    unsafe { r.csr.modify(|v| v & !CSR_TICKINT) };
-    if !LOCKSTEP.swap(true, Ordering::Relaxed) {
-        watchdog_start(WATCHDOG_LOCKSTEP_MS);
-    }
-}
-
 /// Core clock cycles since boot (the DWT cycle counter, wrapping every 23.9 s at 180 MHz; the
 /// firmware takes wrapping differences).
 pub fn cost_now() -> u32 {
-    cortex_m::peripheral::DWT::cycle_count()
-}
-
-/// Whether the timer has fired again since the current period began.
-pub fn timer_pending() -> bool {
-    SCB::is_pendst_pending()
+    DWT::cycle_count()
 }
 
 /// Starts transmission of queued bytes (the USART2 interrupt does the rest).
 pub fn kick_tx() {
-    NVIC::pend(Interrupt::USART2);
+    rtic::pend(pac::Interrupt::USART2);
 }
 
-fn iwdg() -> &'static pac::iwdg::RegisterBlock {
-    // SAFETY: the IWDG's register block is always mapped. Its prescaler and reload are written
-    // by `watchdog_start` only (at start-up, and once in thread mode on entering lockstep,
-    // inside a critical section against the feed); the periodic task only writes the feed key.
-    unsafe { &*pac::IWDG::ptr() }
+/// The independent watchdog (IWDG, on the ~32 kHz LSI), owned by the periodic task: started at
+/// start-up, fed every period, given its longest timeout once lockstep begins.
+pub struct Watchdog {
+    iwdg: pac::IWDG,
+    lockstep: bool,
 }
 
-/// Starts the IWDG (it cannot be stopped again) or changes its timeout, and feeds it.
-fn watchdog_start(timeout_ms: u32) {
-    // Smallest prescaler 4 << pr whose 12-bit reload reaches the timeout.
-    let counts = u64::from(timeout_ms) * u64::from(LSI_HZ) / 1000;
-    let mut pr = 0u8;
-    while pr < 6 && counts >> (2 + pr) > 0x1000 {
-        pr += 1;
-    }
-    let reload = (counts >> (2 + pr)).clamp(1, 0x1000) as u16 - 1;
-    let w = iwdg();
-    // A previous update must finish before the registers take a new value (5 LSI cycles).
-    wait_watchdog_update(w);
-    // The unlock sequence is broken by any other key (the periodic task's feed): no interrupt
-    // between the unlock and the writes.
-    critical_section::with(|_| {
+impl Watchdog {
+    /// Starts the IWDG (it cannot be stopped again) or changes its timeout, and feeds it.
+    fn start(&mut self, timeout_ms: u32) {
+        // Smallest prescaler 4 << pr whose 12-bit reload reaches the timeout.
+        let counts = u64::from(timeout_ms) * u64::from(LSI_HZ) / 1000;
+        let mut pr = 0u8;
+        while pr < 6 && counts >> (2 + pr) > 0x1000 {
+            pr += 1;
+        }
+        let reload = (counts >> (2 + pr)).clamp(1, 0x1000) as u16 - 1;
+        let w = &self.iwdg;
+        // A previous update must finish before the registers take a new value (5 LSI cycles).
+        wait_watchdog_update(w);
+        // The unlock sequence is broken by any other key; only this owner writes keys.
         w.kr().write(|k| k.key().start());
         w.kr().write(|k| k.key().unlock());
         w.pr().write(|p| p.pr().set(pr));
         w.rlr().write(|r| r.rl().set(reload));
-    });
-    wait_watchdog_update(w);
-    w.kr().write(|k| k.key().feed());
+        wait_watchdog_update(w);
+        w.kr().write(|k| k.key().feed());
+    }
+
+    /// Feeds the watchdog (the periodic task, every period).
+    pub fn feed(&mut self) {
+        self.iwdg.kr().write(|k| k.key().feed());
+    }
+
+    /// Lockstep: the watchdog waits as long as it can for the host's ticks (the first call only;
+    /// the periodic task calls this on every lockstep period).
+    pub fn enter_lockstep(&mut self) {
+        if !self.lockstep {
+            self.lockstep = true;
+            self.start(WATCHDOG_LOCKSTEP_MS);
+        }
+    }
 }
 
 /// Waits, boundedly, for the IWDG's prescaler and reload updates to finish.
@@ -321,11 +281,6 @@ fn wait_watchdog_update(w: &pac::iwdg::RegisterBlock) {
             return;
         }
     }
-}
-
-/// Feeds the independent watchdog (the periodic task calls this every period).
-pub fn feed_watchdog() {
-    iwdg().kr().write(|k| k.key().feed());
 }
 
 /// A log line over defmt-RTT (`probe-rs run` prints it), without its line break.
@@ -362,49 +317,90 @@ pub fn exit(success: bool) -> ! {
     }
 }
 
-/// USART2, both directions: move every received byte into the receive queue, then send queued
-/// bytes while the UART takes them, keeping the TX-empty interrupt on only while bytes remain.
-#[interrupt]
-fn USART2() {
-    static mut UART: Option<Serial<USART2>> = None;
-    static mut RX: Option<crate::firmware::RxProducer> = None;
-    static mut TX: Option<crate::firmware::TxConsumer> = None;
-    if UART.is_none() {
-        *UART = critical_section::with(|cs| SERIAL.borrow(cs).take());
+/// USART2 as an `embedded-io` byte stream (the HAL implements `Write` only, and blocking):
+/// reading takes the received byte, or reports the error flag it cleared; writing sends one byte
+/// when the data register is empty.
+pub struct Usart2 {
+    serial: Serial<USART2>,
+}
+
+/// A byte lost on the line (framing, noise, parity or overrun); the link's CRC catches the
+/// damaged frame.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct LineError;
+
+impl embedded_io::Error for LineError {
+    fn kind(&self) -> embedded_io::ErrorKind {
+        embedded_io::ErrorKind::InvalidData
     }
-    if RX.is_none() {
-        *RX = crate::firmware::rx_producer();
+}
+
+impl Usart2 {
+    /// Turns the transmit-empty interrupt on (bytes remain to send) or off.
+    pub fn interrupt_when_ready(&mut self, on: bool) {
+        if on {
+            self.serial.listen(Event::TxEmpty);
+        } else {
+            self.serial.unlisten(Event::TxEmpty);
+        }
     }
-    if TX.is_none() {
-        *TX = crate::firmware::tx_consumer();
+}
+
+impl embedded_io::ErrorType for Usart2 {
+    type Error = LineError;
+}
+
+impl embedded_io::ReadReady for Usart2 {
+    /// A byte, or an error flag that the next read clears (an overrun raises the interrupt
+    /// too, and only a read of the data register clears it).
+    fn read_ready(&mut self) -> Result<bool, LineError> {
+        let f = self.serial.flags();
+        Ok(f.intersects(
+            Flag::RxNotEmpty | Flag::Overrun | Flag::Noise | Flag::FramingError | Flag::ParityError,
+        ))
     }
-    let Some(uart) = UART.as_mut() else { return };
-    // Receive. A byte with a framing, noise or parity error, or after an overrun, is dropped
-    // (reading the data register clears the flag); the link's CRC catches the damaged frame.
-    loop {
-        match uart.read() {
-            Ok(b) => {
-                if let Some(p) = RX.as_mut() {
-                    crate::firmware::on_rx_byte(p, b);
+}
+
+impl embedded_io::Read for Usart2 {
+    fn read(&mut self, buf: &mut [u8]) -> Result<usize, LineError> {
+        let Some(slot) = buf.first_mut() else {
+            return Ok(0);
+        };
+        loop {
+            match self.serial.read() {
+                Ok(b) => {
+                    *slot = b;
+                    return Ok(1);
                 }
+                Err(stm32f4xx_hal::nb::Error::Other(_)) => return Err(LineError),
+                Err(stm32f4xx_hal::nb::Error::WouldBlock) => {}
             }
-            Err(stm32f4xx_hal::nb::Error::Other(_)) => {}
-            Err(stm32f4xx_hal::nb::Error::WouldBlock) => break,
         }
     }
-    // Transmit.
-    let Some(c) = TX.as_mut() else { return };
-    while uart.is_tx_empty() {
-        match c.dequeue() {
-            Some(b) => {
-                let _ = uart.write(b);
+}
+
+impl embedded_io::WriteReady for Usart2 {
+    fn write_ready(&mut self) -> Result<bool, LineError> {
+        Ok(self.serial.is_tx_empty())
+    }
+}
+
+impl embedded_io::Write for Usart2 {
+    fn write(&mut self, buf: &[u8]) -> Result<usize, LineError> {
+        let Some(&b) = buf.first() else {
+            return Ok(0);
+        };
+        loop {
+            match stm32f4xx_hal::prelude::_embedded_hal_serial_nb_Write::write(&mut self.serial, b)
+            {
+                Ok(()) => return Ok(1),
+                Err(stm32f4xx_hal::nb::Error::Other(_)) => return Err(LineError),
+                Err(stm32f4xx_hal::nb::Error::WouldBlock) => {}
             }
-            None => break,
         }
     }
-    if c.ready() {
-        uart.listen(Event::TxEmpty);
-    } else {
-        uart.unlisten(Event::TxEmpty);
+
+    fn flush(&mut self) -> Result<(), LineError> {
+        Ok(())
     }
 }

@@ -21,7 +21,7 @@ use vpf::sonar::Scanline;
 use vpf::world::{Agent, Obstacle, Origin, MAX_AGENTS, MAX_OBSTACLES};
 use vpf::{Mission, NavState, Params, Strategy, Vec2};
 
-use super::{stats, Idle};
+use super::background::{BackgroundTask, Exchange};
 use crate::board::active as board;
 
 /// Periods to run.
@@ -30,21 +30,21 @@ pub const PERIODS: u32 = 50;
 pub const STEP_BUDGET: u32 = 100_000;
 
 /// Runs the self-test; never returns.
-pub fn run(idle: &mut Idle, params: Params) -> ! {
+pub fn run(idle: &mut BackgroundTask, x: &mut impl Exchange, params: Params) -> ! {
     board::log(b"selftest: full tables, sonar flood, 50 periods per strategy\n");
-    load_world(idle);
+    load_world(idle, x);
     let mut ok = true;
     for strategy in [Strategy::Vpf, Strategy::Multipoint, Strategy::Navfn] {
         let p = Params { strategy, ..params };
         let mut frame = [0u8; vpf::link::MAX_FRAME];
         if let Ok(n) = Message::Params(p).emit_frame(0, &mut frame) {
             if let Some(f) = frame.get(..n) {
-                idle.feed(f);
+                idle.feed(f, x);
             }
         }
-        let _ = super::take_stats();
-        let flood = flood(idle);
-        ok &= report(strategy, &flood);
+        let _ = x.take_stats();
+        let flood = flood(idle, x);
+        ok &= report(strategy, &flood, x);
     }
     let mut line = Line::new();
     line.push(b"selftest: stack high-water ");
@@ -73,7 +73,7 @@ struct Flood {
     max_nav_cost: u32,
 }
 
-fn flood(idle: &mut Idle) -> Flood {
+fn flood(idle: &mut BackgroundTask, x: &mut impl Exchange) -> Flood {
     let mut bins = [0u8; 400];
     let mut ping = 0u32;
     let mut f = Flood {
@@ -83,19 +83,19 @@ fn flood(idle: &mut Idle) -> Flood {
         measured: 0,
         max_nav_cost: 0,
     };
-    while stats().periods < PERIODS {
+    while x.stats().periods < PERIODS {
         // Keep navigation fresh (the periodic task holds on stale navigation), and serve the
         // UART as the firmware would.
         if ping.is_multiple_of(8) {
-            let periods = stats().periods;
+            let periods = x.stats().periods;
             let start = board::cost_now();
-            send_nav(idle);
+            send_nav(idle, x);
             let cost = board::cost_now().wrapping_sub(start);
-            if stats().periods == periods {
+            if x.stats().periods == periods {
                 f.max_nav_cost = f.max_nav_cost.max(cost);
             }
         }
-        idle.poll();
+        idle.poll(x);
         // One synthetic ping: a wall of echoes at a bearing-dependent range, with speckle.
         for (i, b) in bins.iter_mut().enumerate() {
             let r = (i as u32).wrapping_mul(2_654_435_761).wrapping_add(ping) >> 28;
@@ -108,7 +108,7 @@ fn flood(idle: &mut Idle) -> Flood {
             };
         }
         let scan = Scanline {
-            time_ms: super::now_ms(),
+            time_ms: x.now_ms(),
             bearing_rad: ((ping % 200) as f32) * 0.0314 - core::f32::consts::PI,
             step_rad: 0.0314,
             range_m: 40.0,
@@ -117,12 +117,12 @@ fn flood(idle: &mut Idle) -> Flood {
         let mut frame = [0u8; vpf::link::MAX_FRAME];
         if let Ok(n) = scan.emit_frame(ping as u16, &mut frame) {
             if let Some(bytes) = frame.get(..n) {
-                let periods = stats().periods;
+                let periods = x.stats().periods;
                 let start = board::cost_now();
-                idle.feed(bytes);
+                idle.feed(bytes, x);
                 let cost = board::cost_now().wrapping_sub(start);
                 f.scanlines += 1;
-                if stats().periods == periods {
+                if x.stats().periods == periods {
                     f.max_cost = f.max_cost.max(cost);
                     f.sum_cost += u64::from(cost);
                     f.measured += 1;
@@ -134,13 +134,14 @@ fn flood(idle: &mut Idle) -> Flood {
     f
 }
 
-fn send_nav(idle: &mut Idle) {
+fn send_nav(idle: &mut BackgroundTask, x: &mut impl Exchange) {
+    let now = x.now_ms();
     let nav = NavRepr {
-        time_ms: super::now_ms(),
+        time_ms: now,
         nav: NavState {
             // A fix that changes (by millimetres), as a real one does: the same fix over and
             // over while commanded to move is a frozen navigation source, and holds.
-            position: Vec2::new((super::now_ms() % 1000) as f32 * 1e-5, 0.0),
+            position: Vec2::new((now % 1000) as f32 * 1e-5, 0.0),
             heading: 0.0,
             velocity: Vec2::new(0.8, 0.1),
         },
@@ -149,13 +150,13 @@ fn send_nav(idle: &mut Idle) {
     let mut frame = [0u8; 64];
     if let Ok(n) = Message::Nav(nav).emit_frame(0, &mut frame) {
         if let Some(f) = frame.get(..n) {
-            idle.feed(f);
+            idle.feed(f, x);
         }
     }
 }
 
 /// Full tables, through the same request and sighting queues as the UART path.
-fn load_world(idle: &mut Idle) {
+fn load_world(idle: &mut BackgroundTask, x: &mut impl Exchange) {
     let mission = Mission {
         goal: Vec2::new(80.0, 0.0),
         formation: Some(vpf::planner::Formation {
@@ -168,7 +169,7 @@ fn load_world(idle: &mut Idle) {
     let mut frame = [0u8; 128];
     if let Ok(n) = Message::Mission(mission).emit_frame(0, &mut frame) {
         if let Some(f) = frame.get(..n) {
-            idle.feed(f);
+            idle.feed(f, x);
         }
     }
     for i in 0..MAX_OBSTACLES {
@@ -204,8 +205,8 @@ fn load_world(idle: &mut Idle) {
 }
 
 /// Prints one strategy's line; true if it met the budget.
-fn report(strategy: Strategy, flood: &Flood) -> bool {
-    let s = super::take_stats();
+fn report(strategy: Strategy, flood: &Flood, x: &mut impl Exchange) -> bool {
+    let s = x.take_stats();
     let mean = s.sum_cost / u64::from(s.periods.max(1));
     let mut line = Line::new();
     line.push(b"selftest: ");
@@ -242,8 +243,11 @@ fn stack_high_water() -> usize {
         static _stack_end: u32;
         static _stack_start: u32;
     }
-    // SAFETY: the linker's stack bounds; the region between them is RAM reserved for the stack
-    // and is only read here, word by word.
+    // # Safety
+    // The linker's stack bounds (flip-link: the bottom of RAM up to `.data`); the region between
+    // them is RAM reserved for the stack, word-aligned, and only read here, word by word, with
+    // volatile loads (the live stack above the paint is never read as Rust values).
+    #[allow(unsafe_code)]
     unsafe {
         let lo = core::ptr::addr_of!(_stack_end) as usize;
         let hi = core::ptr::addr_of!(_stack_start) as usize;

@@ -9,7 +9,7 @@
 
 use crate::link::{Decoder, Direction, Message, MessageType, Outcome, ReplyRepr, RxCounters};
 use crate::route::{Route, Router};
-use crate::sonar::{EvidenceMap, Extractor, ExtractorConfig, Pose};
+use crate::sonar::{ConfigError, EvidenceMap, Extractor, ExtractorConfig, Pose};
 
 use super::{Control, NavSample, Sighting};
 
@@ -88,13 +88,13 @@ pub struct Background {
 }
 
 impl Background {
-    /// A background with the sonar extractor configured by `sonar` (`None` if it is refused,
-    /// which cannot happen for `ExtractorConfig::default()`), and host contacts given
+    /// A background with the sonar extractor configured by `sonar` (refused with the reason if
+    /// it is out of range, which `ExtractorConfig::default()` is not), and host contacts given
     /// repulsiveness `contact_a_plus`.
-    pub fn new(sonar: ExtractorConfig, contact_a_plus: f32) -> Option<Self> {
-        Some(Background {
+    pub fn new(sonar: ExtractorConfig, contact_a_plus: f32) -> Result<Self, ConfigError> {
+        Ok(Background {
             decoder: Decoder::accepting(Direction::ToFirmware),
-            extractor: Extractor::new(sonar).ok()?,
+            extractor: Extractor::new(sonar)?,
             pose: None,
             lockstep: false,
             last_tick_ms: None,

@@ -8,8 +8,8 @@
 //!   run sonar feature extraction on scanlines, and queue sightings and requests for the periodic
 //!   task.
 //!
-//! They meet only through what the board provides (lock-free SPSC queues and one
-//! critical-section cell on the firmware; plain values on a host): the newest [`NavSample`], a
+//! They meet only through what the board provides (lock-free SPSC queues and RTIC shared
+//! resources on the firmware; plain values on a host): the newest [`NavSample`], a
 //! queue of [`Sighting`]s, a queue of [`Control`] requests and a ring of replies owed to
 //! requests that never reach the periodic task (refused at the wire, or "busy"). The board also
 //! carries the outgoing frames. Capacities, and what happens when each is full:

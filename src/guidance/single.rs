@@ -91,12 +91,13 @@ impl SingleContext {
         cost_unit: CostUnit,
     ) -> Result<Self, crate::params::ParamError> {
         let periodic = Periodic::new(params, config, cost_unit)?;
-        let background = Background::new(ExtractorConfig::default(), params.a_plus).ok_or(
-            crate::params::ParamError {
-                name: "sonar",
-                problem: crate::params::ParamProblem::OutOfRange,
-            },
-        )?;
+        let background =
+            Background::new(ExtractorConfig::default(), params.a_plus).map_err(|_| {
+                crate::params::ParamError {
+                    name: "sonar",
+                    problem: crate::params::ParamProblem::OutOfRange,
+                }
+            })?;
         Ok(SingleContext {
             background,
             periodic,

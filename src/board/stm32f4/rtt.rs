@@ -1,18 +1,24 @@
 //! defmt's global logger over SEGGER RTT: one up channel, named `defmt`, that `probe-rs run`
 //! finds by the `_SEGGER_RTT` symbol and decodes with the ELF's defmt table.
 //!
-//! In place of the `defmt-rtt` crate, for two reasons:
-//! - `defmt-rtt` panics when the logger is taken re-entrantly (a hard fault inside a log call);
-//!   the compiler cannot prove that unreachable, so the release image's link-time no-panic
-//!   check fails. Here a re-entrant frame is dropped instead.
+//! In place of the `defmt-rtt` crate (and `rtt-target`'s logger), for two reasons:
+//! - Both panic when the logger is taken re-entrantly; the compiler cannot prove that
+//!   unreachable, so the release image's link-time no-panic check fails. Here a frame begun
+//!   while another context is writing one is dropped instead (and counted).
 //! - It never blocks: a frame that does not fit is cut short (the host's decoder drops it and
-//!   resynchronises at the next frame), whatever mode the host asks for. Logging holds a
-//!   critical section for one frame; waiting in it for the host would stop the UART and the
-//!   periodic task. The firmware logs only at start-up, on a fault and in the self-test.
+//!   resynchronises at the next frame), whatever mode the host asks for. The firmware logs only
+//!   at start-up, on a fault and in the self-test.
+//!
+//! Everything the host reads is atomics (the ring buffer is `AtomicU8`s, the pointers
+//! `AtomicPtr`s), so the control block is `Sync` without `unsafe`; the encoder's state sits in a
+//! `critical_section::Mutex`, taken for one `write` at a time by the context that owns the frame.
 
-use core::cell::UnsafeCell;
-use core::mem::MaybeUninit;
-use core::sync::atomic::{AtomicBool, AtomicU32, Ordering};
+use core::cell::RefCell;
+use core::sync::atomic::{AtomicPtr, AtomicU32, AtomicU8, Ordering};
+
+use cortex_m::peripheral::scb::VectActive;
+use cortex_m::peripheral::SCB;
+use critical_section::Mutex;
 
 /// The up channel's ring buffer, bytes (one is always left free).
 const BUF_SIZE: usize = 1024;
@@ -29,8 +35,8 @@ struct Header {
 
 #[repr(C)]
 struct Channel {
-    name: *const u8,
-    buffer: *mut u8,
+    name: AtomicPtr<u8>,
+    buffer: AtomicPtr<u8>,
     size: u32,
     /// Written by the target only.
     write: AtomicU32,
@@ -39,31 +45,30 @@ struct Channel {
     flags: AtomicU32,
 }
 
-// SAFETY: the raw pointers are to statics; the target writes `buffer` only under the logger's
-// critical section and publishes it through the `write` atomic.
-unsafe impl Sync for Header {}
+/// The ring the host reads (in `.bss`).
+static BUFFER: [AtomicU8; BUF_SIZE] = [const { AtomicU8::new(0) }; BUF_SIZE];
 
-struct Buffer(UnsafeCell<MaybeUninit<[u8; BUF_SIZE]>>);
-// SAFETY: written only under the logger's critical section; never read by the target.
-unsafe impl Sync for Buffer {}
-
-// Not zeroed at start-up (cortex-m-rt's `.uninit`): the host reads only what `write` covers.
-#[link_section = ".uninit.vpf-rtt.BUFFER"]
-static BUFFER: Buffer = Buffer(UnsafeCell::new(MaybeUninit::uninit()));
-
-// In RAM with the header, so the probe can read the whole control block from RAM.
-#[link_section = ".data.vpf-rtt.NAME"]
-static NAME: [u8; 6] = *b"defmt\0";
+/// The channel's name, in RAM with the control block (interior mutability puts it in `.data`),
+/// so the probe can read the whole control block from RAM.
+static NAME: [AtomicU8; 6] = [
+    AtomicU8::new(b'd'),
+    AtomicU8::new(b'e'),
+    AtomicU8::new(b'f'),
+    AtomicU8::new(b'm'),
+    AtomicU8::new(b't'),
+    AtomicU8::new(0),
+];
 
 /// The RTT control block; the probe finds it by this symbol.
+#[allow(unsafe_code)] // `no_mangle`: the probe looks the block up by its plain name.
 #[no_mangle]
 static _SEGGER_RTT: Header = Header {
     id: *b"SEGGER RTT\0\0\0\0\0\0",
     max_up_channels: 1,
     max_down_channels: 0,
     up: Channel {
-        name: NAME.as_ptr(),
-        buffer: BUFFER.0.get().cast::<u8>(),
+        name: AtomicPtr::new(NAME.as_ptr().cast_mut().cast::<u8>()),
+        buffer: AtomicPtr::new(BUFFER.as_ptr().cast_mut().cast::<u8>()),
         size: BUF_SIZE as u32,
         write: AtomicU32::new(0),
         read: AtomicU32::new(0),
@@ -73,108 +78,102 @@ static _SEGGER_RTT: Header = Header {
 
 impl Channel {
     /// Copies as much of `bytes` as fits; drops the rest.
-    fn write(&self, mut bytes: &[u8]) {
-        while !bytes.is_empty() {
-            // `% BUF_SIZE`: a host that wrote nonsense into `read` cannot send us out of bounds.
-            let w = self.write.load(Ordering::Relaxed) as usize % BUF_SIZE;
-            let r = self.read.load(Ordering::Acquire) as usize % BUF_SIZE;
-            // Contiguous free space from `w`: up to `r - 1`, or to the end of the buffer (less
-            // one when the reader is at 0, so that a full ring never looks empty).
-            let free = if r > w {
-                r - w - 1
-            } else {
-                BUF_SIZE - w - usize::from(r == 0)
-            };
-            let n = free.min(bytes.len());
-            let Some((chunk, rest)) = bytes.split_at_checked(n) else {
-                return;
-            };
-            if chunk.is_empty() {
-                return;
+    fn write(&self, bytes: &[u8]) {
+        // `% BUF_SIZE`: a host that wrote nonsense into `read` cannot send us out of bounds.
+        let mut w = self.write.load(Ordering::Relaxed) as usize % BUF_SIZE;
+        let r = self.read.load(Ordering::Acquire) as usize % BUF_SIZE;
+        for &b in bytes {
+            let next = (w + 1) % BUF_SIZE;
+            if next == r {
+                break;
             }
-            // SAFETY: `w + n <= BUF_SIZE`, so the copy stays in `BUFFER`; the host does not read
-            // these bytes until `write` is advanced past them below.
-            unsafe {
-                core::ptr::copy_nonoverlapping(chunk.as_ptr(), self.buffer.add(w), n);
+            if let Some(slot) = BUFFER.get(w) {
+                slot.store(b, Ordering::Relaxed);
             }
-            self.write
-                .store(((w + n) % BUF_SIZE) as u32, Ordering::Release);
-            bytes = rest;
+            w = next;
         }
+        // The host reads no byte before `write` has moved past it.
+        self.write.store(w as u32, Ordering::Release);
     }
 }
 
-/// The encoder's state, used only by the context that holds the logger.
-struct State {
-    encoder: UnsafeCell<defmt::Encoder>,
-    restore: UnsafeCell<critical_section::RestoreState>,
-}
-// SAFETY: accessed only between `acquire` and `release`, under the critical section, by the
-// one context that took the logger (`TAKEN`).
-unsafe impl Sync for State {}
-
-static STATE: State = State {
-    encoder: UnsafeCell::new(defmt::Encoder::new()),
-    restore: UnsafeCell::new(critical_section::RestoreState::invalid()),
-};
-/// A frame is being written.
-static TAKEN: AtomicBool = AtomicBool::new(false);
-/// Frames begun (and dropped) while another was being written: only an exception that runs
-/// with interrupts masked (a hard fault) can do that.
+/// No context owns the logger.
+const NO_OWNER: u32 = u32::MAX;
+/// The context writing a frame: its exception number (0 for thread mode).
+static OWNER: AtomicU32 = AtomicU32::new(NO_OWNER);
+/// Frames begun by the owner inside its own frame (dropped; only a fault inside a log call
+/// could).
 static NESTED: AtomicU32 = AtomicU32::new(0);
+/// Frames dropped because another context was writing one.
+static CONTENDED: AtomicU32 = AtomicU32::new(0);
+static ENCODER: Mutex<RefCell<defmt::Encoder>> = Mutex::new(RefCell::new(defmt::Encoder::new()));
+
+/// The running context: 0 in thread mode, else the active exception's number.
+fn context() -> u32 {
+    match SCB::vect_active() {
+        VectActive::ThreadMode => 0,
+        VectActive::Exception(e) => (i32::from(e.irqn()) + 16) as u32,
+        VectActive::Interrupt { irqn } => u32::from(irqn) + 16,
+    }
+}
+
+/// Whether the running context owns the frame being written.
+fn owned() -> bool {
+    OWNER.load(Ordering::Relaxed) == context() && NESTED.load(Ordering::Relaxed) == 0
+}
 
 fn emit(bytes: &[u8]) {
     _SEGGER_RTT.up.write(bytes);
 }
 
+fn with_encoder(f: impl FnOnce(&mut defmt::Encoder)) {
+    critical_section::with(|cs| {
+        if let Ok(mut e) = ENCODER.borrow(cs).try_borrow_mut() {
+            f(&mut e);
+        }
+    });
+}
+
 #[defmt::global_logger]
 struct Logger;
 
-// SAFETY: `acquire` and `release` pair up (defmt's contract); frames are serialised by the
-// critical section, and a nested frame is dropped, never interleaved.
+// # Safety
+// defmt requires that `acquire` and `release` pair up and that frames do not interleave: a
+// frame belongs to the one context that took `OWNER`; `write` and `release` from any other
+// context (or from a nested frame of the owner) do nothing, so frames never interleave, and the
+// encoder is only touched under a critical section.
+#[allow(unsafe_code)]
 unsafe impl defmt::Logger for Logger {
     fn acquire() {
-        // SAFETY: released in `release`, or at once below for a nested frame.
-        let restore = unsafe { critical_section::acquire() };
-        if TAKEN.load(Ordering::Relaxed) {
-            NESTED.fetch_add(1, Ordering::Relaxed);
-            // SAFETY: pairs with the acquire just above (interrupts stay masked: the outer
-            // frame's critical section is still held).
-            unsafe { critical_section::release(restore) };
-            return;
-        }
-        TAKEN.store(true, Ordering::Relaxed);
-        // SAFETY: this context now holds the logger, under the critical section.
-        unsafe {
-            *STATE.restore.get() = restore;
-            (*STATE.encoder.get()).start_frame(emit);
+        let me = context();
+        match OWNER.compare_exchange(NO_OWNER, me, Ordering::Acquire, Ordering::Relaxed) {
+            Ok(_) => with_encoder(|e| e.start_frame(emit)),
+            Err(owner) if owner == me => {
+                NESTED.fetch_add(1, Ordering::Relaxed);
+            }
+            Err(_) => {
+                CONTENDED.fetch_add(1, Ordering::Relaxed);
+            }
         }
     }
 
     unsafe fn flush() {}
 
     unsafe fn release() {
+        if OWNER.load(Ordering::Relaxed) != context() {
+            return;
+        }
         if NESTED.load(Ordering::Relaxed) > 0 {
             NESTED.fetch_sub(1, Ordering::Relaxed);
             return;
         }
-        if !TAKEN.load(Ordering::Relaxed) {
-            return;
-        }
-        // SAFETY: this context holds the logger (see `acquire`); the critical section is
-        // released exactly once, with the state its acquire returned.
-        unsafe {
-            (*STATE.encoder.get()).end_frame(emit);
-            TAKEN.store(false, Ordering::Relaxed);
-            critical_section::release(*STATE.restore.get());
-        }
+        with_encoder(|e| e.end_frame(emit));
+        OWNER.store(NO_OWNER, Ordering::Release);
     }
 
     unsafe fn write(bytes: &[u8]) {
-        if NESTED.load(Ordering::Relaxed) > 0 || !TAKEN.load(Ordering::Relaxed) {
-            return;
+        if owned() {
+            with_encoder(|e| e.write(bytes, emit));
         }
-        // SAFETY: this context holds the logger (see `acquire`).
-        unsafe { (*STATE.encoder.get()).write(bytes, emit) };
     }
 }

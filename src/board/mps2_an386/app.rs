@@ -1,0 +1,138 @@
+//! The firmware's contexts on the emulated board, declared as an RTIC application: which task
+//! runs at which priority, bound to which interrupt, owning or sharing what. The bodies are the
+//! firmware's ([`crate::firmware`]); the NUCLEO's application (`board::stm32f4::app`) differs
+//! only in its UART task and start-up.
+
+#[rtic::app(device = crate::board::mps2_an386::device, peripherals = false)]
+mod app {
+    use vpf::guidance::NavSample;
+    use vpf::params::Params;
+    use vpf::route::{RouteConfig, Router};
+
+    use crate::board::mps2_an386 as board;
+    use crate::firmware::background::{self, BackgroundTask, IdleShared};
+    use crate::firmware::link::{Receiver, Transmitter};
+    use crate::firmware::periodic::{PeriodShared, PeriodicTask};
+    use crate::firmware::{
+        fault, LinkCounters, Lockstep, Memory, Stats, CONTROL_RX_SLOTS, CONTROL_TX_SLOTS,
+    };
+
+    /// Shared by idle (the background) and the periodic task: ceiling = the periodic task's
+    /// priority, below the UART's, so no lock ever masks the UART.
+    #[shared]
+    struct Shared {
+        /// The newest navigation (background → periodic).
+        nav: Option<NavSample>,
+        /// The decoder's and background's counters (background → periodic, for telemetry).
+        link_counters: LinkCounters,
+        /// Firmware time, ms (periodic → background, for time stamps).
+        now_ms: u64,
+        /// Lockstep: the host's clock and the `Tick` waiting to run (both ways).
+        lockstep: Lockstep,
+        /// What the periodic task has done (periodic → the self-test).
+        stats: Stats,
+    }
+
+    /// Each owned by the one task that uses it.
+    #[local]
+    struct Local {
+        periodic: PeriodicTask,
+        background: BackgroundTask,
+        /// UART0's receive half and the control link's receiving end.
+        uart0_rx: (board::UartRx, Receiver<CONTROL_RX_SLOTS>),
+        /// UART0's transmit half and the control link's sending end.
+        uart0_tx: (board::UartTx, Transmitter<CONTROL_TX_SLOTS>),
+    }
+
+    /// Start-up, interrupts masked: the stack guard, UART0 and SysTick, the runtime built in
+    /// its statics (`memory` in `.bss`; the route layer's grid built at compile time in `.data`,
+    /// so its 2.5 KiB never pass through the stack), the queues split into their ends.
+    #[init(local = [
+        memory: Memory = Memory::new(),
+        router: Router = Router::new(RouteConfig::DEFAULT),
+    ])]
+    fn init(cx: init::Context) -> (Shared, Local) {
+        board::log(concat!("vpf-firmware ", env!("CARGO_PKG_VERSION"), "\n").as_bytes());
+        fault::guard_stack(cx.core.MPU);
+        let Some(parts) = board::init(cx.core.SYST) else {
+            board::exit(false)
+        };
+        let Some(fw) = crate::firmware::start(
+            cx.local.memory,
+            cx.local.router,
+            Params::default(),
+            parts.timer,
+            parts.watchdog,
+        ) else {
+            board::exit(false)
+        };
+        let (uart_rx, uart_tx) = parts.control;
+        (
+            Shared {
+                nav: None,
+                link_counters: LinkCounters::default(),
+                now_ms: 0,
+                lockstep: Lockstep::default(),
+                stats: Stats::default(),
+            },
+            Local {
+                periodic: fw.periodic,
+                background: fw.background,
+                uart0_rx: (uart_rx, fw.receiver),
+                uart0_tx: (uart_tx, fw.transmitter),
+            },
+        )
+    }
+
+    /// The background (thread mode, priority 0): decodes, extracts, maps and routes.
+    #[idle(local = [background], shared = [nav, link_counters, now_ms, lockstep, stats])]
+    fn idle(cx: idle::Context) -> ! {
+        let s = cx.shared;
+        let mut shared = IdleShared {
+            nav: s.nav,
+            link_counters: s.link_counters,
+            now_ms: s.now_ms,
+            lockstep: s.lockstep,
+            stats: s.stats,
+        };
+        background::run(cx.local.background, &mut shared)
+    }
+
+    /// The periodic task: every SysTick interrupt (absolute schedule), or when idle pends
+    /// SysTick for a lockstep `Tick`. At the shared resources' ceiling: its locks are free.
+    #[task(binds = SysTick, priority = 2, local = [periodic],
+           shared = [nav, link_counters, now_ms, lockstep, stats])]
+    fn period(cx: period::Context) {
+        let task = cx.local.periodic;
+        let s = cx.shared;
+        (s.nav, s.link_counters, s.now_ms, s.lockstep, s.stats).lock(
+            |nav, link_counters, now_ms, lockstep, stats| {
+                task.on_interrupt(PeriodShared {
+                    nav,
+                    link_counters,
+                    now_ms,
+                    lockstep,
+                    stats,
+                });
+            },
+        );
+    }
+
+    /// UART0 receive: every waiting byte into the control link's queue.
+    #[task(binds = UART0RX, priority = 3, local = [uart0_rx])]
+    fn uart0_receive(cx: uart0_receive::Context) {
+        let (uart, receiver) = cx.local.uart0_rx;
+        uart.acknowledge();
+        receiver.receive(uart);
+    }
+
+    /// UART0 transmit: queued bytes out while the UART takes them; the interrupt stays on only
+    /// while bytes remain.
+    #[task(binds = UART0TX, priority = 3, local = [uart0_tx])]
+    fn uart0_transmit(cx: uart0_transmit::Context) {
+        let (uart, transmitter) = cx.local.uart0_tx;
+        uart.acknowledge();
+        let more = transmitter.transmit(uart);
+        uart.interrupt_when_ready(more);
+    }
+}

@@ -1,0 +1,54 @@
+//! The emulated board as RTIC sees a device: its interrupt numbers, its priority bits and its
+//! interrupt vector (what an svd2rust PAC would supply; there is none for the AN386).
+//!
+//! Interrupt numbers are the AN386's (ARM's "Cortex-M4 FPGA image" application note, and QEMU's
+//! `mps2-an386`): each CMSDK APB UART has a receive and a transmit interrupt. UART1 is listed
+//! for a second byte link (wire its two vectors below and bind two tasks to them).
+
+/// Priority bits the NVIC implements: the AN386 image's 3 (CMSIS `__NVIC_PRIO_BITS`).
+pub const NVIC_PRIO_BITS: u8 = 3;
+
+/// The board's external interrupts that the firmware uses (or may).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[allow(non_camel_case_types, clippy::upper_case_acronyms)]
+pub enum Interrupt {
+    /// UART0 receive (the control link).
+    UART0RX = 0,
+    /// UART0 transmit.
+    UART0TX = 1,
+    /// UART1 receive (free: a second byte link).
+    #[allow(dead_code)]
+    UART1RX = 2,
+    /// UART1 transmit.
+    #[allow(dead_code)]
+    UART1TX = 3,
+}
+
+/// RTIC names bound interrupts through `device::interrupt::NAME`, as svd2rust PACs export them.
+pub use self::Interrupt as interrupt;
+
+// # Safety
+// `number` returns the variant's discriminant, a valid AN386 interrupt number (below its 32
+// external interrupts), and is the same every call: what `InterruptNumber` requires.
+#[allow(unsafe_code)]
+unsafe impl cortex_m::interrupt::InterruptNumber for Interrupt {
+    fn number(self) -> u16 {
+        self as u16
+    }
+}
+
+// The handlers RTIC defines for bound tasks (`#[no_mangle]`); `device.x` (written by build.rs)
+// points the unbound ones at cortex-m-rt's `DefaultHandler`.
+extern "C" {
+    fn UART0RX();
+    fn UART0TX();
+    fn UART1RX();
+    fn UART1TX();
+}
+
+/// The device part of the vector table: external interrupts 0–3 (the rest are never enabled).
+#[allow(unsafe_code)] // `link_section` and `no_mangle` place the table; it only holds addresses.
+#[link_section = ".vector_table.interrupts"]
+#[no_mangle]
+#[used]
+static __INTERRUPTS: [unsafe extern "C" fn(); 4] = [UART0RX, UART0TX, UART1RX, UART1TX];

@@ -1,0 +1,90 @@
+//! The emulated ARM MPS2 AN386 board (QEMU `-machine mps2-an386 -cpu cortex-m4`): its CMSDK APB
+//! UART0, SysTick as the period timer and instruction counter, semihosting for logs and exit.
+//!
+//! Under `-icount shift=0` QEMU advances the virtual clock by 1 ns per executed instruction, and
+//! SysTick counts its 25 MHz reference clock, so one SysTick count is 40 instructions. That makes
+//! SysTick both the absolute-schedule period timer and an instruction counter (checked against
+//! an exact counter to within 0.1 %). The DWT cycle counter reads 0 on QEMU. Without `-icount`
+//! the counts are still a relative measure, not instructions.
+
+mod app;
+pub mod device;
+pub mod uart;
+
+use cortex_m::peripheral::SYST;
+use vpf::link::CostUnit;
+
+use super::systick::PeriodTimer;
+pub use uart::{UartRx, UartTx};
+
+/// SysTick reference clock, Hz.
+pub const SYSTICK_HZ: u32 = 25_000_000;
+/// Instructions per SysTick count under `-icount shift=0` (1 ns per instruction, 40 ns a count).
+pub const INSTRUCTIONS_PER_TICK: u32 = 40;
+/// The unit of [`cost_now`].
+pub const COST_UNIT: CostUnit = CostUnit::Instructions;
+/// UART baud rate (QEMU ignores it; a real CMSDK UART would use it).
+pub const BAUD: u32 = 115_200;
+
+/// What [`init`] hands to the firmware's contexts.
+pub struct Parts {
+    /// The period timer (SysTick), for the periodic task.
+    pub timer: PeriodTimer,
+    /// The watchdog, fed by the periodic task.
+    pub watchdog: Watchdog,
+    /// UART0, the control link: receive half (UART0RX task) and transmit half (UART0TX task).
+    pub control: (UartRx, UartTx),
+}
+
+/// Sets up UART0 (receive interrupt on) and the period timer (not yet running). `None` if
+/// UART0 was already taken (start-up runs once).
+pub fn init(syst: SYST) -> Option<Parts> {
+    let control = uart::Uart::take(0, SYSTICK_HZ / BAUD)?.split();
+    Some(Parts {
+        timer: PeriodTimer::new(syst, SYSTICK_HZ),
+        watchdog: Watchdog,
+        control,
+    })
+}
+
+/// Instructions executed so far in this timer interval (see the module notes).
+pub fn cost_now() -> u32 {
+    let reload = SYST::get_reload();
+    let elapsed = reload - SYST::get_current().min(reload);
+    elapsed.wrapping_mul(INSTRUCTIONS_PER_TICK)
+}
+
+/// Starts transmission of queued bytes (the transmit interrupt does the rest).
+pub fn kick_tx() {
+    rtic::pend(device::Interrupt::UART0TX);
+}
+
+/// The emulated board has no watchdog.
+pub struct Watchdog;
+
+impl Watchdog {
+    /// Nothing to feed.
+    pub fn feed(&mut self) {}
+    /// Nothing to change in lockstep.
+    pub fn enter_lockstep(&mut self) {}
+}
+
+/// A log line on the host's console (semihosting; QEMU prints it on its stdout).
+pub fn log(line: &[u8]) {
+    if let Ok(mut out) = cortex_m_semihosting::hio::hstdout() {
+        let _ = out.write_all(line);
+    }
+}
+
+/// Ends the program (semihosting exit, which QEMU turns into its exit status).
+pub fn exit(success: bool) -> ! {
+    use cortex_m_semihosting::debug;
+    debug::exit(if success {
+        debug::EXIT_SUCCESS
+    } else {
+        debug::EXIT_FAILURE
+    });
+    loop {
+        cortex_m::asm::wfi();
+    }
+}

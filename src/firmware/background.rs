@@ -1,0 +1,219 @@
+//! The background (RTIC's idle, thread mode): decodes received bytes, extracts sonar features,
+//! builds the evidence map and the route, and passes navigation, sightings and requests to the
+//! periodic task. Everything slow and preemptible is here.
+
+use heapless::spsc::Consumer;
+use rtic::Mutex;
+use vpf::guidance::{Background, Control, NavSample, Sighting, Sink};
+use vpf::link::ReplyRepr;
+use vpf::route::{Route, Router};
+
+use super::queues::Producers;
+use super::{LinkCounters, Lockstep, Stats, CONTROL_RX_SLOTS, EVIDENCE, ROUTE};
+
+/// What the background shares with the periodic task: RTIC's shared resources seen from idle,
+/// each access one short lock at the periodic task's priority (the UART's is above it, so no
+/// lock here ever masks the UART).
+pub trait Exchange {
+    /// Publishes the newest navigation.
+    fn publish_nav(&mut self, sample: NavSample);
+    /// Publishes the link's counters, for telemetry.
+    fn publish_counters(&mut self, counters: LinkCounters);
+    /// Firmware time now, ms.
+    fn now_ms(&mut self) -> u64;
+    /// Lockstep: asks for a period at the host's time `time_ms`.
+    fn request_period(&mut self, time_ms: u64);
+    /// Whether a requested period has not run yet.
+    fn period_pending(&mut self) -> bool;
+    /// What the periodic task has done so far.
+    #[cfg(feature = "selftest")]
+    fn stats(&mut self) -> Stats;
+    /// The statistics so far, which then start again from zero (for reports per phase).
+    #[cfg(feature = "selftest")]
+    fn take_stats(&mut self) -> Stats;
+}
+
+/// Idle's view of the shared resources: RTIC's lock proxies, one per resource.
+pub struct IdleShared<Nav, Counters, Now, Step, Report> {
+    /// The newest navigation.
+    pub nav: Nav,
+    /// The link's counters.
+    pub link_counters: Counters,
+    /// Firmware time.
+    pub now_ms: Now,
+    /// Lockstep state.
+    pub lockstep: Step,
+    /// The periodic task's statistics (read by the self-test).
+    #[cfg_attr(not(feature = "selftest"), allow(dead_code))]
+    pub stats: Report,
+}
+
+impl<Nav, Counters, Now, Step, Report> Exchange for IdleShared<Nav, Counters, Now, Step, Report>
+where
+    Nav: Mutex<T = Option<NavSample>>,
+    Counters: Mutex<T = LinkCounters>,
+    Now: Mutex<T = u64>,
+    Step: Mutex<T = Lockstep>,
+    Report: Mutex<T = Stats>,
+{
+    fn publish_nav(&mut self, sample: NavSample) {
+        self.nav.lock(|n| *n = Some(sample));
+    }
+    fn publish_counters(&mut self, counters: LinkCounters) {
+        self.link_counters.lock(|c| *c = counters);
+    }
+    fn now_ms(&mut self) -> u64 {
+        self.now_ms.lock(|t| *t)
+    }
+    fn request_period(&mut self, time_ms: u64) {
+        self.lockstep.lock(|l| {
+            l.active = true;
+            l.pending = Some(time_ms);
+        });
+    }
+    fn period_pending(&mut self) -> bool {
+        self.lockstep.lock(|l| l.pending.is_some())
+    }
+    #[cfg(feature = "selftest")]
+    fn stats(&mut self) -> Stats {
+        self.stats.lock(|s| *s)
+    }
+    #[cfg(feature = "selftest")]
+    fn take_stats(&mut self) -> Stats {
+        self.stats.lock(core::mem::take)
+    }
+}
+
+/// Idle's body: polls for received bytes and sleeps until the next interrupt when there are
+/// none (the self-test and stack-check images run their own test instead).
+pub fn run(task: &mut BackgroundTask, shared: &mut impl Exchange) -> ! {
+    if cfg!(feature = "stackcheck") {
+        super::fault::overflow_the_stack();
+    }
+    #[cfg(feature = "selftest")]
+    super::selftest::run(task, shared, vpf::params::Params::default());
+    #[cfg(not(feature = "selftest"))]
+    loop {
+        if !task.poll(shared) {
+            cortex_m::asm::wfi();
+        }
+    }
+}
+
+/// The background's own state (an RTIC `#[local]` of idle).
+pub struct BackgroundTask {
+    background: Background,
+    router: &'static mut Router,
+    inbox: Consumer<'static, u8, CONTROL_RX_SLOTS>,
+    queues: Producers,
+}
+
+/// The background's [`Sink`]: its queue ends and the shared resources.
+struct Outlet<'a, X: Exchange> {
+    queues: &'a mut Producers,
+    exchange: &'a mut X,
+}
+
+impl<X: Exchange> Sink for Outlet<'_, X> {
+    fn nav(&mut self, sample: NavSample) {
+        self.exchange.publish_nav(sample);
+    }
+    fn sighting(&mut self, s: Sighting) -> bool {
+        self.queues.sightings.enqueue(s).is_ok()
+    }
+    fn control(&mut self, c: Control) -> bool {
+        self.queues.controls.enqueue(c).is_ok()
+    }
+    fn reply(&mut self, r: ReplyRepr) -> bool {
+        self.queues.replies.enqueue(r).is_ok()
+    }
+    fn tick(&mut self, time_ms: u64) {
+        self.exchange.request_period(time_ms);
+    }
+    fn route(&mut self, r: Route) {
+        ROUTE.publish(&r);
+    }
+}
+
+impl BackgroundTask {
+    /// The background's state around its queue ends.
+    pub fn new(
+        background: Background,
+        router: &'static mut Router,
+        inbox: Consumer<'static, u8, CONTROL_RX_SLOTS>,
+        queues: Producers,
+    ) -> Self {
+        BackgroundTask {
+            background,
+            router,
+            inbox,
+            queues,
+        }
+    }
+
+    /// Decodes what has been received; `true` if there was anything.
+    pub fn poll(&mut self, exchange: &mut impl Exchange) -> bool {
+        let mut buf = [0u8; 64];
+        let mut n = 0;
+        for slot in buf.iter_mut() {
+            match self.inbox.dequeue() {
+                Some(b) => {
+                    *slot = b;
+                    n += 1;
+                }
+                None => break,
+            }
+        }
+        let Some(mut rest) = buf.get(..n) else {
+            return false;
+        };
+        while !rest.is_empty() {
+            let now = exchange.now_ms();
+            rest = self.background.on_bytes(
+                rest,
+                now,
+                &mut Outlet {
+                    queues: &mut self.queues,
+                    exchange: &mut *exchange,
+                },
+                Some(&EVIDENCE),
+                Some(self.router),
+            );
+            if exchange.period_pending() {
+                // Run the requested period now, before later bytes are decoded: SysTick
+                // preempts at once.
+                cortex_m::peripheral::SCB::set_pendst();
+                while exchange.period_pending() {
+                    cortex_m::asm::nop();
+                }
+            }
+        }
+        exchange.publish_counters((*self.background.rx_counters(), self.background.counters));
+        n > 0
+    }
+
+    /// Queues a sighting as the background would (for the self-test).
+    #[cfg(feature = "selftest")]
+    pub fn push_sighting(&mut self, s: Sighting) {
+        let _ = self.queues.sightings.enqueue(s);
+    }
+
+    /// Decodes `bytes` as if received (for the self-test).
+    #[cfg(feature = "selftest")]
+    pub fn feed(&mut self, bytes: &[u8], exchange: &mut impl Exchange) {
+        let now = exchange.now_ms();
+        let mut rest = bytes;
+        while !rest.is_empty() {
+            rest = self.background.on_bytes(
+                rest,
+                now,
+                &mut Outlet {
+                    queues: &mut self.queues,
+                    exchange: &mut *exchange,
+                },
+                Some(&EVIDENCE),
+                Some(self.router),
+            );
+        }
+    }
+}
