@@ -111,7 +111,7 @@ impl Planner {
             .filter(|_| !m.escape.formation_released(cx.now_ms));
         let leader = formation.and_then(|f| {
             let vl = f.virtual_leader(p, world.agents())?;
-            Some((f, GoalPdf::new(vl, f.attraction, f.sigma())))
+            Some((f, f.leader_pdf(p, vl)))
         });
 
         // The rotor terms: one normal per obstacle, and one for the map (one obstacle: its
