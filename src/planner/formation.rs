@@ -246,7 +246,7 @@ mod tests {
     fn honeycomb(f: &Formation) -> heapless::Vec<Vec2, 16> {
         let dir = |a: f32| Vec2::from_angle(f.orientation + a) * f.lattice_m;
         let mut v: heapless::Vec<Vec2, 16> = heapless::Vec::new();
-        let mut add = |p: Vec2, v: &mut heapless::Vec<Vec2, 16>| {
+        let add = |p: Vec2, v: &mut heapless::Vec<Vec2, 16>| {
             if v.iter().all(|q| (*q - p).norm() > 1e-3) {
                 v.push(p).unwrap();
             }
