@@ -246,7 +246,7 @@ fn simulate(
             ..SonarConfig::default()
         });
         sims.push(Sim {
-            model: new_model(v.model, v.start, v.heading),
+            model: new_model(v.model, v.start, v.heading, v.autopilot),
             kind: v.model,
             nav,
             sonar,
@@ -558,10 +558,19 @@ fn collect(
         _ => None,
     });
     if let Some(c) = command {
+        let sp = &c.setpoints;
         s.setpoints = SetPoints {
             psi: f64::from(c.psi_set),
             speed: f64::from(c.v_set),
             velocity: P2::new(f64::from(c.velocity.x), f64::from(c.velocity.y)),
+            pid: crate::types::PidFeeds {
+                a_c: f64::from(sp.a_c),
+                v_c: f64::from(sp.v_c),
+                i_surge: f64::from(sp.i_surge),
+                alpha_c: f64::from(sp.alpha_c),
+                omega_c: f64::from(sp.omega_c),
+                phi_c: f64::from(sp.phi_c),
+            },
         };
         let target = P2::new(f64::from(c.target.x), f64::from(c.target.y));
         if target.sub(s.record.goal).norm() > 0.5

@@ -23,6 +23,7 @@ use vpf::{Bounding, Params};
 
 pub use vpf::params::Strategy;
 
+pub use crate::sim::vehicle::Autopilot;
 pub use crate::sim::vehicle::ModelKind;
 use crate::types::{SimObstacle, SimShape, P2};
 
@@ -118,6 +119,9 @@ pub struct Vehicle {
     pub formation: Option<Formation>,
     /// How it senses obstacles.
     pub sensing: Sensing,
+    /// What its autopilots track: the heading and speed set-points (the default), or seed
+    /// 001's PI-D set-point decomposition.
+    pub autopilot: Autopilot,
 }
 
 /// What the simulated sonar sends.
@@ -1426,6 +1430,7 @@ fn vehicle(
             "goal",
             "formation",
             "sensing",
+            "autopilot",
         ],
         "a [[vehicle]]",
     )?;
@@ -1470,6 +1475,15 @@ fn vehicle(
         },
     };
 
+    let autopilot = match t.string("autopilot")? {
+        Some(s) => choose(
+            &s,
+            &[("plain", Autopilot::Plain), ("pid", Autopilot::SetPoints)],
+            "autopilot",
+        )?,
+        None => Autopilot::Plain,
+    };
+
     for (i, (o, s)) in obstacles.iter().zip(shapes).enumerate() {
         if s.signed_distance(start.v.to_vpf()) <= 0.0 {
             return Err(start.fail(format!(
@@ -1501,6 +1515,7 @@ fn vehicle(
         goal: goal.v,
         formation,
         sensing,
+        autopilot,
     })
 }
 

@@ -67,6 +67,30 @@ pub struct SetPoints {
     pub speed: f64,
     /// The planner's commanded velocity vector (for the kinematic model), m/s.
     pub velocity: P2,
+    /// Seed 001's PI-D set-points, for autopilots in [`Autopilot::SetPoints`] mode
+    /// (`crate::sim::vehicle`).
+    ///
+    /// [`Autopilot::SetPoints`]: crate::sim::vehicle::Autopilot::SetPoints
+    pub pid: PidFeeds,
+}
+
+/// Seed 001 §2's set-point decomposition as the firmware sends it (`vpf::planner::PidSetpoints`),
+/// in f64: surge (a_c, v_c, I_surge) and heading (α_c, ω_c, φ_c).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PidFeeds {
+    /// a_c, surge acceleration command, m/s².
+    pub a_c: f64,
+    /// v_c, surge speed command, m/s.
+    pub v_c: f64,
+    /// I_surge, the integral channel: how far the vehicle lags the planner's ideal position
+    /// along its travel, m.
+    pub i_surge: f64,
+    /// α_c, heading acceleration command, rad/s².
+    pub alpha_c: f64,
+    /// ω_c, heading rate command, rad/s.
+    pub omega_c: f64,
+    /// φ_c, heading command, rad.
+    pub phi_c: f64,
 }
 
 /// Obstacle geometry in the simulation (world frame, at t = 0). The firmware sees only what the

@@ -195,19 +195,23 @@ impl Escape {
         self.stall_since = None;
     }
 
-    /// 000 eq. 16–17.
+    /// 000 eq. 16–17, with ρ drawn from the seeded generator.
     fn place(&mut self, p: Vec2, target: Vec2, params: &Params) -> Vec2 {
-        let to = target - p;
-        let d = to.norm();
-        let v = to.normalized(1e-6).unwrap_or(Vec2::new(1.0, 0.0));
-        // R(π/2)·ṽ for ρ = 0, R(3π/2)·ṽ for ρ = 1.
-        let side = if self.rng.next_bool() {
-            -v.perp()
-        } else {
-            v.perp()
-        };
-        p + v * (params.ghost_lambda * d) + side * (params.ghost_alpha * d)
+        let rho = self.rng.next_bool();
+        ghost_point(p, target, params.ghost_lambda, params.ghost_alpha, rho)
     }
+}
+
+/// The ghost goal-point of 000 eq. 16–17 for the vehicle at `p` and the active goal-point
+/// `target`: r_GGP = p + λ·d·ṽ + α·d·R(π(1 + 2ρ)/2)·ṽ, ρ = `rho` (false: 0, true: 1).
+/// R(π/2)·ṽ is ṽ turned counter-clockwise (to the left of the line to the goal), R(3π/2)·ṽ
+/// clockwise (to the right).
+pub fn ghost_point(p: Vec2, target: Vec2, lambda: f32, alpha: f32, rho: bool) -> Vec2 {
+    let to = target - p;
+    let d = to.norm();
+    let v = to.normalized(1e-6).unwrap_or(Vec2::new(1.0, 0.0));
+    let side = if rho { -v.perp() } else { v.perp() };
+    p + v * (lambda * d) + side * (alpha * d)
 }
 
 #[cfg(test)]
@@ -223,18 +227,50 @@ mod tests {
     }
 
     #[test]
+    fn eq_17_puts_the_ghost_lambda_along_and_alpha_across_on_the_side_rho_picks() {
+        // λ ≠ α, the vehicle away from the origin, the goal up and to the right of it:
+        // d = 10, ṽ = (0.6, 0.8), left of ṽ (ρ = 0) is (−0.8, 0.6), right (ρ = 1) (0.8, −0.6).
+        let p = Vec2::new(3.0, -2.0);
+        let goal = Vec2::new(9.0, 6.0);
+        let (lambda, alpha) = (0.3, 0.7);
+        let left = ghost_point(p, goal, lambda, alpha, false);
+        let right = ghost_point(p, goal, lambda, alpha, true);
+        // p + 3·ṽ + 7·(left or right of ṽ).
+        let want_left = Vec2::new(3.0 + 1.8 - 5.6, -2.0 + 2.4 + 4.2);
+        let want_right = Vec2::new(3.0 + 1.8 + 5.6, -2.0 + 2.4 - 4.2);
+        assert!((left - want_left).norm() < 1e-4, "ρ = 0: {left:?}");
+        assert!((right - want_right).norm() < 1e-4, "ρ = 1: {right:?}");
+        // ρ = 0 is counter-clockwise of the line to the goal, ρ = 1 clockwise.
+        assert!((goal - p).cross(left - p) > 0.0);
+        assert!((goal - p).cross(right - p) < 0.0);
+    }
+
+    #[test]
     fn stall_far_from_goal_places_a_ghost_per_eq_17() {
-        let p = params();
-        let mut e = Escape::new(3);
-        let goal = Vec2::new(20.0, 0.0);
-        for k in 0..=20u64 {
-            e.update(k * 100, Vec2::ZERO, 0.0, goal, &p, |_| StallCause::Static);
+        let p = Params {
+            ghost_lambda: 0.25,
+            ghost_alpha: 0.75,
+            ..params()
+        };
+        let at = Vec2::new(-4.0, 7.0);
+        let goal = Vec2::new(-4.0, 27.0);
+        // Ghosts on both sides, each where eq. 17 and that placement's draw of ρ put it.
+        let mut sides = [false, false];
+        for seed in [1, 7, 0x9e37_79b9, 0x8000_0001, 0xdead_beef, 123_456_789] {
+            let mut e = Escape::new(seed);
+            let mut rho = XorShift32::new(seed);
+            for k in 0..=20u64 {
+                e.update(k * 100, at, 0.0, goal, &p, |_| StallCause::Static);
+            }
+            let g = e.ghosts().first().copied().unwrap();
+            let right = rho.next_bool();
+            // λ·d = 5 along the line (north), α·d = 15 across it: west is left, east right.
+            let want = Vec2::new(if right { 11.0 } else { -19.0 }, 12.0);
+            assert!((g.position - want).norm() < 1e-4, "seed {seed}: {g:?}");
+            assert_eq!(e.active_target(goal), g.position);
+            sides[right as usize] = true;
         }
-        let g = e.ghosts().first().copied().unwrap();
-        // λ·d = 10 along the line, α·d = 10 across it.
-        assert!((g.position.x - 10.0).abs() < 1e-4);
-        assert!((g.position.y.abs() - 10.0).abs() < 1e-4);
-        assert_eq!(e.active_target(goal), g.position);
+        assert_eq!(sides, [true, true], "both values of ρ drawn");
     }
 
     #[test]

@@ -9,6 +9,20 @@
 //! nodes λ·(cos θₖ, sin θₖ), θₖ = θ₀ + 2πk/q around each agent): q = 4 the square lattice, q = 6
 //! the triangular one, q = 3 the honeycomb.
 //!
+//! **The honeycomb's two sublattices (q = 3).** The paper's nodes sit at the same bearings
+//! θ₀ + 2πk/3 round every agent. But if B sits on one of A's nodes, A lies at that bearing + π
+//! from B, which is none of B's node bearings: no pair is an equilibrium, and the vehicles
+//! chase each other. A honeycomb has two sublattices whose node directions are opposite:
+//! θ₀ + 2πk/3 on one, θ₀ + π + 2πk/3 on the other (together, the six directions of Table 1's
+//! π/3 quantum), and every neighbour of a vertex is on the other sublattice. So each vehicle
+//! decides which sublattice it is on from the bearings βᵢ to its neighbours: the one whose
+//! directions they fit, by the sign of Σᵢ cos 3(βᵢ − θ₀) (+1 on a node direction of the
+//! θ₀ set, −1 on one of the θ₀ + π set; ties count as the θ₀ set) — and takes the agents' nodes
+//! from the *other* set. Neighbours decide consistently: seen from the agent the bearing is
+//! βᵢ + π and cos 3(βᵢ + π − θ₀) = −cos 3(βᵢ − θ₀), so a pair always puts itself on opposite
+//! sublattices. q = 4 and q = 6 are Bravais lattices (one set of directions for every vertex)
+//! and are as the paper gives them.
+//!
 //! **Which node.** Table 1 quantises the bearing βᵢ by 2π/q (its "π/3" is the q = 6 case) and
 //! takes the node in that direction on the agent's first ring. Two readings were needed:
 //! 1. The paper's βᵢ = atan2(x_agᵢ − p) is the bearing *to* the agent; that node lies behind the
@@ -21,6 +35,7 @@
 //!    and the second (√2·λ for q = 4, √3·λ for q = 3 and 6). A vehicle with no neighbour yet
 //!    joins its nearest agent's first ring, which is Table 1 applied to that agent alone.
 
+use crate::field::GoalPdf;
 use crate::math::{wrap_angle, Vec2, TAU};
 use crate::world::Agent;
 
@@ -28,7 +43,8 @@ use crate::world::Agent;
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Formation {
-    /// q, the formation descriptor: 3 (triangles), 4 (squares) or 6 (hexagons) (001 §3.2).
+    /// q, the formation descriptor (001 §3.2): nodes per agent, 3 (the honeycomb: hexagonal
+    /// cells), 4 (the square lattice) or 6 (the triangular lattice).
     pub q: u8,
     /// λ, the lattice length: the ideal distance between neighbours, m. 0.5 ..= 1000.
     pub lattice_m: f32,
@@ -82,12 +98,64 @@ impl Formation {
     }
 
     /// The first-ring node of `agent` in the bearing of the vehicle at `p` (Table 1,
-    /// L1.1–L1.3, bearing taken from the agent).
-    pub fn node(&self, agent: Vec2, p: Vec2) -> Vec2 {
+    /// L1.1–L1.3, bearing taken from the agent), for agents whose node directions start at
+    /// `orientation` (θ₀, or θ₀ + π for the honeycomb's other sublattice: [`Formation::agents_orientation`]).
+    pub fn node_from(&self, agent: Vec2, p: Vec2, orientation: f32) -> Vec2 {
         let step = TAU / self.q as f32;
-        let beta = wrap_angle((p - agent).angle() - self.orientation);
+        let beta = wrap_angle((p - agent).angle() - orientation);
         let k = libm::roundf(beta / step);
-        agent + Vec2::from_angle(self.orientation + k * step) * self.lattice_m
+        agent + Vec2::from_angle(orientation + k * step) * self.lattice_m
+    }
+
+    /// [`Formation::node_from`] with the node directions starting at θ₀.
+    pub fn node(&self, agent: Vec2, p: Vec2) -> Vec2 {
+        self.node_from(agent, p, self.orientation)
+    }
+
+    /// Where the node directions of the agents at `neighbours` start, seen by the vehicle at
+    /// `p`: θ₀ for q = 4 and 6; for the honeycomb (q = 3) the opposite of the vehicle's own
+    /// sublattice, θ₀ + π when the bearings to its neighbours fit the θ₀ set, else θ₀ (module
+    /// notes).
+    pub fn agents_orientation<'a>(
+        &self,
+        p: Vec2,
+        neighbours: impl Iterator<Item = &'a Agent>,
+    ) -> f32 {
+        if self.q != 3 {
+            return self.orientation;
+        }
+        let fit: f32 = neighbours
+            .map(|a| libm::cosf(3.0 * ((a.position - p).angle() - self.orientation)))
+            .sum();
+        if fit >= 0.0 {
+            self.orientation + core::f32::consts::PI
+        } else {
+            self.orientation
+        }
+    }
+
+    /// The virtual leader's goal-point PDF (Table 1, step 3; 000 eq. 13 with σ = λ/3, 001
+    /// eq. 12) for the vehicle at `p` and the leader at `vl`.
+    ///
+    /// **Departure, and why.** Eq. 12's σ = λ/3 is chosen so that eq. 11's node wells "taper
+    /// away" at the agent; its pull on a vehicle d from the well is A⁻·ε·d/σ²·e^{−d²/2σ²},
+    /// nothing once d is a few σ (at 5 m with λ = 4 m, e⁻⁷ of its peak). A vehicle that has no
+    /// neighbour yet — every vehicle of a fleet started more than a lattice length apart — then
+    /// feels no formation at all, and the fleet transits in its starting arrangement. As for
+    /// far goals (`vpf::goal_point`), a leader farther than 2σ is carried 2σ ahead on the line
+    /// to it ("carrot on a stick", 000 §III), where it pulls with A⁻·ε·2e⁻²/σ; within 2σ it is
+    /// the paper's.
+    pub fn leader_pdf(&self, p: Vec2, vl: Vec2) -> GoalPdf {
+        let sigma = self.sigma();
+        let d = vl - p;
+        let reach = LEADER_CARROT_SIGMAS * sigma;
+        let n2 = d.norm2();
+        let at = if n2 > reach * reach {
+            p + d * (reach / crate::math::sqrt(n2))
+        } else {
+            vl
+        };
+        GoalPdf::new(at, self.attraction, sigma)
     }
 
     /// Radius of the first shell, m: agents inside it are neighbours.
@@ -100,12 +168,15 @@ impl Formation {
     /// the nearest agent's when none is a neighbour; `None` with no agent in sight.
     pub fn virtual_leader(&self, p: Vec2, agents: &[Agent]) -> Option<Vec2> {
         let shell2 = self.neighbour_shell() * self.neighbour_shell();
-        let (sum, n) = agents
-            .iter()
-            .filter(|a| (a.position - p).norm2() <= shell2)
-            .fold((Vec2::ZERO, 0u32), |(s, n), a| {
-                (s + self.node(a.position, p), n + 1)
-            });
+        let neighbours = || {
+            agents
+                .iter()
+                .filter(move |a| (a.position - p).norm2() <= shell2)
+        };
+        let theta = self.agents_orientation(p, neighbours());
+        let (sum, n) = neighbours().fold((Vec2::ZERO, 0u32), |(s, n), a| {
+            (s + self.node_from(a.position, p, theta), n + 1)
+        });
         if n > 0 {
             return Some(sum * (1.0 / n as f32));
         }
@@ -114,9 +185,13 @@ impl Formation {
                 .norm2()
                 .total_cmp(&(b.position - p).norm2())
         })?;
-        Some(self.node(nearest.position, p))
+        let theta = self.agents_orientation(p, core::iter::once(nearest));
+        Some(self.node_from(nearest.position, p, theta))
     }
 }
+
+/// How far ahead a far virtual leader is carried, in σ ([`Formation::leader_pdf`]).
+pub const LEADER_CARROT_SIGMAS: f32 = 2.0;
 
 const SQRT_2: f32 = core::f32::consts::SQRT_2;
 const SQRT_3: f32 = 1.732_050_8;
@@ -164,6 +239,79 @@ mod tests {
             let vl = f.virtual_leader(me, &others).unwrap();
             assert!((vl - me).norm() < 1e-4, "corner {i}: leader at {vl:?}");
         }
+    }
+
+    /// The vertices of a honeycomb patch: a vertex at the origin on the θ₀ sublattice, its
+    /// three neighbours, and theirs (10 vertices: two hexagons sharing an edge).
+    fn honeycomb(f: &Formation) -> heapless::Vec<Vec2, 16> {
+        let dir = |a: f32| Vec2::from_angle(f.orientation + a) * f.lattice_m;
+        let mut v: heapless::Vec<Vec2, 16> = heapless::Vec::new();
+        let add = |p: Vec2, v: &mut heapless::Vec<Vec2, 16>| {
+            if v.iter().all(|q| (*q - p).norm() > 1e-3) {
+                v.push(p).unwrap();
+            }
+        };
+        add(Vec2::ZERO, &mut v);
+        for k in 0..3 {
+            let a = dir(TAU * k as f32 / 3.0);
+            add(a, &mut v);
+            // a is on the other sublattice: its directions are θ₀ + π + 2πj/3.
+            for j in 0..3 {
+                add(
+                    a + dir(core::f32::consts::PI + TAU * j as f32 / 3.0),
+                    &mut v,
+                );
+            }
+        }
+        v
+    }
+
+    #[test]
+    fn a_finished_honeycomb_is_an_equilibrium_for_every_vertex() {
+        for orientation in [0.0, 0.4, -2.0] {
+            let f = Formation {
+                q: 3,
+                orientation,
+                ..square()
+            };
+            let cells = honeycomb(&f);
+            assert_eq!(cells.len(), 10);
+            for (i, &me) in cells.iter().enumerate() {
+                let others: heapless::Vec<Agent, 16> = cells
+                    .iter()
+                    .enumerate()
+                    .filter(|&(j, _)| j != i)
+                    .map(|(j, &c)| Agent::new(j as u16, c, Vec2::ZERO, 0).unwrap())
+                    .collect();
+                let vl = f.virtual_leader(me, &others).unwrap();
+                assert!(
+                    (vl - me).norm() < 1e-3,
+                    "θ₀ {orientation}, vertex {i}: {vl:?}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn a_honeycomb_pair_agrees_on_opposite_sublattices() {
+        let f = Formation { q: 3, ..square() };
+        // B on A's node at θ₀ (east of A): each one's leader is where it is ...
+        let a = Agent::new(1, Vec2::ZERO, Vec2::ZERO, 0).unwrap();
+        let b = Agent::new(2, Vec2::new(2.0, 0.0), Vec2::ZERO, 0).unwrap();
+        assert!((f.virtual_leader(b.position, &[a]).unwrap() - b.position).norm() < 1e-5);
+        assert!((f.virtual_leader(a.position, &[b]).unwrap() - a.position).norm() < 1e-5);
+        // ... which the fixed bearings θ₀ + 2πk/3 round every agent cannot give: A's node
+        // nearest B's bearing from B is a whole λ away from A.
+        assert!((f.node(b.position, a.position) - a.position).norm() > 1.0);
+        // And a three-vehicle triangle (60°) is not a honeycomb: one of them is moved.
+        let c = Agent::new(3, Vec2::from_angle(TAU / 6.0) * 2.0, Vec2::ZERO, 0).unwrap();
+        let moved = [(a, [b, c]), (b, [a, c]), (c, [a, b])]
+            .iter()
+            .filter(|(me, others)| {
+                (f.virtual_leader(me.position, others).unwrap() - me.position).norm() > 0.1
+            })
+            .count();
+        assert!(moved > 0);
     }
 
     #[test]

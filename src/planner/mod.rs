@@ -245,6 +245,9 @@ struct Motion {
     escape: Escape,
     rotor_sense: RotorSense,
     arc: ArcState,
+    /// The navigation function's last descent direction (`strategy.rs`, saddles); zero when
+    /// there is none yet.
+    descent: Vec2,
     /// Arrival latch of the alternative strategies (`strategy.rs`).
     arrived: bool,
 }
@@ -257,6 +260,7 @@ impl Motion {
             escape: Escape::new(seed),
             rotor_sense: RotorSense::Free,
             arc: ArcState::default(),
+            descent: Vec2::ZERO,
             arrived: false,
         }
     }
@@ -389,6 +393,7 @@ impl Planner {
         self.motion.escape.reset();
         self.motion.rotor_sense = RotorSense::Free;
         self.motion.arc = ArcState::default();
+        self.motion.descent = Vec2::ZERO;
         self.motion.arrived = false;
         Ok(())
     }
@@ -414,6 +419,7 @@ impl Planner {
         self.motion.escape.reset();
         self.motion.rotor_sense = RotorSense::Free;
         self.motion.arc = ArcState::default();
+        self.motion.descent = Vec2::ZERO;
         self.motion.arrived = false;
     }
 

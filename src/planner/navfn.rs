@@ -394,8 +394,8 @@ impl SphereWorld {
     }
 
     /// −∇φ_κ(q)/‖∇φ_κ(q)‖, the unit descent direction, from the bracket alone: no logarithm, no
-    /// exponential (module doc). Zero at the goal and at critical points (saddles; the caller
-    /// perturbs).
+    /// exponential (module doc). Zero at the goal and at critical points (saddles: the planner
+    /// perturbs off them, `Planner::plan_navfn` in `strategy.rs`).
     pub fn descent_direction(&self, q: Vec2) -> Result<Vec2, NavfnError> {
         let c = self.core(q)?;
         Ok(unit_scaled(c.v).map_or(Vec2::ZERO, |(u, _, _)| -u))

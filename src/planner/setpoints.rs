@@ -14,8 +14,20 @@
 //!   ω = κ·v is α = κ·a + v·κ̇, which needs no division by r² and is exact on straight lines
 //!   (κ = 0). κ̇ is (κ_c(k) − κ(k−1))/T. Below [`V_EPS`] the curvature is undefined and α_c is
 //!   the rate of change of ω: (ω_c(k) − ω(k−1))/T.
-//! - **I_surge** = ‖p(k) − p_c(k)‖ with p_c the double-integrator position, integrated from the
-//!   bounded command like 000 eq. 8. It is anti-wound: p_c is kept within [`I_SURGE_LIMIT_M`].
+//!
+//!   *The discrete rate term, kept on purpose.* Read with R = 1/κ, a true radius, the paper's
+//!   formula α = (R_c·a_c − v_c·(R_c − R)/T)/R_c² gives κ_c·a_c + v_c·(κ_c − κ)/T·(κ_c/κ): its
+//!   rate term is ours times κ_c/κ. Both are first-order differences of the same derivative
+//!   and agree as κ_c → κ (the unit test below checks it), but the paper's divides by κ, the
+//!   measured curvature, which is zero on every straight line: it is infinite at the onset of
+//!   every turn (R = ∞) and changes sign with κ. Ours is finite there and exact in the limit.
+//! - **I_surge** is the along-track component ⟨p_c(k) − p(k), ê₁⟩, with p_c the
+//!   double-integrator position integrated from the bounded command like 000 eq. 8: positive
+//!   when the vehicle lags the ideal position. *Departure:* the paper writes the magnitude
+//!   ‖p(k) − p_c(k)‖, which cannot tell an integral channel whether to push or hold back (a
+//!   vehicle ahead and one behind give the same value); its along-track part is the time
+//!   integral of the surge speed error the channel stands for. It is anti-wound: p_c is kept
+//!   within [`I_SURGE_LIMIT_M`] of the vehicle.
 
 use crate::math::{wrap_angle, Vec2};
 
@@ -32,7 +44,8 @@ pub struct PidSetpoints {
     pub a_c: f32,
     /// v_c, surge speed command, m/s (⟨v̄_c, ê₁⟩: negative means back up).
     pub v_c: f32,
-    /// I_surge, integral channel: distance from the idealised position, m.
+    /// I_surge, integral channel: how far the idealised position is ahead of the vehicle along
+    /// its travel, m (negative: the vehicle is ahead).
     pub i_surge: f32,
     /// α_c, heading acceleration command (derivative channel), rad/s².
     pub alpha_c: f32,
@@ -134,7 +147,7 @@ impl SetpointState {
         PidSetpoints {
             a_c,
             v_c,
-            i_surge: (m.position - p_c).norm(),
+            i_surge: (p_c - m.position).dot(e1),
             alpha_c,
             omega_c,
             phi_c,
@@ -209,5 +222,44 @@ mod tests {
                 .i_surge;
         }
         assert!((last - I_SURGE_LIMIT_M).abs() < 1e-3);
+        // Ahead of the ideal position (it stays behind at the start): negative.
+        let mut s = SetpointState::default();
+        let ahead = Measured {
+            velocity: Vec2::new(1.0, 0.0),
+            ..m
+        };
+        s.decompose(0.1, Vec2::ZERO, Vec2::ZERO, &ahead);
+        let moved = Measured {
+            position: Vec2::new(0.5, 0.0),
+            ..ahead
+        };
+        let sp = s.decompose(0.1, Vec2::ZERO, Vec2::ZERO, &moved);
+        // p_c moved 0.05 m (half a period at the initial 1 m/s), the vehicle 0.5 m.
+        assert!((sp.i_surge + 0.45).abs() < 1e-5, "{sp:?}");
+    }
+
+    #[test]
+    fn alpha_rate_term_agrees_with_the_papers_as_the_curvatures_meet() {
+        // The paper's form with radii R = 1/κ against ours, for κ_c → κ (module notes).
+        let (t, v_c, a_c, kappa) = (0.1f32, 1.0f32, 0.2f32, 0.05f32);
+        for dk in [0.01f32, 0.001, 0.0001] {
+            let kappa_c = kappa + dk;
+            let ours = kappa_c * a_c + v_c * (kappa_c - kappa) / t;
+            let (r_c, r) = (1.0 / kappa_c, 1.0 / kappa);
+            let paper = (r_c * a_c - v_c * (r_c - r) / t) / (r_c * r_c);
+            assert!(
+                (ours - paper).abs() <= 1.5 * dk / kappa * ours.abs(),
+                "{dk}"
+            );
+        }
+        // On a straight line (κ = 0) the paper's form divides by zero; ours is finite.
+        let mut s = SetpointState::default();
+        let m = Measured {
+            position: Vec2::ZERO,
+            velocity: Vec2::new(1.0, 0.0),
+            heading: 0.0,
+        };
+        let sp = s.decompose(0.1, Vec2::ZERO, Vec2::from_angle(0.05), &m);
+        assert!(sp.alpha_c.is_finite() && sp.alpha_c > 0.0);
     }
 }

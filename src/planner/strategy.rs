@@ -27,6 +27,12 @@ const TRACK_GAIN: f32 = 0.3;
 /// coasts for metres) would otherwise circle the goal, re-approaching each time it drifts out.
 const ARRIVAL_RELEASE: f32 = 4.0;
 
+/// Cosine between two successive navigation-function descent directions below which the
+/// descent counts as reversed, i.e. the vehicle crossed a critical point (a saddle) along its
+/// stable manifold (`plan_navfn`): about 154°. The descent field is smooth away from critical
+/// points, turning by a few degrees per period; only crossing one flips it.
+const SADDLE_REVERSAL: f32 = -0.9;
+
 /// The multipoint strategy's state between periods: the arc point being steered to and the
 /// periods until the next choice (seed 003 §4: "the next one-step position").
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -115,10 +121,19 @@ impl Planner {
     /// minima, see `navfn.rs`). Outside the free space (inside an enclosing circle, beyond ρ₀)
     /// the vehicle heads out along the way out; with the goal inside a circle there is no
     /// navigation function and it heads straight at the goal.
+    ///
+    /// **Saddles.** Besides the goal, φ has a saddle behind every obstacle (seed 004: a
+    /// navigation function is a Morse function; its other critical points are saddles). Its
+    /// stable manifold is a line: a vehicle on it descends to the saddle and, the descent
+    /// reversing there, chatters on it, left only when rounding errors grow. The planner
+    /// perturbs deterministically: when the descent is zero or reverses within one period
+    /// (cosine below [`SADDLE_REVERSAL`] with the last one) away from the goal, it steers for
+    /// that period square to the line to the goal, to its left. Off the stable manifold,
+    /// descent carries the vehicle away from the saddle.
     pub(super) fn plan_navfn(&self, m: &mut Motion, cx: &Context<'_>) -> Command {
         let p = cx.nav.position;
         let straight = (cx.aim - p).normalized(1e-6).unwrap_or(Vec2::ZERO);
-        let direction = match self.sphere_world(cx) {
+        let mut direction = match self.sphere_world(cx) {
             Ok(world) => match world.eval(p) {
                 Ok(e) => e.descent,
                 Err(NavfnError::GoalBlocked) => straight,
@@ -126,6 +141,12 @@ impl Planner {
             },
             Err(_) => straight,
         };
+        let far = (cx.aim - p).norm() > self.params.arrival_radius_m;
+        let reversed = direction == Vec2::ZERO || direction.dot(m.descent) < SADDLE_REVERSAL;
+        if far && reversed && m.descent != Vec2::ZERO {
+            direction = straight.perp();
+        }
+        m.descent = direction;
         let speed = self.cruise_speed(m, cx);
         self.track(m, cx, direction * speed)
     }

@@ -111,7 +111,7 @@ impl Planner {
             .filter(|_| !m.escape.formation_released(cx.now_ms));
         let leader = formation.and_then(|f| {
             let vl = f.virtual_leader(p, world.agents())?;
-            Some((f, GoalPdf::new(vl, f.attraction, f.sigma())))
+            Some((f, f.leader_pdf(p, vl)))
         });
 
         // The rotor terms: one normal per obstacle, and one for the map (one obstacle: its
@@ -165,6 +165,12 @@ impl Planner {
             leave_to_map: world.map_in_use(),
         };
         let forces = field.sampled_forces(&self.circle);
+        // Virtual viscous friction, 000 eq. 14: F = F_nf − μ·v(k−1). Seed 001 eq. 4 prints
+        // "+ μ·v(k−1)"; with μ ≥ 0 that would push the vehicle on in the direction it moves
+        // and pump energy in, the opposite of the friction 001 cites from [1, 2] ("virtual
+        // viscose friction") and of 000 eq. 14 (the force ξ·|v| at angle π + arg v, i.e.
+        // against the motion), whose purpose is to siphon kinetic energy (000 Fig. 2 → 3).
+        // 002 writes the friction against the motion too. We take the sign of 000 and 002.
         let f = forces.full - m.integrator.velocity * prm.mu;
         let mut cmd = self.integrate(m, cx, f);
 

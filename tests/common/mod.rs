@@ -6,6 +6,8 @@
 //! the course as heading.
 #![allow(dead_code)]
 
+pub mod lattice;
+
 use vpf::field::Shape;
 use vpf::planner::{Command, Formation};
 use vpf::{Mission, NavState, Obstacle, Origin, Params, Planner, Vec2, World};

@@ -150,6 +150,11 @@ impl FlatFish {
     pub fn params(&self) -> &HullParams {
         self.0.params()
     }
+
+    /// Selects what its autopilots track ([`TwinThruster::set_autopilot`]).
+    pub fn set_autopilot(&mut self, autopilot: crate::sim::vehicle::Autopilot) {
+        self.0.set_autopilot(autopilot);
+    }
 }
 
 impl VehicleModel for FlatFish {
@@ -177,6 +182,7 @@ mod tests {
             psi,
             speed,
             velocity: P2::new(speed * psi.cos(), speed * psi.sin()),
+            ..SetPoints::default()
         }
     }
 
@@ -196,7 +202,12 @@ mod tests {
         }
         assert!("flat fish".parse::<ModelKind>().is_err());
         assert_eq!(ModelKind::FlatFish.to_string(), "flatfish");
-        let m = new_model(ModelKind::FlatFish, P2::new(30.0, 20.0), 0.5);
+        let m = new_model(
+            ModelKind::FlatFish,
+            P2::new(30.0, 20.0),
+            0.5,
+            Default::default(),
+        );
         assert_eq!(m.kind(), ModelKind::FlatFish);
         assert_eq!(m.state().position, P2::new(30.0, 20.0));
         assert_eq!(m.state().heading, 0.5);
@@ -363,6 +374,14 @@ mod tests {
                 psi: f64::NAN,
                 speed: f64::INFINITY,
                 velocity: P2::new(f64::NAN, 0.0),
+                pid: crate::types::PidFeeds {
+                    a_c: f64::NAN,
+                    v_c: f64::INFINITY,
+                    i_surge: -1e30,
+                    alpha_c: f64::NAN,
+                    omega_c: f64::NEG_INFINITY,
+                    phi_c: f64::NAN,
+                },
             },
             sp(1e30, -1e30),
             sp(-PI, f64::NAN),

@@ -23,10 +23,10 @@
 //! A runner's period, per vehicle, is typically:
 //!
 //! ```
-//! use hil::sim::{new_model, Current, ModelKind, NavConfig, NavSensor, Sonar, SonarConfig};
+//! use hil::sim::{new_model, Autopilot, Current, ModelKind, NavConfig, NavSensor, Sonar, SonarConfig};
 //! use hil::types::{SetPoints, P2};
 //!
-//! let mut vehicle = new_model(ModelKind::VideoRay, P2::new(0.0, 0.0), 0.0);
+//! let mut vehicle = new_model(ModelKind::VideoRay, P2::new(0.0, 0.0), 0.0, Autopilot::Plain);
 //! let mut nav = NavSensor::new(NavConfig { rate_hz: 5.0, ..NavConfig::default() });
 //! let mut sonar = Sonar::new(SonarConfig::default());
 //! let current = Current::steady(P2::new(0.1, 0.0));
@@ -57,6 +57,7 @@ pub use sonar::{
     contacts, relative_bearing, OtherVehicle, Ping, Sector, Sonar, SonarConfig, SonarConfigError,
 };
 pub use vehicle::{
-    new_model, wrap_pi, AutopilotGains, HullParams, Kinematic, ModelKind, PidGains, TwinThruster,
-    UnknownModel, VehicleModel, VideoRay, VideoRayParams, VIDEORAY_PRO3, VIDEORAY_PRO3_GAINS,
+    new_model, wrap_pi, Autopilot, AutopilotGains, HullParams, Kinematic, ModelKind, PidGains,
+    TwinThruster, UnknownModel, VehicleModel, VideoRay, VideoRayParams, VIDEORAY_PRO3,
+    VIDEORAY_PRO3_GAINS,
 };

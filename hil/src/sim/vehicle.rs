@@ -137,14 +137,42 @@ pub trait VehicleModel: Send + fmt::Debug {
     fn step(&mut self, dt: f64, sp: &SetPoints, current: P2) -> VehicleState;
 }
 
-/// A model of `kind` at `start` with heading `heading` (rad), at rest. Non-finite coordinates
-/// or heading count as zero.
-pub fn new_model(kind: ModelKind, start: P2, heading: f64) -> Box<dyn VehicleModel> {
+/// A model of `kind` at `start` with heading `heading` (rad), at rest, its autopilots in mode
+/// `autopilot` (the kinematic model has none and ignores it). Non-finite coordinates or
+/// heading count as zero.
+pub fn new_model(
+    kind: ModelKind,
+    start: P2,
+    heading: f64,
+    autopilot: Autopilot,
+) -> Box<dyn VehicleModel> {
     match kind {
         ModelKind::Kinematic => Box::new(Kinematic::new(start, heading)),
-        ModelKind::VideoRay => Box::new(VideoRay::new(start, heading)),
-        ModelKind::FlatFish => Box::new(super::flatfish::FlatFish::new(start, heading)),
+        ModelKind::VideoRay => {
+            let mut v = VideoRay::new(start, heading);
+            v.set_autopilot(autopilot);
+            Box::new(v)
+        }
+        ModelKind::FlatFish => {
+            let mut v = super::flatfish::FlatFish::new(start, heading);
+            v.set_autopilot(autopilot);
+            Box::new(v)
+        }
     }
+}
+
+/// What the autopilots of a [`TwinThruster`] track.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Autopilot {
+    /// The heading set-point ψ_set and the speed set-point v_set (000 eq. 6–7) with their own
+    /// PI-D loops (the default).
+    #[default]
+    Plain,
+    /// Seed 001 §2's parallel PI-D set-points, as the paper intends them
+    /// ([`TwinThruster`]'s docs): surge on v_c with the integral channel I_surge and the
+    /// acceleration a_c fed forward; heading on φ_c with the turn rate ω_c as the derivative
+    /// channel's set-point and α_c fed forward.
+    SetPoints,
 }
 
 /// The state of a vehicle at rest.
@@ -426,6 +454,21 @@ impl Pid {
 /// use conditional-integration anti-windup. Between autopilot updates the thrust is held, and
 /// the dynamics are integrated with classical RK4.
 ///
+/// **Set-point mode** ([`Autopilot::SetPoints`]), seed 001 §2: the planner's decomposition
+/// {(a_c, v_c, I_surge), (α_c, ω_c, φ_c)} feeds the channels of the same two loops:
+///
+/// ```text
+/// X = m₁₁·a_c + kp·(v_c − u) + ki·I_surge + kd·(a_c − u̇)
+/// N = m₃₃·α_c + kp·wrap(φ_c − ψ) + ki·∫wrap(φ_c − ψ) + kd·(ω_c − r)
+/// ```
+///
+/// The accelerations are fed forward through the inertias (what the planner's double
+/// integrator asks of the hull), the derivative channels compare commanded with measured
+/// rates instead of braking every rate, and the surge integral channel is the planner's own:
+/// I_surge, how far the vehicle lags the ideal double-integrator position along its travel,
+/// replaces the loop's integral of the speed error (whose time integral it is). The gains are
+/// the plain mode's.
+///
 /// **`thrust`** in the state is `|T_s| + |T_p|` averaged over the step, N: the total effort of
 /// the two thrusters (for the energy proxy ∫|thrust| dt). In pure surge it equals |X|; in a
 /// pure turn, |N|/arm.
@@ -440,6 +483,7 @@ pub struct TwinThruster {
     heading: Pid,
     prev_u: f64,
     state: VehicleState,
+    autopilot: Autopilot,
 }
 
 impl TwinThruster {
@@ -507,7 +551,13 @@ impl TwinThruster {
             heading: Pid::default(),
             prev_u: 0.0,
             state,
+            autopilot: Autopilot::Plain,
         }
+    }
+
+    /// Selects what the autopilots track (from the next step).
+    pub fn set_autopilot(&mut self, autopilot: Autopilot) {
+        self.autopilot = autopilot;
     }
 
     /// Its parameters (as sanitised by [`TwinThruster::new`]).
@@ -583,6 +633,7 @@ impl VehicleModel for TwinThruster {
         };
         let c = bounded(sanitize(current), MAX_COMMAND_SPEED);
         let speed_ref = finite_or_zero(sp.speed).clamp(-MAX_COMMAND_SPEED, MAX_COMMAND_SPEED);
+        let feeds = Feeds::new(self.autopilot, sp);
         // The epsilon keeps 0.1 / 0.01 at 10 substeps despite rounding.
         let n = (dt / DYNAMIC_SUBSTEP_S - 1e-9).ceil().max(1.0);
         let h = dt / n;
@@ -592,21 +643,32 @@ impl VehicleModel for TwinThruster {
         let mut effort = 0.0;
         for _ in 0..(n as u64) {
             let (psi, u, r) = (self.x[2], self.x[3], self.x[5]);
-            // Heading first: yaw has the thrusters' priority, surge gets what is left.
-            let e_psi = if sp.psi.is_finite() {
-                wrap_pi(sp.psi - psi)
-            } else {
-                0.0
-            };
-            let n_cmd = self
-                .heading
-                .update(&self.gains.heading, e_psi, r, h, n_lim, n_lim);
-            let x_avail = (x_lim - n_cmd.abs() / p.arm).max(0.0);
             let u_dot = (u - self.prev_u) / h;
             self.prev_u = u;
-            let x_cmd =
-                self.surge
-                    .update(&self.gains.surge, speed_ref - u, u_dot, h, x_avail, x_lim);
+            let (n_cmd, x_cmd) = match feeds {
+                None => {
+                    // Heading first: yaw has the thrusters' priority, surge gets what is left.
+                    let e_psi = if sp.psi.is_finite() {
+                        wrap_pi(sp.psi - psi)
+                    } else {
+                        0.0
+                    };
+                    let n_cmd = self
+                        .heading
+                        .update(&self.gains.heading, e_psi, r, h, n_lim, n_lim);
+                    let x_avail = (x_lim - n_cmd.abs() / p.arm).max(0.0);
+                    let x_cmd = self.surge.update(
+                        &self.gains.surge,
+                        speed_ref - u,
+                        u_dot,
+                        h,
+                        x_avail,
+                        x_lim,
+                    );
+                    (n_cmd, x_cmd)
+                }
+                Some(f) => self.pid_setpoints(&f, psi, u, r, u_dot, h, n_lim, x_lim),
+            };
             let (x_f, n_f, e) = self.allocate(x_cmd, n_cmd);
             effort += e;
             self.rk4(h, x_f, n_f, c);
@@ -635,6 +697,82 @@ impl VehicleModel for TwinThruster {
             thrust: effort / n,
         };
         self.state
+    }
+}
+
+/// The PI-D set-points of one step, sanitised (non-finite counts as zero, a non-finite φ_c as
+/// the plain heading set-point), or `None` in plain mode.
+#[derive(Clone, Copy, Debug)]
+struct Feeds {
+    a_c: f64,
+    v_c: f64,
+    i_surge: f64,
+    alpha_c: f64,
+    omega_c: f64,
+    phi_c: f64,
+}
+
+impl Feeds {
+    fn new(mode: Autopilot, sp: &SetPoints) -> Option<Feeds> {
+        if mode != Autopilot::SetPoints {
+            return None;
+        }
+        let f = &sp.pid;
+        let speed = |x: f64| finite_or_zero(x).clamp(-MAX_COMMAND_SPEED, MAX_COMMAND_SPEED);
+        Some(Feeds {
+            a_c: finite_or_zero(f.a_c),
+            v_c: speed(f.v_c),
+            i_surge: finite_or_zero(f.i_surge),
+            alpha_c: finite_or_zero(f.alpha_c),
+            omega_c: finite_or_zero(f.omega_c),
+            phi_c: if f.phi_c.is_finite() { f.phi_c } else { sp.psi },
+        })
+    }
+}
+
+impl TwinThruster {
+    /// Set-point mode (see the type's docs): the yaw moment and the surge force, yaw first.
+    #[allow(clippy::too_many_arguments)]
+    fn pid_setpoints(
+        &mut self,
+        f: &Feeds,
+        psi: f64,
+        u: f64,
+        r: f64,
+        u_dot: f64,
+        h: f64,
+        n_lim: f64,
+        x_lim: f64,
+    ) -> (f64, f64) {
+        let p = self.params;
+        let g = self.gains;
+        let m11 = p.mass + p.x_udot;
+        let m33 = p.iz + p.n_rdot;
+        let e_psi = if f.phi_c.is_finite() {
+            wrap_pi(f.phi_c - psi)
+        } else {
+            0.0
+        };
+        // The loop's own integral of the heading error, its derivative channel on ω_c − r
+        // (the `y_dot` argument is the measured minus the commanded rate), α_c fed forward.
+        let pid = self
+            .heading
+            .update(&g.heading, e_psi, r - f.omega_c, h, n_lim, n_lim);
+        let n_cmd = (pid + m33 * f.alpha_c).clamp(-n_lim, n_lim);
+        let x_avail = (x_lim - n_cmd.abs() / p.arm).max(0.0);
+        // The integral channel within the plain loop's anti-windup bound (|ki·∫e| ≤ X_max).
+        let integral = if g.surge.ki > 0.0 {
+            (g.surge.ki * f.i_surge).clamp(-x_lim, x_lim)
+        } else {
+            0.0
+        };
+        let raw = m11 * f.a_c + g.surge.kp * (f.v_c - u) + integral + g.surge.kd * (f.a_c - u_dot);
+        let x_cmd = if raw.is_finite() {
+            raw.clamp(-x_avail, x_avail)
+        } else {
+            0.0
+        };
+        (n_cmd, x_cmd)
     }
 }
 
@@ -667,6 +805,11 @@ impl VideoRay {
     pub fn params(&self) -> &HullParams {
         self.0.params()
     }
+
+    /// Selects what its autopilots track ([`TwinThruster::set_autopilot`]).
+    pub fn set_autopilot(&mut self, autopilot: Autopilot) {
+        self.0.set_autopilot(autopilot);
+    }
 }
 
 impl VehicleModel for VideoRay {
@@ -693,6 +836,7 @@ mod tests {
             psi,
             speed,
             velocity: P2::new(speed * psi.cos(), speed * psi.sin()),
+            ..SetPoints::default()
         }
     }
 
@@ -723,14 +867,19 @@ mod tests {
         assert!("rov".parse::<ModelKind>().is_err());
         assert_eq!(ModelKind::VideoRay.to_string(), "videoray");
         assert_eq!(
-            new_model(ModelKind::VideoRay, P2::default(), 0.0).kind(),
+            new_model(ModelKind::VideoRay, P2::default(), 0.0, Autopilot::Plain).kind(),
             ModelKind::VideoRay
         );
     }
 
     #[test]
     fn kinematic_integrates_bilinearly_with_current() {
-        let mut k = new_model(ModelKind::Kinematic, P2::new(1.0, 2.0), 0.3);
+        let mut k = new_model(
+            ModelKind::Kinematic,
+            P2::new(1.0, 2.0),
+            0.3,
+            Autopilot::Plain,
+        );
         assert_eq!(k.state().heading, 0.3);
         let cmd = SetPoints {
             velocity: P2::new(0.0, 1.0),
@@ -761,7 +910,12 @@ mod tests {
             ModelKind::VideoRay,
             ModelKind::FlatFish,
         ] {
-            let mut m = new_model(kind, P2::new(f64::NAN, 1.0), f64::INFINITY);
+            let mut m = new_model(
+                kind,
+                P2::new(f64::NAN, 1.0),
+                f64::INFINITY,
+                Autopilot::SetPoints,
+            );
             let s0 = m.state();
             assert_eq!(s0.position, P2::new(0.0, 1.0));
             assert_eq!(s0.heading, 0.0);
@@ -772,6 +926,14 @@ mod tests {
                 psi: f64::NAN,
                 speed: 1e30,
                 velocity: P2::new(f64::INFINITY, 1e30),
+                pid: crate::types::PidFeeds {
+                    a_c: 1e30,
+                    v_c: f64::NAN,
+                    i_surge: f64::INFINITY,
+                    alpha_c: -1e30,
+                    omega_c: f64::NAN,
+                    phi_c: f64::INFINITY,
+                },
             };
             for _ in 0..50 {
                 let s = m.step(0.1, &wild, P2::new(f64::NAN, 1e9));
