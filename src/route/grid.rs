@@ -289,6 +289,7 @@ mod tests {
             range_m: 20.0,
             blank_m: 0.5,
             echoes: &echoes,
+            seconded: 0,
         };
         map.observe(&beam);
         map.observe(&beam);

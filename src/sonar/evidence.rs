@@ -19,9 +19,12 @@
 //! `hit`, a beam that passes through (nearer than its first echo, less `stop_short_m`; or up to
 //! `free_range_m` when it returns nothing) takes `miss`; a cell is believed occupied at
 //! `occupied` or more. With the defaults a cell beyond `near_m` (8 m) needs two echoes before
-//! it is believed (a surface is hit again by the next rays or the next sweep; a spurious echo
-//! at a random range almost never is), and three looks through it undo one echo — so speckle
-//! and false targets fade within a sweep while a real surface, hit on every sweep, stays.
+//! it is believed — a second look, or the neighbouring beam of the same sweep returning an echo
+//! within the extractor's cluster gap of it (a surface spans beams; a spurious echo at a random
+//! range is one ping) — and three looks through it undo one echo, so speckle and false targets
+//! fade within a sweep while a real surface, hit on every sweep, stays. (Without the
+//! neighbour rule, a box swept once from 10 m was believed in one cell of six, and the vehicle
+//! met its corner before the next sweep: generated box fields, own sonar.)
 //! Within `near_m` one echo is believed: there the vehicle has no time to wait for a second
 //! look, and a false one costs only a detour until the next look clears it.
 //!
@@ -162,6 +165,9 @@ pub struct Beam<'a> {
     pub blank_m: f32,
     /// Leading-edge ranges of the detected echoes, m, nearest first.
     pub echoes: &'a [f32],
+    /// Bit k set: echo k continues an echo of the previous beam of the sweep (the same surface
+    /// seen twice), so its cell is believed at once.
+    pub seconded: u8,
 }
 
 /// The window's lower-left world cell.
@@ -317,6 +323,15 @@ impl EvidenceMap {
 
     // ---- The writer's side (background) ----
 
+    /// Believes the cell at `p` (writer only): an echo there was seconded by the next beam.
+    pub fn believe(&self, p: Vec2) {
+        let Some(w) = self.window() else { return };
+        let (i, j) = self.cell_of(p);
+        if w.contains(i, j) {
+            self.set(i, j, self.value(i, j).max(self.cfg.occupied));
+        }
+    }
+
     /// Keeps the window centred on `p` (writer only): when `p` is a quarter of the side off
     /// centre, the window moves and the cells that leave it are cleared for those that enter.
     pub fn follow(&self, p: Vec2) {
@@ -408,13 +423,14 @@ impl EvidenceMap {
                 self.set(i, j, self.value(i, j).saturating_sub(cfg.miss));
             }
         }
-        for &r in beam.echoes {
+        for (k, &r) in beam.echoes.iter().enumerate() {
             if !(r.is_finite() && r >= 0.0 && r <= beam.range_m) {
                 continue;
             }
             let (i, j) = self.cell_of(beam.origin + beam.look * r);
             if w.contains(i, j) {
-                let add = if r <= cfg.near_m {
+                let seconded = k < 8 && beam.seconded & (1 << k) != 0;
+                let add = if r <= cfg.near_m || seconded {
                     cfg.hit.max(cfg.occupied)
                 } else {
                     cfg.hit
@@ -553,6 +569,7 @@ mod tests {
             range_m: 30.0,
             blank_m: 0.0,
             echoes: &echoes,
+            seconded: 0,
         });
     }
 
@@ -623,6 +640,7 @@ mod tests {
                 range_m: 30.0,
                 blank_m: 2.0,
                 echoes: &[],
+                seconded: 0,
             });
         }
         assert!(
@@ -675,6 +693,7 @@ mod tests {
                     range_m: 30.0,
                     blank_m: 0.0,
                     echoes: &[1.0],
+                    seconded: 0,
                 });
                 m.observe(&Beam {
                     origin: Vec2::new(x, 0.0),
@@ -682,6 +701,7 @@ mod tests {
                     range_m: 30.0,
                     blank_m: 0.0,
                     echoes: &[3.0],
+                    seconded: 0,
                 });
             }
         }
@@ -738,6 +758,7 @@ mod tests {
             range_m: 30.0,
             blank_m: 0.0,
             echoes: &[f32::INFINITY, -1.0, 40.0],
+            seconded: 0,
         });
         let mut near: heapless::Vec<Near, 4> = heapless::Vec::new();
         m.nearest(Vec2::ZERO, 30.0, &mut near);

@@ -35,6 +35,9 @@ struct LastPing {
     sensor: Vec2,
     /// Sweep direction: +1 counter-clockwise, −1 clockwise, 0 not yet known.
     dir: i8,
+    /// Its echoes' leading edges, world frame, m (the first `echo_count`).
+    echoes: [Vec2; MAX_RUNS_PER_BEAM],
+    echo_count: usize,
 }
 
 /// Sonar scanlines → obstacle features. Owns a fixed-capacity cluster table; no heap, O(bins)
@@ -114,6 +117,8 @@ impl Extractor {
         // 1. Continuity with the previous ping.
         let mut dir = 0i8;
         let mut advance = 1u32;
+        // The previous beam's echoes, if it is the neighbour of this one in the same sweep.
+        let mut neighbour: Option<LastPing> = None;
         if let Some(last) = self.last {
             let d = wrap_angle(bearing - last.bearing);
             let ad = d.abs();
@@ -137,16 +142,11 @@ impl Extractor {
                 // ½ ≤ |d|/step ≤ max_missed + 1.5, so this is 1 ..= max_missed + 2.
                 advance = libm::roundf(ad / step).max(1.0) as u32;
                 self.table.advance(ad);
+                neighbour = Some(last);
             }
         }
         let beam = self.beam.wrapping_add(advance);
         self.beam = beam;
-        self.last = Some(LastPing {
-            bearing,
-            time_ms: scan.time_ms,
-            sensor,
-            dir,
-        });
 
         // 2. Clusters that missed too many beams while pings were missing cannot continue.
         let missed = u32::from(self.cfg.max_missed_beams);
@@ -155,10 +155,37 @@ impl Extractor {
         // 3. Runs → world-frame hits → clusters.
         let echoes = detect(scan, &self.cfg);
         let look = Vec2::from_angle(pose.heading + bearing);
+        let mut here = LastPing {
+            bearing,
+            time_ms: scan.time_ms,
+            sensor,
+            dir,
+            echoes: [Vec2::ZERO; MAX_RUNS_PER_BEAM],
+            echo_count: 0,
+        };
+        for (slot, e) in here.echoes.iter_mut().zip(echoes.iter()) {
+            *slot = sensor + look * e.range_m;
+            here.echo_count += 1;
+        }
+        self.last = Some(here);
         if let Some(map) = map {
             let mut ranges: heapless::Vec<f32, MAX_RUNS_PER_BEAM> = heapless::Vec::new();
             for e in echoes.iter() {
                 let _ = ranges.push(e.range_m);
+            }
+            // An echo the neighbouring beam also returned (within the cluster gap) is the
+            // second look a far cell needs: a false target or a fish is one ping, a surface
+            // spans beams. Both ends of the pair are believed.
+            let gap2 = self.cfg.cluster_gap_m * self.cfg.cluster_gap_m;
+            let mut seconded = 0u8;
+            if let Some(prev) = neighbour {
+                let before = prev.echoes.get(..prev.echo_count).unwrap_or(&[]);
+                for (k, p) in here.echoes.iter().take(here.echo_count).enumerate() {
+                    if let Some(q) = before.iter().find(|q| (**q - *p).norm2() <= gap2) {
+                        seconded |= 1 << k;
+                        map.believe(*q);
+                    }
+                }
             }
             map.follow(pose.position);
             map.observe(&Beam {
@@ -167,6 +194,7 @@ impl Extractor {
                 range_m: scan.range_m,
                 blank_m: self.cfg.blanking_m,
                 echoes: &ranges,
+                seconded,
             });
         }
         // Pushed, not collected: heapless' `collect` panics on overflow.
@@ -423,6 +451,64 @@ mod tests {
 
     const STEP: f32 = SCAN.step;
     const FULL: usize = SCAN.pings;
+
+    #[test]
+    fn a_face_swept_once_from_afar_is_believed_along_its_length() {
+        // A 4 m face across the +x axis at 12 m (beyond the map's near_m): each cell is hit by
+        // one or two beams in one sweep. Neighbouring beams second each other's echoes, so the
+        // face is believed along its length after a single sweep; an echo only one beam
+        // returns (a false target) is not.
+        let scene = [Obj::Wall(Vec2::new(12.0, -2.0), Vec2::new(12.0, 2.0))];
+        let map = EvidenceMap::new(crate::sonar::EvidenceConfig::default()).unwrap();
+        let mut ex = Extractor::new(ExtractorConfig::default()).unwrap();
+        let mut sonar = Sonar::new(1, 30, 2);
+        let mut bins = [0u8; MAX_BINS];
+        let head = SCAN;
+        for k in 0..head.pings {
+            let bearing = wrap_angle(head.bearing0 + k as f32 * head.step);
+            let u = Vec2::from_angle(bearing);
+            sonar.ping(&scene, Vec2::ZERO, u, head.range, &mut bins[..head.bins]);
+            let scan = Scanline {
+                time_ms: k as u64 * head.dt_ms,
+                bearing_rad: bearing,
+                step_rad: head.step,
+                range_m: head.range,
+                bins: &bins[..head.bins],
+            };
+            let pose = STILL.pose(0.0);
+            ex.push_scanline_mapped(&scan, pose, Some(&map), &mut |_| true)
+                .unwrap();
+        }
+        let w = map.window().unwrap();
+        let face_rows = (-4..4).filter(|&j| map.is_occupied(w, 24, j)).count();
+        // (Without the neighbour rule: 1 of 8.)
+        assert!(
+            face_rows >= 6,
+            "{face_rows} of 8 cells of the face believed"
+        );
+        // One ping's echo at 14 m on a bearing no neighbour saw.
+        let mut lone = [0u8; 300];
+        lone[140..143].fill(220);
+        let quiet = [0u8; 300];
+        let mut ex = Extractor::new(ExtractorConfig::default()).unwrap();
+        for (k, bins) in [&quiet, &lone, &quiet].into_iter().enumerate() {
+            let sl = Scanline {
+                time_ms: 60 * k as u64,
+                bearing_rad: 1.0 + k as f32 * head.step,
+                step_rad: head.step,
+                range_m: 30.0,
+                bins,
+            };
+            ex.push_scanline_mapped(&sl, STILL.pose(0.0), Some(&map), &mut |_| true)
+                .unwrap();
+        }
+        let p = Vec2::from_angle(1.0 + head.step) * 14.05;
+        let cell = |x: f32| libm::floorf(x / 0.5) as i32;
+        assert!(
+            !map.is_occupied(w, cell(p.x), cell(p.y)),
+            "a lone echo is not believed"
+        );
+    }
 
     #[test]
     fn one_circle_from_a_moving_turning_vehicle() {
