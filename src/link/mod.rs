@@ -38,6 +38,7 @@ pub mod crc;
 pub mod decoder;
 pub mod frame;
 pub mod message;
+pub mod ping;
 pub mod report;
 pub mod sensors;
 pub mod shape;
