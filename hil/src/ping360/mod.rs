@@ -3,3 +3,4 @@
 //! the simulated Ping360 the runner puts on its own pty (`sim`).
 
 pub mod dump;
+pub mod sim;

@@ -13,7 +13,7 @@ pub const RAD_PER_GRAD: f32 = TAU / GRADIANS as f32;
 pub const MAX_STEP_GRAD: u16 = 12;
 
 /// The driver's settings. [`Default`]: a full circle in 2-gradian (1.8°) steps, 30 m over 600
-/// samples at 1500 m/s, normal gain, 750 kHz, a 100 µs pulse, 1 s timeout, mounted as
+/// samples at 1500 m/s, normal gain, 750 kHz, a 100 µs pulse, 0.5 s timeout, mounted as
 /// described at [`Ping360Config::zero_bearing_rad`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -47,8 +47,12 @@ pub struct Ping360Config {
     /// for a sonar mounted upside down.
     pub clockwise: bool,
     /// A `transducer` not answered by its `device_data` within this long is counted as a
-    /// timeout and the head steps on, ms, `100 ..= 10000`. Blue Robotics advises 4 s for the
-    /// worst case (a long move); a step of a few gradians takes tens of milliseconds.
+    /// timeout and the head steps on, ms, `100 ..= 10000`. A ping of 1200 samples at 50 m
+    /// takes about 0.2 s at 115 200 baud (67 ms listening, 106 ms of data, a step of the
+    /// motor); Blue Robotics advises 4 s for the worst case, a long move (the first command,
+    /// from wherever the head is, may time out once: counted, and its late answer is still
+    /// used). Each lost answer costs this long of sonar time, and a sweep slowed by many lets
+    /// the vehicle outrun what its sonar has seen (see the README's "With a Ping360").
     pub timeout_ms: u32,
 }
 
@@ -66,7 +70,7 @@ impl Default for Ping360Config {
             sound_speed: 1500.0,
             zero_bearing_rad: PI,
             clockwise: true,
-            timeout_ms: 1000,
+            timeout_ms: 500,
         }
     }
 }

@@ -8,9 +8,10 @@
 //!
 //! **The cycle.** One command is outstanding at a time: `transducer` at the current angle;
 //! its `device_data` (checksum matched, head accepted) becomes a scanline and the next command
-//! goes out at once, one step on (continuously round, or back and forth over the sector). No
-//! answer within `timeout_ms` (or a `nack` of the command): counted as a timeout, the head
-//! steps on and the next command goes out. A `device_data` for another angle (a late answer)
+//! goes out at once, one step on (continuously round, or back and forth over the sector). An
+//! answer dropped for its checksum (counted there) also steps on at once: the sonar is idle
+//! again. No answer within `timeout_ms` (or a `nack` of the command): counted as a timeout,
+//! the head steps on and the next command goes out. A `device_data` for another angle (a late answer)
 //! still becomes a scanline; the command outstanding stays outstanding.
 //!
 //! **The scanline** of a `device_data`: time and vehicle pose are those when its head arrived
@@ -213,8 +214,18 @@ impl Ping360 {
                         self.finish(inc, now_ms, tx, out);
                     }
                 }
-                // Counted by the decoder; whatever was pooled is thrown away.
-                Event::Dropped(_) => self.incoming = None,
+                // Counted by the decoder; whatever was pooled is thrown away. If it was the
+                // answer to the command outstanding, the sonar is idle again: step on now
+                // rather than wait out the timeout.
+                Event::Dropped(_) => {
+                    let lost = self.incoming.take();
+                    if lost
+                        .is_some_and(|i| self.pending.is_some_and(|p| p.angle == i.settings.angle))
+                    {
+                        self.step();
+                        self.send(now_ms, tx);
+                    }
+                }
                 Event::Frame(h) if h.message_id == id::NACK => {
                     let nacked = self
                         .decoder
@@ -433,9 +444,9 @@ mod tests {
             true
         };
         d.poll(0, &mut tx);
-        d.poll(999, &mut tx);
+        d.poll(499, &mut tx);
         assert_eq!(d.counters().timeouts, 0);
-        d.poll(1000, &mut tx);
+        d.poll(500, &mut tx);
         assert_eq!(d.counters().timeouts, 1);
         assert_eq!(d.angle(), 2);
         // A nack of the command: the same.
@@ -455,6 +466,8 @@ mod tests {
         d.on_bytes(b"\x00\x01xyz", 1200, None, &mut tx, &mut |_, _| scans += 1);
         let c = d.counters();
         assert_eq!((c.checksum_errors, c.bytes_skipped, scans), (1, 5, 0));
+        // The corrupted answer was to the command outstanding: the head stepped on at once.
+        assert_eq!((d.angle(), c.timeouts), (6, 2));
         // Then a good answer goes through.
         let good = answer(&sent.borrow().last().unwrap().clone(), 300, 10);
         d.on_bytes(&good, 1300, None, &mut tx, &mut |_, p| {
@@ -462,7 +475,7 @@ mod tests {
             scans += 1
         });
         assert_eq!(scans, 1);
-        assert_eq!(d.angle(), 6);
+        assert_eq!(d.angle(), 8);
     }
 
     #[test]
