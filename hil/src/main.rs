@@ -10,6 +10,8 @@
 //! hil merge DIR... [--out DIR]
 //! hil compare [SCENARIO.toml...] [--strategies vpf,multipoint,navfn] [--firmware host|qemu]
 //! hil bench [--families ...] [--seeds N] [--strategies ...] [--models ...] [--sensing ...]
+//! hil sonar-replay --ping360 FILE [--plot FILE.svg] [detection options]
+//! hil ping360-raw DUMP.txt OUT.bin
 //! ```
 //!
 //! `hil run` also takes `--params RECIPE.toml` (a `[planner]` table, as `hil sweep` writes).
@@ -29,6 +31,8 @@ const USAGE: &str = "usage:
   hil compare [SCENARIO.toml...]    fly scenarios with each strategy, print a table (hil compare --help)
   hil bench [options]               fly generated worlds, tabulate success and safety (hil bench --help)
   hil faults SCENARIO.toml... [options]  fly each scenario under each fault, print a table (hil faults --help)
+  hil sonar-replay --ping360 FILE [options]  raw Ping360 bytes through the firmware's parser and extractor
+  hil ping360-raw DUMP.txt OUT.bin  a brping text dump of device_data messages as raw Ping bytes
 
 options for run:
   --out DIR                 output directory
@@ -294,6 +298,8 @@ fn main() -> ExitCode {
         Some("compare") => hil::compare::cli(it),
         Some("bench") => hil::bench::cli(it),
         Some("faults") => hil::campaign::cli(it),
+        Some("sonar-replay") => hil::ping360::replay::cli(it),
+        Some("ping360-raw") => hil::ping360::replay::cli_raw(it),
         Some("-h" | "--help") => {
             println!("{USAGE}");
             ExitCode::SUCCESS

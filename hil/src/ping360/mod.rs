@@ -3,4 +3,5 @@
 //! the simulated Ping360 the runner puts on its own pty (`sim`).
 
 pub mod dump;
+pub mod replay;
 pub mod sim;
