@@ -160,7 +160,7 @@ pub fn main() -> ExitCode {
                     cfg.range_m(),
                     cfg.samples
                 );
-                Some((r, w, *cfg))
+                Some(((r, w), *cfg))
             }
             Err(e) => {
                 eprintln!("vpf-firmware: cannot open the Ping360 port {path}: {e}");
@@ -285,7 +285,7 @@ fn run(
     reader: Box<dyn Read + Send>,
     mut writer: Box<dyn Write>,
     is_device: bool,
-    sonar: Option<(Box<dyn Read + Send>, Box<dyn Write>, Ping360Config)>,
+    sonar: Option<(SonarPort, Ping360Config)>,
 ) -> std::io::Result<()> {
     let mut fw = SingleContext::new(
         Params::default(),
@@ -298,7 +298,7 @@ fn run(
     let stats = Arc::new(RxStats::default());
     let sonar_stats = Arc::new(RxStats::default());
     let mut sonar_writer = None;
-    if let Some((sonar_reader, w, cfg)) = sonar {
+    if let Some(((sonar_reader, w), cfg)) = sonar {
         fw.set_ping360(cfg)
             .map_err(|e| std::io::Error::other(e.to_string()))?;
         sonar_writer = Some(w);

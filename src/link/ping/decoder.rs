@@ -403,7 +403,7 @@ mod tests {
             assert!(matches!(ev[0], Event::DataHead(h, dh)
                 if h.message_id == 2300 && dh.settings.angle == 150 && dh.data_len == 1200));
             assert!(matches!(ev.last(), Some(Event::DataEnd(_))));
-            assert_eq!(done, [samples.clone()]);
+            assert_eq!(done, core::slice::from_ref(&samples));
         }
     }
 
@@ -501,7 +501,7 @@ mod tests {
         let mut input = Vec::new();
         for _ in 0..20_000 {
             input.push((rng.next_u32() >> 24) as u8);
-            if rng.next_u32() % 500 == 0 {
+            if rng.next_u32().is_multiple_of(500) {
                 input.extend_from_slice(&device_data(3, &[5; 50]));
             }
         }

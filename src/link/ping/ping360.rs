@@ -78,8 +78,10 @@ impl PingSettings {
 
     fn emit(&self, out: &mut [u8]) -> Result<(), Error> {
         let dst = out.get_mut(..Self::LEN).ok_or(Error::BufferTooSmall)?;
-        dst[0] = self.mode;
-        dst[1] = self.gain_setting;
+        if let Some([m, g]) = dst.get_mut(..2) {
+            *m = self.mode;
+            *g = self.gain_setting;
+        }
         for (at, v) in [
             (2, self.angle),
             (4, self.transmit_duration),
@@ -226,8 +228,10 @@ impl TransducerRepr {
         self.settings.check()?;
         let dst = out.get_mut(..TRANSDUCER_LEN).ok_or(Error::BufferTooSmall)?;
         self.settings.emit(dst)?;
-        dst[PingSettings::LEN] = u8::from(self.transmit);
-        dst[PingSettings::LEN + 1] = 0;
+        if let Some([t, reserved]) = dst.get_mut(PingSettings::LEN..) {
+            *t = u8::from(self.transmit);
+            *reserved = 0;
+        }
         Ok(TRANSDUCER_LEN)
     }
 }

@@ -152,7 +152,8 @@ impl Ping360Config {
     pub fn sample_period_for(range_m: f32, samples: u16, sound_speed: f32) -> Option<u16> {
         let p = 2.0 * range_m / (sound_speed * 25e-9 * f32::from(samples.max(1)));
         let p = libm::roundf(p);
-        (p.is_finite() && p >= 80.0 && p <= 40_000.0)
+        (80.0..=40_000.0)
+            .contains(&p)
             .then_some(p as u16)
             .filter(|p| SAMPLE_PERIOD_RANGE.contains(p))
     }

@@ -293,7 +293,7 @@ impl Ping360 {
         let sent = emit_frame(&m, HOST_ID, SONAR_ID, &mut buf)
             .ok()
             .and_then(|n| buf.get(..n))
-            .is_some_and(|f| tx(f));
+            .is_some_and(tx);
         self.pending = sent.then_some(Pending {
             angle: self.angle,
             sent_ms: now_ms,
