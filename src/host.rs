@@ -5,7 +5,14 @@
 //! ```text
 //! vpf-firmware                      # protocol on stdin/stdout, log on stderr
 //! vpf-firmware --device /dev/pts/7  # protocol on a serial device or pty (set raw by its opener)
+//! vpf-firmware --ping360 /dev/ttyUSB0 [--ping360-range 30 ...]   # and a Ping360 on its own port
 //! ```
+//!
+//! With `--ping360 DEVICE` the firmware drives a Blue Robotics Ping360 on that serial port
+//! (`vpf::sonar::ping360`): its pings become scanlines like those of the `Scanline` message, its
+//! counters are `Telemetry` rows 28–33. Bytes for the Ping360 are written before the main
+//! link's of the same event, so a `transducer` sent in a period precedes that period's
+//! `Command` (the HIL harness relies on it in lockstep).
 //!
 //! Time: in real time the periods run on an absolute schedule from the process clock; once the
 //! host sends a `Tick`, the process switches to lockstep and runs a period per `Tick`, at the
@@ -23,12 +30,29 @@ use std::time::{Duration, Instant};
 
 use vpf::guidance::{RuntimeConfig, SingleContext};
 use vpf::link::CostUnit;
+use vpf::sonar::ping360::Ping360Config;
 use vpf::Params;
 
-const USAGE: &str = "usage: vpf-firmware [--device PATH]
+const USAGE: &str = "usage: vpf-firmware [--device PATH] [--ping360 DEVICE [Ping360 options]]
 
 The VPF guidance firmware as a host process. Speaks the serial protocol of docs/protocol.md
-on stdin/stdout, or on the serial device or pty at PATH. Logs go to stderr.";
+on stdin/stdout, or on the serial device or pty at PATH. Logs go to stderr.
+
+  --ping360 DEVICE             drive a Blue Robotics Ping360 on this serial device or pty
+  --ping360-baud N             its baud rate (default 115200)
+  --ping360-sector START:WIDTH head angles scanned, gradians (default 0:400, a full circle;
+                               less goes back and forth from START to START+WIDTH)
+  --ping360-step G             head step, gradians, 1..=12 (default 2, i.e. 1.8 degrees)
+  --ping360-range M            range, m (sets the sample period; default 30)
+  --ping360-samples N          samples per ping, 200..=1200 (default 600)
+  --ping360-gain 0|1|2         low, normal (default), high
+  --ping360-frequency KHZ      transmit frequency, 500..=1000 (default 750)
+  --ping360-pulse US           transmit duration, microseconds, 1..=1000 (default 100)
+  --ping360-mount DEG[:ccw]    bearing of head angle 0 from the bow, degrees counter-clockwise
+                               (default 180: angle 200 ahead); `:ccw` if the angle grows
+                               counter-clockwise seen from above (the sonar upside down)
+  --ping360-timeout-ms T       a ping unanswered this long is counted and skipped (default 500)
+  --sound-speed C              speed of sound, m/s (default 1500)";
 
 /// Where the protocol flows.
 enum Port {
@@ -36,23 +60,81 @@ enum Port {
     Device(String),
 }
 
-fn parse_args() -> Result<Port, String> {
+/// The command line.
+struct Args {
+    port: Port,
+    /// The Ping360's device, baud rate and settings.
+    ping360: Option<(String, u32, Ping360Config)>,
+}
+
+fn number<T: std::str::FromStr>(flag: &str, v: Option<String>) -> Result<T, String> {
+    let v = v.ok_or(format!("{flag} needs a value"))?;
+    v.parse().map_err(|_| format!("{flag} {v}: not a number"))
+}
+
+fn parse_args() -> Result<Args, String> {
     let mut args = std::env::args().skip(1);
     let mut port = Port::Stdio;
+    let mut device = None;
+    let mut baud = 115_200u32;
+    let mut cfg = Ping360Config::default();
+    let mut range_m: Option<f32> = None;
     while let Some(a) = args.next() {
         match a.as_str() {
             "--device" => {
                 port = Port::Device(args.next().ok_or("--device needs a path")?);
             }
+            "--ping360" => device = Some(args.next().ok_or("--ping360 needs a device")?),
+            "--ping360-baud" => baud = number(&a, args.next())?,
+            "--ping360-sector" => {
+                let v = args.next().ok_or("--ping360-sector needs START:WIDTH")?;
+                let (s, w) = v
+                    .split_once(':')
+                    .ok_or(format!("--ping360-sector {v}: expected START:WIDTH"))?;
+                cfg.start_grad = number(&a, Some(s.to_string()))?;
+                cfg.width_grad = number(&a, Some(w.to_string()))?;
+            }
+            "--ping360-step" => cfg.step_grad = number(&a, args.next())?,
+            "--ping360-range" => range_m = Some(number(&a, args.next())?),
+            "--ping360-samples" => cfg.samples = number(&a, args.next())?,
+            "--ping360-gain" => cfg.gain = number(&a, args.next())?,
+            "--ping360-frequency" => cfg.frequency_khz = number(&a, args.next())?,
+            "--ping360-pulse" => cfg.transmit_duration_us = number(&a, args.next())?,
+            "--ping360-timeout-ms" => cfg.timeout_ms = number(&a, args.next())?,
+            "--sound-speed" => cfg.sound_speed = number(&a, args.next())?,
+            "--ping360-mount" => {
+                let v = args.next().ok_or("--ping360-mount needs DEG[:ccw]")?;
+                let (deg, sense) = v.split_once(':').unwrap_or((&v, "cw"));
+                let deg: f32 = number(&a, Some(deg.to_string()))?;
+                cfg.zero_bearing_rad = deg.to_radians();
+                cfg.clockwise = match sense {
+                    "cw" => true,
+                    "ccw" => false,
+                    other => return Err(format!("--ping360-mount: `{other}`: expected cw or ccw")),
+                };
+            }
             "-h" | "--help" => return Err(String::new()),
             other => return Err(format!("unknown argument `{other}`")),
         }
     }
-    Ok(port)
+    let range_m = range_m.unwrap_or(cfg.range_m());
+    cfg.sample_period = Ping360Config::sample_period_for(range_m, cfg.samples, cfg.sound_speed)
+        .ok_or(format!(
+            "--ping360-range {range_m}: no sample period reaches it with {} samples",
+            cfg.samples
+        ))?;
+    let ping360 = match device {
+        Some(d) => {
+            cfg.validate().map_err(|e| e.to_string())?;
+            Some((d, baud, cfg))
+        }
+        None => None,
+    };
+    Ok(Args { port, ping360 })
 }
 
 pub fn main() -> ExitCode {
-    let port = match parse_args() {
+    let Args { port, ping360 } = match parse_args() {
         Ok(p) => p,
         Err(e) => {
             if !e.is_empty() {
@@ -67,6 +149,26 @@ pub fn main() -> ExitCode {
         }
     };
     let is_device = matches!(port, Port::Device(_));
+    let sonar = match &ping360 {
+        Some((path, baud, cfg)) => match open_ping360(path, *baud) {
+            Ok((r, w)) => {
+                eprintln!(
+                    "vpf-firmware: Ping360 on {path} at {baud} baud: angles {}+{} gradians in steps of {}, {:.1} m over {} samples",
+                    cfg.start_grad,
+                    cfg.width_grad,
+                    cfg.step_grad,
+                    cfg.range_m(),
+                    cfg.samples
+                );
+                Some(((r, w), *cfg))
+            }
+            Err(e) => {
+                eprintln!("vpf-firmware: cannot open the Ping360 port {path}: {e}");
+                return ExitCode::FAILURE;
+            }
+        },
+        None => None,
+    };
     let (reader, writer): (Box<dyn Read + Send>, Box<dyn Write>) = match &port {
         Port::Stdio => (Box::new(std::io::stdin()), Box::new(std::io::stdout())),
         Port::Device(path) => {
@@ -93,7 +195,7 @@ pub fn main() -> ExitCode {
             Port::Device(p) => p.clone(),
         }
     );
-    match run(reader, writer, is_device) {
+    match run(reader, writer, is_device, sonar) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("vpf-firmware: {e}");
@@ -124,19 +226,46 @@ struct RxStats {
     dropped: AtomicU64,
 }
 
+/// The Ping360's serial port, raw, opened twice over (reads in a thread, writes in the loop).
+type SonarPort = (Box<dyn Read + Send>, Box<dyn Write>);
+
+/// Opens the Ping360's port at `baud`, 8N1, raw, with reads that time out when it is quiet.
+fn open_ping360(path: &str, baud: u32) -> Result<SonarPort, serialport::Error> {
+    let port = serialport::new(path, baud)
+        .timeout(Duration::from_millis(20))
+        .open()?;
+    let writer = port.try_clone()?;
+    Ok((Box::new(port), Box::new(writer)))
+}
+
+/// Where a chunk of input came from.
+enum Input {
+    /// The main link.
+    Main(Vec<u8>),
+    /// The Ping360's port.
+    Sonar(Vec<u8>),
+}
+
 /// The reader thread: reads `reader` until its end and queues what it reads without ever
 /// blocking on the queue (a full queue drops the chunk and counts it), so a flood costs CPU,
-/// never memory.
-fn pump(mut reader: impl Read, tx: &mpsc::SyncSender<Vec<u8>>, stats: &RxStats, is_device: bool) {
+/// never memory. `wrap` tags the chunks with their port.
+fn pump(
+    mut reader: impl Read,
+    tx: &mpsc::SyncSender<Input>,
+    stats: &RxStats,
+    is_device: bool,
+    wrap: fn(Vec<u8>) -> Input,
+) {
     let mut buf = [0u8; READ_CHUNK];
     loop {
         match reader.read(&mut buf) {
             // A serial line set to time out reads returns 0 when quiet: not the end.
             Ok(0) if is_device => std::thread::sleep(Duration::from_millis(5)),
+            Err(e) if is_device && e.kind() == std::io::ErrorKind::TimedOut => {}
             Ok(0) | Err(_) => return,
             Ok(n) => {
                 stats.read.fetch_add(n as u64, Ordering::Relaxed);
-                match tx.try_send(buf[..n].to_vec()) {
+                match tx.try_send(wrap(buf[..n].to_vec())) {
                     Ok(()) => {}
                     Err(mpsc::TrySendError::Full(_)) => {
                         stats.dropped.fetch_add(n as u64, Ordering::Relaxed);
@@ -156,6 +285,7 @@ fn run(
     reader: Box<dyn Read + Send>,
     mut writer: Box<dyn Write>,
     is_device: bool,
+    sonar: Option<(SonarPort, Ping360Config)>,
 ) -> std::io::Result<()> {
     let mut fw = SingleContext::new(
         Params::default(),
@@ -164,16 +294,25 @@ fn run(
     )
     .map_err(|e| std::io::Error::other(e.to_string()))?;
 
-    let (tx, rx) = mpsc::sync_channel::<Vec<u8>>(RX_CHUNKS);
+    let (tx, rx) = mpsc::sync_channel::<Input>(RX_CHUNKS);
     let stats = Arc::new(RxStats::default());
+    let sonar_stats = Arc::new(RxStats::default());
+    let mut sonar_writer = None;
+    if let Some(((sonar_reader, w), cfg)) = sonar {
+        fw.set_ping360(cfg)
+            .map_err(|e| std::io::Error::other(e.to_string()))?;
+        sonar_writer = Some(w);
+        let (tx, st) = (tx.clone(), Arc::clone(&sonar_stats));
+        std::thread::spawn(move || pump(sonar_reader, &tx, &st, true, Input::Sonar));
+    }
     let pump_stats = Arc::clone(&stats);
-    std::thread::spawn(move || pump(reader, &tx, &pump_stats, is_device));
+    std::thread::spawn(move || pump(reader, &tx, &pump_stats, is_device, Input::Main));
 
     let start = Instant::now();
     let mut cost = || start.elapsed().as_micros() as u32;
     let mut out: Vec<u8> = Vec::with_capacity(4096);
     let mut next = Duration::from_millis(u64::from(fw.periodic().period_ms()));
-    let mut drops_logged = (0u64, start);
+    let mut drops_logged = (0u64, start, 0u64);
     let mut drops_counted = 0u64;
     loop {
         if !fw.lockstep() && start.elapsed() >= next {
@@ -191,12 +330,13 @@ fn run(
                 next.saturating_sub(start.elapsed())
             };
             match rx.recv_timeout(wait) {
-                Ok(bytes) => {
+                Ok(Input::Main(bytes)) => {
                     fw.on_bytes(&bytes, &mut cost, &mut |f: &[u8]| {
                         out.extend_from_slice(f);
                         true
                     });
                 }
+                Ok(Input::Sonar(bytes)) => fw.on_ping360_bytes(&bytes),
                 Err(mpsc::RecvTimeoutError::Timeout) => {}
                 Err(mpsc::RecvTimeoutError::Disconnected) => {
                     eprintln!(
@@ -216,9 +356,23 @@ fn run(
             fw.count_rx_dropped(n);
             drops_counted = dropped;
         }
-        if dropped > drops_logged.0 && drops_logged.1.elapsed() >= DROP_LOG_EVERY {
-            eprintln!("vpf-firmware: input queue full: {dropped} bytes dropped so far");
-            drops_logged = (dropped, Instant::now());
+        let sonar_dropped = sonar_stats.dropped.load(Ordering::Relaxed);
+        if (dropped > drops_logged.0 || sonar_dropped > drops_logged.2)
+            && drops_logged.1.elapsed() >= DROP_LOG_EVERY
+        {
+            eprintln!(
+                "vpf-firmware: input queue full: {dropped} bytes of the main link and \
+                 {sonar_dropped} of the Ping360's dropped so far"
+            );
+            drops_logged = (dropped, Instant::now(), sonar_dropped);
+        }
+        // The Ping360's bytes first: a command sent in a period precedes its Command frame.
+        if let Some(w) = sonar_writer.as_mut() {
+            let bytes = fw.take_ping360_output();
+            if !bytes.is_empty() {
+                w.write_all(&bytes)?;
+                w.flush()?;
+            }
         }
         if !out.is_empty() {
             writer.write_all(&out)?;
@@ -232,6 +386,12 @@ fn run(
 mod tests {
     use super::*;
 
+    fn chunk(i: Input) -> Vec<u8> {
+        match i {
+            Input::Main(b) | Input::Sonar(b) => b,
+        }
+    }
+
     #[test]
     fn a_full_queue_drops_and_counts_instead_of_growing() {
         // 10 MiB of input and an event loop that never drains: the queue holds its capacity,
@@ -240,9 +400,9 @@ mod tests {
         let input = std::io::Cursor::new(vec![0x55u8; total]);
         let (tx, rx) = mpsc::sync_channel(RX_CHUNKS);
         let stats = RxStats::default();
-        pump(input, &tx, &stats, false);
+        pump(input, &tx, &stats, false, Input::Main);
         drop(tx);
-        let queued: usize = rx.iter().map(|c| c.len()).sum();
+        let queued: usize = rx.iter().map(|c| chunk(c).len()).sum();
         assert_eq!(queued, RX_CHUNKS * READ_CHUNK);
         assert_eq!(stats.read.load(Ordering::Relaxed), total as u64);
         assert_eq!(
@@ -256,9 +416,15 @@ mod tests {
         let input: Vec<u8> = (0..100_000u32).map(|i| (i % 251) as u8).collect();
         let (tx, rx) = mpsc::sync_channel(RX_CHUNKS);
         let stats = RxStats::default();
-        pump(std::io::Cursor::new(input.clone()), &tx, &stats, false);
+        pump(
+            std::io::Cursor::new(input.clone()),
+            &tx,
+            &stats,
+            false,
+            Input::Main,
+        );
         drop(tx);
-        let got: Vec<u8> = rx.iter().flatten().collect();
+        let got: Vec<u8> = rx.iter().flat_map(chunk).collect();
         assert_eq!(got, input);
         assert_eq!(stats.dropped.load(Ordering::Relaxed), 0);
     }

@@ -464,6 +464,7 @@ fn payload(rng: &mut Rng, ctx: &Ctx<'_>, ty: u8) -> Vec<u8> {
             step_cost: rng.next() as u32,
             cost_unit: CostUnit::Unknown,
             counters: TelemetryCounters::default(),
+            ping360: Default::default(),
         })),
         0x83 => payload_of(&Message::Reply(ReplyRepr::accepted(Header {
             msg_type: MessageType::Params,

@@ -207,10 +207,23 @@ fn cli_inner(mut it: impl Iterator<Item = String>) -> Result<(), String> {
             .collect();
         files.sort();
     }
-    let scenarios = files
+    let mut scenarios = files
         .iter()
         .map(|f| crate::scenario::load(f).map_err(|e| e.to_string()))
         .collect::<Result<Vec<_>, _>>()?;
+    if target != Target::Host {
+        // The board images do not drive a Ping360 yet.
+        scenarios.retain(|s| {
+            let keep = s.sonar.interface != crate::scenario::SonarInterface::Ping360;
+            if !keep {
+                eprintln!(
+                    "hil compare: leaving out \"{}\": a Ping360 needs --firmware host",
+                    s.name
+                );
+            }
+            keep
+        });
+    }
     let out = out.unwrap_or_else(|| {
         let secs = std::time::SystemTime::now()
             .duration_since(std::time::UNIX_EPOCH)

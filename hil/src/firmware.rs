@@ -166,8 +166,9 @@ fn make_raw(f: &File) -> std::io::Result<()> {
     Ok(())
 }
 
-/// A new pseudo-terminal pair: (master, slave path).
-fn open_pty() -> std::io::Result<(File, PathBuf)> {
+/// A new pseudo-terminal pair: (master, slave path). The slave stays open (leaked) so that no
+/// byte written before its user opens it is lost.
+pub fn open_pty() -> std::io::Result<(File, PathBuf)> {
     let (mut master, mut slave) = (0, 0);
     // SAFETY: openpty writes two descriptors we then own; the name buffer is large enough.
     let mut name = [0 as libc::c_char; 128];
@@ -200,10 +201,22 @@ impl Firmware {
     /// Starts `target` (built binary at `binary` for QEMU and host) and connects to it.
     /// `lockstep`: the host will drive time with `Tick`s (QEMU then need not pace its virtual
     /// clock with the wall clock while the firmware waits).
-    pub fn start(target: &Target, binary: &Path, lockstep: bool) -> std::io::Result<Self> {
+    /// `extra`: more arguments for the host-process firmware (its Ping360 port); refused for
+    /// the others, which take none.
+    pub fn start(
+        target: &Target,
+        binary: &Path,
+        lockstep: bool,
+        extra: &[std::ffi::OsString],
+    ) -> std::io::Result<Self> {
+        if !extra.is_empty() && *target != Target::Host {
+            return Err(std::io::Error::other(format!(
+                "the {target} firmware drives no Ping360 (the board images do not yet): use --firmware host"
+            )));
+        }
         match target {
             Target::Qemu => Self::start_qemu(binary, lockstep),
-            Target::Host => Self::start_host(binary),
+            Target::Host => Self::start_host(binary, extra),
             Target::Port(path) => {
                 let port = std::fs::OpenOptions::new()
                     .read(true)
@@ -286,10 +299,11 @@ impl Firmware {
     /// The host-process firmware speaking on its stdin/stdout, both one end of a Unix socket
     /// pair whose other end is the link: no pty and no line discipline in between (the sweep's
     /// link: a period's round trip is faster than through a pty, see `hil/sweeps/README.md`).
-    pub fn start_host_socket(bin: &Path) -> std::io::Result<Self> {
+    pub fn start_host_socket(bin: &Path, extra: &[std::ffi::OsString]) -> std::io::Result<Self> {
         let (ours, theirs) = std::os::unix::net::UnixStream::pair()?;
         let theirs_out = theirs.try_clone()?;
         let child = Command::new(bin)
+            .args(extra)
             .stdin(Stdio::from(std::os::fd::OwnedFd::from(theirs)))
             .stdout(Stdio::from(std::os::fd::OwnedFd::from(theirs_out)))
             .stderr(Stdio::null())
@@ -299,11 +313,12 @@ impl Firmware {
     }
 
     /// The host-process firmware on the slave side of a fresh pty.
-    fn start_host(bin: &Path) -> std::io::Result<Self> {
+    fn start_host(bin: &Path, extra: &[std::ffi::OsString]) -> std::io::Result<Self> {
         let (master, slave) = open_pty()?;
         let child = Command::new(bin)
             .arg("--device")
             .arg(&slave)
+            .args(extra)
             .stdin(Stdio::null())
             .stdout(Stdio::null())
             .stderr(Stdio::null())

@@ -22,6 +22,7 @@ pub mod compare;
 pub mod faults;
 pub mod firmware;
 pub mod output;
+pub mod ping360;
 pub mod runner;
 pub mod scenario;
 pub mod sim;

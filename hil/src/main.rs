@@ -4,11 +4,14 @@
 //! hil run SCENARIO.toml [--out DIR] [--firmware qemu|host] [--port /dev/ttyXXX] [--quiet]
 //!         [--bit-error-rate X] [--drop-rate X] [--nav-delay-ms X]
 //!         [--nav-freeze FROM:TO] [--nav-loss FROM:TO] [--sonar-dropout FROM:TO]
+//!         [--ping360-bit-error-rate X] [--ping360-drop-rate X]
 //! hil check SCENARIO.toml...
 //! hil sweep SPEC.toml [--out DIR] [--jobs N] [--shard K/N] [--quiet]
 //! hil merge DIR... [--out DIR]
 //! hil compare [SCENARIO.toml...] [--strategies vpf,multipoint,navfn] [--firmware host|qemu]
 //! hil bench [--families ...] [--seeds N] [--strategies ...] [--models ...] [--sensing ...]
+//! hil sonar-replay --ping360 FILE [--plot FILE.svg] [detection options]
+//! hil ping360-raw DUMP.txt OUT.bin
 //! ```
 //!
 //! `hil run` also takes `--params RECIPE.toml` (a `[planner]` table, as `hil sweep` writes).
@@ -28,6 +31,8 @@ const USAGE: &str = "usage:
   hil compare [SCENARIO.toml...]    fly scenarios with each strategy, print a table (hil compare --help)
   hil bench [options]               fly generated worlds, tabulate success and safety (hil bench --help)
   hil faults SCENARIO.toml... [options]  fly each scenario under each fault, print a table (hil faults --help)
+  hil sonar-replay --ping360 FILE [options]  raw Ping360 bytes through the firmware's parser and extractor
+  hil ping360-raw DUMP.txt OUT.bin  a brping text dump of device_data messages as raw Ping bytes
 
 options for run:
   --out DIR                 output directory
@@ -35,8 +40,10 @@ options for run:
   --port /dev/ttyXXX        a real board on a serial adapter (flashed beforehand)
   --quiet                   no progress bar
   --params RECIPE.toml      planner parameters from a recipe (replace the scenario's [planner])
-  --bit-error-rate X        corrupt bytes sent to the firmware at this bit-error rate
-  --drop-rate X             drop this fraction of the frames sent to the firmware
+  --bit-error-rate X        corrupt bytes sent to the firmware on its main link at this bit-error rate
+  --drop-rate X             drop this fraction of the frames sent to the firmware on its main link
+  --ping360-bit-error-rate X  the same on the simulated Ping360's port ([sonar] interface = \"ping360\")
+  --ping360-drop-rate X     drop this fraction of the Ping360's device_data frames
   --nav-delay-ms X          delay navigation by X ms
   --nav-freeze FROM:TO      repeat the same navigation fix between FROM and TO seconds
   --nav-loss FROM:TO        send no navigation between FROM and TO seconds
@@ -101,8 +108,14 @@ fn parse_run(mut it: impl Iterator<Item = String>) -> Result<Args, String> {
             "--quiet" => args.quiet = true,
             "--params" => args.params = Some(PathBuf::from(value()?)),
             "-h" | "--help" => return Err(String::new()),
-            "--bit-error-rate" | "--drop-rate" | "--nav-delay-ms" | "--nav-freeze"
-            | "--nav-loss" | "--sonar-dropout" => {
+            "--bit-error-rate"
+            | "--drop-rate"
+            | "--nav-delay-ms"
+            | "--nav-freeze"
+            | "--nav-loss"
+            | "--sonar-dropout"
+            | "--ping360-bit-error-rate"
+            | "--ping360-drop-rate" => {
                 let v = value()?;
                 args.faults.push((a.clone(), v));
             }
@@ -127,6 +140,8 @@ fn apply_faults(sc: &mut Scenario, faults: &[(String, String)]) -> Result<(), St
             "--nav-freeze" => sc.faults.nav_freeze = Some(window(v)?),
             "--nav-loss" => sc.faults.nav_loss = Some(window(v)?),
             "--sonar-dropout" => sc.faults.sonar_dropout = Some(window(v)?),
+            "--ping360-bit-error-rate" => sc.faults.ping360_bit_error_rate = rate(v, 0.01)?,
+            "--ping360-drop-rate" => sc.faults.ping360_drop_rate = rate(v, 1.0)?,
             _ => {}
         }
     }
@@ -208,12 +223,20 @@ fn cmd_run(it: impl Iterator<Item = String>) -> ExitCode {
     match run(&sc, &cfg) {
         Ok(result) => {
             println!("{}", result.summary);
-            for ((v, f), retries) in sc
+            for (((v, f), retries), p360) in sc
                 .vehicles
                 .iter()
                 .zip(&result.faults)
                 .zip(&result.tick_retries)
+                .zip(&result.ping360)
             {
+                if let Some((p, f)) = p360 {
+                    println!(
+                        "{}: simulated Ping360: {} commands, {} answered; its port: {} of {} frames dropped, {} corrupted ({} bits), {} of them passed the checksum",
+                        v.name, p.commands, p.answers, f.dropped, f.frames, f.corrupted,
+                        f.bits_flipped, p.corrupted_accepted
+                    );
+                }
                 if *retries > 0 {
                     println!(
                         "{}: {retries} Tick(s) sent again (lost on the link)",
@@ -222,7 +245,7 @@ fn cmd_run(it: impl Iterator<Item = String>) -> ExitCode {
                 }
                 if f.dropped + f.corrupted > 0 {
                     println!(
-                        "{}: link faults injected: {} of {} frames dropped, {} corrupted ({} bits)",
+                        "{}: main-link faults injected: {} of {} frames dropped, {} corrupted ({} bits)",
                         v.name, f.dropped, f.frames, f.corrupted, f.bits_flipped
                     );
                 }
@@ -275,6 +298,8 @@ fn main() -> ExitCode {
         Some("compare") => hil::compare::cli(it),
         Some("bench") => hil::bench::cli(it),
         Some("faults") => hil::campaign::cli(it),
+        Some("sonar-replay") => hil::ping360::replay::cli(it),
+        Some("ping360-raw") => hil::ping360::replay::cli_raw(it),
         Some("-h" | "--help") => {
             println!("{USAGE}");
             ExitCode::SUCCESS

@@ -21,7 +21,8 @@ use vpf::Mission;
 use crate::faults::{FaultCounts, FaultTap};
 use crate::firmware::{self, Firmware, Reply, Target};
 use crate::output::{self, FrameLog, RunOutput, Summary};
-use crate::scenario::{RunMode, Scenario, Sensing, Window};
+use crate::ping360::sim::{self as ping360_sim, SimPing360};
+use crate::scenario::{RunMode, Scenario, Sensing, SonarInterface, Window};
 use crate::sim::nav::{NavConfig, NavSensor};
 use crate::sim::sonar::{self as sonar_sim, OtherVehicle, Sonar, SonarConfig};
 use crate::sim::vehicle::{new_model, ModelKind, VehicleModel};
@@ -106,6 +107,9 @@ struct Sim {
     /// Navigation samples waiting out the configured delay: (due time, sample).
     delayed: std::collections::VecDeque<(f64, NavState)>,
     frozen: Option<NavState>,
+    /// The simulated Ping360 on its own port, its fault tap, and the commands the firmware's
+    /// last telemetry counted (`[sonar] interface = "ping360"`).
+    ping360: Option<(SimPing360, FaultTap, u32)>,
 }
 
 /// The result of a run: what was written, and the fault counts per vehicle.
@@ -118,6 +122,8 @@ pub struct RunResult {
     pub faults: Vec<FaultCounts>,
     /// `Tick`s sent again per vehicle (a lost Tick, or a slow firmware).
     pub tick_retries: Vec<u32>,
+    /// Per vehicle with a simulated Ping360: what it did, and the faults on its port.
+    pub ping360: Vec<Option<(ping360_sim::SimCounts, FaultCounts)>>,
 }
 
 /// How [`run_quiet`] runs a scenario: the many short runs of a parameter sweep.
@@ -166,6 +172,7 @@ pub fn run(sc: &Scenario, cfg: &RunConfig) -> Result<RunResult, RunError> {
         summary,
         faults: sim.faults,
         tick_retries: sim.tick_retries,
+        ping360: sim.ping360,
     })
 }
 
@@ -196,6 +203,7 @@ struct Simulated {
     output: RunOutput,
     faults: Vec<FaultCounts>,
     tick_retries: Vec<u32>,
+    ping360: Vec<Option<(ping360_sim::SimCounts, FaultCounts)>>,
 }
 
 /// The run itself.
@@ -211,10 +219,21 @@ fn simulate(
     let mut sims = Vec::new();
     for (i, v) in sc.vehicles.iter().enumerate() {
         let lockstep = sc.mode == RunMode::Lockstep;
+        let seed = sc.seed.wrapping_add(1000 * i as u64);
+        // A Ping360 of its own: a pty whose slave the firmware opens as its sonar port.
+        let mut extra = Vec::new();
+        let mut ping360_port = None;
+        if sc.sonar.interface == SonarInterface::Ping360 && v.sensing == Sensing::Sonar {
+            let cfg = ping360_sim::firmware_config(&sc.sonar)
+                .map_err(|(k, m)| RunError::Firmware(format!("[sonar] {k}: {m}")))?;
+            let (master, slave) = firmware::open_pty().map_err(fw_err)?;
+            extra = ping360_sim::firmware_args(&slave, &cfg);
+            ping360_port = Some((master, cfg));
+        }
         let mut fw = if how.socket && *target == Target::Host {
-            Firmware::start_host_socket(binary)
+            Firmware::start_host_socket(binary, &extra)
         } else {
-            Firmware::start(target, binary, lockstep)
+            Firmware::start(target, binary, lockstep, &extra)
         }
         .map_err(fw_err)?;
         if how.stop_early && lockstep {
@@ -225,7 +244,6 @@ fn simulate(
             Some(dir) => Some(FrameLog::create(dir, &v.name).map_err(RunError::Output)?),
             None => None,
         };
-        let seed = sc.seed.wrapping_add(1000 * i as u64);
         let nav = NavSensor::new(NavConfig {
             position_sigma_m: sc.navigation.position_sigma_m,
             heading_sigma_rad: sc.navigation.heading_sigma,
@@ -245,6 +263,24 @@ fn simulate(
             seed: seed.wrapping_add(7),
             ..SonarConfig::default()
         });
+        let ping360 = match ping360_port {
+            Some((master, cfg)) => {
+                let raw = how
+                    .log_dir
+                    .map(|d| d.join(format!("ping360_{}.bin", output::file_stem(&v.name))));
+                let sim =
+                    SimPing360::new(master, cfg, sonar.config().ping_overhead_s, raw.as_deref())
+                        .map_err(RunError::Output)?;
+                let tap = FaultTap::new(
+                    sc.faults.ping360_bit_error_rate,
+                    sc.faults.ping360_drop_rate,
+                    seed.wrapping_add(17),
+                    None,
+                );
+                Some((sim, tap, 0))
+            }
+            None => None,
+        };
         sims.push(Sim {
             model: new_model(v.model, v.start, v.heading, v.autopilot),
             kind: v.model,
@@ -270,6 +306,7 @@ fn simulate(
             tick_retries: 0,
             delayed: Default::default(),
             frozen: None,
+            ping360,
         });
     }
 
@@ -282,12 +319,26 @@ fn simulate(
             let mut clean = crate::firmware::NoTap;
             s.fw.send(&Message::Tick(TickRepr { time_ms: 0 }), &mut clean)
                 .map_err(fw_err)?;
-            s.fw.receive_until(Duration::from_secs(10), &mut clean, |inbox| {
-                inbox
-                    .iter()
-                    .any(|r| matches!(r, Reply::Command(c) if c.time_ms == 0))
-            })
-            .map_err(fw_err)?;
+            // With a Ping360, its telemetry too (it counts the commands sent).
+            let ping360 = s.ping360.is_some();
+            let got =
+                s.fw.receive_until(Duration::from_secs(10), &mut clean, |inbox| {
+                    inbox.iter().any(|r| match r {
+                        Reply::Command(c) => !ping360 && c.time_ms == 0,
+                        Reply::Telemetry(t) => ping360 && t.time_ms == 0,
+                        _ => false,
+                    })
+                })
+                .map_err(fw_err)?;
+            // The Ping360's first command went out in that period: how many to read.
+            if let Some((p, _, expected)) = s.ping360.as_mut() {
+                p.tick(0);
+                for r in &got {
+                    if let Reply::Telemetry(t) = r {
+                        *expected = t.ping360.commands;
+                    }
+                }
+            }
         }
     }
     // Parameters and missions go out next; the firmware answers them at its next period.
@@ -334,10 +385,13 @@ fn simulate(
                 .filter(|(j, _)| *j != i)
                 .map(|(_, o)| *o)
                 .collect();
-            send_sensors(s, sc, t, t_ms, &truth, &others)?;
+            send_sensors(s, sc, t, &truth, &others)?;
             if sc.mode == RunMode::Lockstep {
                 s.fw.send(&Message::Tick(TickRepr { time_ms: t_ms }), &mut s.tap)
                     .map_err(fw_err)?;
+            }
+            if let Some((p, _, _)) = s.ping360.as_mut() {
+                p.tick(t_ms);
             }
         }
         if sc.mode == RunMode::Realtime {
@@ -369,8 +423,17 @@ fn simulate(
         eprintln!();
     }
 
+    for s in sims.iter_mut() {
+        if let Some((p, _, _)) = s.ping360.as_mut() {
+            p.finish().map_err(RunError::Output)?;
+        }
+    }
     let faults = sims.iter().map(|s| s.tap.counts).collect();
     let tick_retries = sims.iter().map(|s| s.tick_retries).collect();
+    let ping360 = sims
+        .iter()
+        .map(|s| s.ping360.as_ref().map(|(p, tap, _)| (p.counts, tap.counts)))
+        .collect();
     let vehicles: Vec<VehicleRecord> = sims.into_iter().map(|s| s.record).collect();
     let output = RunOutput {
         scenario_name: sc.name.clone(),
@@ -385,6 +448,7 @@ fn simulate(
         output,
         faults,
         tick_retries,
+        ping360,
     })
 }
 
@@ -401,16 +465,35 @@ fn finished(sims: &[Sim], arrival_radius_m: f64) -> bool {
     collided || arrived
 }
 
-/// Sends this period's navigation and sonar, with the scenario's sensor faults.
+/// Sends this period's navigation and sonar, with the scenario's sensor faults. A Ping360 of
+/// its own is served first, while the main link is quiet (`crate::ping360::sim` says why).
 fn send_sensors(
     s: &mut Sim,
     sc: &Scenario,
     t: f64,
-    t_ms: u64,
     truth: &VehicleState,
     others: &[OtherVehicle],
 ) -> Result<(), RunError> {
+    let t_ms = (t * 1000.0).round() as u64;
     let in_window = |w: &Option<Window>| w.as_ref().is_some_and(|w| w.contains(t));
+    if let Some((p, tap, expected)) = s.ping360.as_mut() {
+        let lockstep = sc.mode == RunMode::Lockstep;
+        let hulls: Vec<(P2, f64)> = others.iter().map(|o| (o.position, o.hull_radius)).collect();
+        tap.t = t;
+        p.sync(*expected, (t - sc.dt_s).max(0.0), lockstep)
+            .map_err(fw_err)?;
+        p.answer(
+            t,
+            truth,
+            &sc.obstacles,
+            &hulls,
+            &mut s.sonar,
+            tap,
+            lockstep,
+            in_window(&sc.faults.sonar_dropout),
+        )
+        .map_err(fw_err)?;
+    }
     let fresh = s.nav.sample(t, truth);
     let nav = if in_window(&sc.faults.nav_freeze) {
         *s.frozen.get_or_insert(fresh)
@@ -436,6 +519,11 @@ fn send_sensors(
         return Ok(());
     }
     match s.sensing {
+        Sensing::Sonar if s.ping360.is_some() => {
+            if sc.sonar.vehicle_contacts {
+                send_contacts(s, t, t_ms, truth, &[], others, sc.sonar.range_m)?;
+            }
+        }
         Sensing::Sonar => {
             let hulls: Vec<(P2, f64)> =
                 others.iter().map(|o| (o.position, o.hull_radius)).collect();
@@ -541,6 +629,9 @@ fn collect(
                 s.record.belief.apply(c, t_ms as f64 * 1e-3, position);
             }
             Reply::Telemetry(tel) => {
+                if let Some((_, _, expected)) = s.ping360.as_mut() {
+                    *expected = tel.ping360.commands;
+                }
                 s.record.telemetry = Some(*tel);
                 s.record.cost_unit = Some(tel.cost_unit);
                 if tel.step_cost > 0 {

@@ -159,6 +159,22 @@ pub struct Sonar {
     /// neighbours' positions as known. Default false: the vehicles see each other only through
     /// their sonars.
     pub vehicle_contacts: bool,
+    /// How the scanlines reach the firmware: `Scanline` messages on the main link (default), or
+    /// a simulated Ping360 on a port of its own that the firmware drives.
+    pub interface: SonarInterface,
+}
+
+/// How a vehicle's sonar data reaches its firmware.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum SonarInterface {
+    /// `Scanline` messages on the main link (a sonar handled elsewhere).
+    #[default]
+    Link,
+    /// A simulated Blue Robotics Ping360 on its own pty, answering the firmware's `transducer`
+    /// commands with `device_data` (`crate::ping360::sim`): `bins` is its number of samples
+    /// (200 ..= 512 here), `step_deg` a whole number of gradians (0.9° each, 1 ..= 12), the
+    /// range sets the sample period.
+    Ping360,
 }
 
 impl Default for Sonar {
@@ -173,6 +189,7 @@ impl Default for Sonar {
             beam_rays: 5,
             false_echoes: 0.03,
             vehicle_contacts: false,
+            interface: SonarInterface::Link,
         }
     }
 }
@@ -237,6 +254,11 @@ pub struct Faults {
     pub nav_loss: Option<Window>,
     /// No sonar data in this window.
     pub sonar_dropout: Option<Window>,
+    /// Bit-error rate on the simulated Ping360's port (harness → firmware), 0 ..= 0.01. The
+    /// two rates above apply to the main link only.
+    pub ping360_bit_error_rate: f64,
+    /// Probability that a whole `device_data` frame to the firmware is dropped, 0 ..= 1.
+    pub ping360_drop_rate: f64,
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -1126,9 +1148,21 @@ fn sonar(root: &Table<'_>) -> Result<Sonar, ScenarioError> {
             "beam_rays",
             "false_echoes",
             "vehicle_contacts",
+            "interface",
         ],
         "[sonar]",
     )?;
+    let interface = match t.string("interface")? {
+        Some(i) => Some(choose(
+            &i,
+            &[
+                ("link", SonarInterface::Link),
+                ("ping360", SonarInterface::Ping360),
+            ],
+            "sonar interface",
+        )?),
+        None => None,
+    };
     if let Some(m) = t.string("mode")? {
         s.mode = choose(
             &m,
@@ -1177,6 +1211,12 @@ fn sonar(root: &Table<'_>) -> Result<Sonar, ScenarioError> {
     }
     if let Some(b) = t.boolean("vehicle_contacts")? {
         s.vehicle_contacts = b;
+    }
+    if interface == Some(SonarInterface::Ping360) {
+        s.interface = SonarInterface::Ping360;
+        let at = |key: &str| t.get(key).map(|v| v.span()).unwrap_or(t.span.clone());
+        crate::ping360::sim::firmware_config(&s)
+            .map_err(|(key, msg)| t.src.err(&at(key), &t.key(key), msg))?;
     }
     Ok(s)
 }
@@ -1228,9 +1268,17 @@ fn faults(root: &Table<'_>) -> Result<Faults, ScenarioError> {
             "nav_freeze",
             "nav_loss",
             "sonar_dropout",
+            "ping360_bit_error_rate",
+            "ping360_drop_rate",
         ],
         "[faults]",
     )?;
+    if let Some(x) = t.number("ping360_bit_error_rate")? {
+        f.ping360_bit_error_rate = x.within(0.0, 0.01, "")?;
+    }
+    if let Some(x) = t.number("ping360_drop_rate")? {
+        f.ping360_drop_rate = x.within(0.0, 1.0, "")?;
+    }
     if let Some(x) = t.number("bit_error_rate")? {
         f.bit_error_rate = x.within(0.0, 0.01, "")?;
     }

@@ -42,7 +42,7 @@ fn clearance(s: &Scenario, p: P2) -> f32 {
         .fold(f32::INFINITY, f32::min)
 }
 
-const SHIPPED: [&str; 13] = [
+const SHIPPED: [&str; 14] = [
     "seed000_fig2_no_friction.toml",
     "seed000_fig3_friction.toml",
     "seed000_fig4_clutter_plain.toml",
@@ -56,6 +56,7 @@ const SHIPPED: [&str; 13] = [
     "seed003_case1_static.toml",
     "seed003_case2_moving.toml",
     "crossing_traffic.toml",
+    "ping360_narrow_gap.toml",
 ];
 
 #[test]
@@ -766,6 +767,30 @@ fn planner_parameters_are_checked_by_the_library() {
 
     let text = BASE.replace("dt_s = 0.1", "dt_s = 2.0");
     assert_refused(&text, "dt_s", "dt_s", "must be in 0.02 ..= 1 s, got 2");
+}
+
+#[test]
+fn a_ping360_interface_is_checked_against_what_a_ping360_can_do() {
+    use hil::scenario::SonarInterface;
+    let s = scenario::parse(&with("\n[sonar]\ninterface = \"ping360\"\n"), "p.toml").unwrap();
+    assert_eq!(s.sonar.interface, SonarInterface::Ping360);
+    let s = scenario::parse(BASE, "p.toml").unwrap();
+    assert_eq!(s.sonar.interface, SonarInterface::Link);
+    let text = with("\n[sonar]\ninterface = \"ping360\"\nstep_deg = 1.0\n");
+    assert_refused(&text, "sonar.step_deg", "step_deg = 1.0", "whole gradians");
+    let text = with("\n[sonar]\ninterface = \"ping360\"\nbins = 150\n");
+    assert_refused(&text, "sonar.bins", "bins = 150", "200 ..= 1200 samples");
+    let text = with("\n[sonar]\ninterface = \"ping360\"\nrange_m = 0.5\nbins = 500\n");
+    assert_refused(&text, "sonar.range_m", "range_m = 0.5", "sample period");
+    let text = with("\n[sonar]\ninterface = \"sidescan\"\n");
+    assert_refused(
+        &text,
+        "sonar.interface",
+        "sidescan",
+        "unknown sonar interface",
+    );
+    let text = with("\n[faults]\nping360_bit_error_rate = 0.5\n");
+    assert_refused(&text, "faults.ping360_bit_error_rate", "0.5", "");
 }
 
 #[test]

@@ -9,7 +9,7 @@
 
 use crate::link::{Decoder, Direction, Message, MessageType, Outcome, ReplyRepr, RxCounters};
 use crate::route::{Route, Router};
-use crate::sonar::{ConfigError, EvidenceMap, Extractor, ExtractorConfig, Pose};
+use crate::sonar::{ConfigError, EvidenceMap, Extractor, ExtractorConfig, Pose, Scanline};
 
 use super::{Control, NavSample, Sighting};
 
@@ -107,6 +107,31 @@ impl Background {
     /// Whether a `Tick` has come: firmware time is then the host's.
     pub fn lockstep(&self) -> bool {
         self.lockstep
+    }
+
+    /// The newest vehicle pose navigation gave (`None` before the first `Nav`).
+    pub fn pose(&self) -> Option<Pose> {
+        self.pose
+    }
+
+    /// A scanline from a sonar on its own port (the Ping360 driver), taken at `pose`: into the
+    /// extractor and the evidence map `map`, counted as a `Scanline` message's would be.
+    pub fn on_scanline(
+        &mut self,
+        scan: &Scanline<'_>,
+        pose: Option<Pose>,
+        sink: &mut impl Sink,
+        map: Option<&EvidenceMap>,
+    ) {
+        scanline(
+            &mut self.extractor,
+            &mut self.last_bearing,
+            &mut self.counters,
+            scan,
+            pose,
+            sink,
+            map,
+        );
     }
 
     /// The decoder's counters.
@@ -220,6 +245,45 @@ fn count_if(cond: bool, counter: &mut u32) {
     }
 }
 
+/// A scanline into the extractor and the evidence map, at the vehicle pose `pose` (refused and
+/// counted without one: it cannot be placed in the world).
+fn scanline(
+    extractor: &mut Extractor,
+    last_bearing: &mut Option<f32>,
+    counters: &mut BackgroundCounters,
+    scan: &Scanline<'_>,
+    pose: Option<Pose>,
+    sink: &mut impl Sink,
+    map: Option<&EvidenceMap>,
+) {
+    let Some(p) = pose else {
+        count_if(true, &mut counters.scanlines_rejected);
+        return;
+    };
+    let mut emitted = 0u32;
+    let mut dropped = 0u32;
+    let result = extractor.push_scanline_mapped(scan, p, map, &mut |f| {
+        emitted = emitted.saturating_add(1);
+        let ok = sink.sighting(Sighting::Feature(f));
+        count_if(!ok, &mut dropped);
+        ok
+    });
+    count_if(result.is_err(), &mut counters.scanlines_rejected);
+    if result.is_ok() {
+        counters.scanlines = counters.scanlines.saturating_add(1);
+        let step = scan.step_rad.abs();
+        // Lost pings show as a longer turn since the last scanline (up to half a turn).
+        let turn = last_bearing.map_or(step, |b| {
+            crate::math::wrap_angle(scan.bearing_rad - b).abs()
+        });
+        *last_bearing = Some(scan.bearing_rad);
+        counters.swept_mrad = counters.swept_mrad.saturating_add((step * 1000.0) as u32);
+        counters.head_mrad = counters.head_mrad.saturating_add((turn * 1000.0) as u32);
+    }
+    counters.features_extracted = counters.features_extracted.saturating_add(emitted);
+    counters.sightings_dropped = counters.sightings_dropped.saturating_add(dropped);
+}
+
 #[allow(clippy::too_many_arguments)]
 fn dispatch(
     header: crate::link::Header,
@@ -251,33 +315,7 @@ fn dispatch(
             }
         }
         Message::Scanline(scan) => {
-            let Some(p) = *pose else {
-                // No pose yet: the scanline cannot be placed in the world.
-                count_if(true, &mut counters.scanlines_rejected);
-                return;
-            };
-            let mut emitted = 0u32;
-            let mut dropped = 0u32;
-            let result = extractor.push_scanline_mapped(&scan, p, map, &mut |f| {
-                emitted = emitted.saturating_add(1);
-                let ok = sink.sighting(Sighting::Feature(f));
-                count_if(!ok, &mut dropped);
-                ok
-            });
-            count_if(result.is_err(), &mut counters.scanlines_rejected);
-            if result.is_ok() {
-                counters.scanlines = counters.scanlines.saturating_add(1);
-                let step = scan.step_rad.abs();
-                // Lost pings show as a longer turn since the last scanline (up to half a turn).
-                let turn = last_bearing.map_or(step, |b| {
-                    crate::math::wrap_angle(scan.bearing_rad - b).abs()
-                });
-                *last_bearing = Some(scan.bearing_rad);
-                counters.swept_mrad = counters.swept_mrad.saturating_add((step * 1000.0) as u32);
-                counters.head_mrad = counters.head_mrad.saturating_add((turn * 1000.0) as u32);
-            }
-            counters.features_extracted = counters.features_extracted.saturating_add(emitted);
-            counters.sightings_dropped = counters.sightings_dropped.saturating_add(dropped);
+            scanline(extractor, last_bearing, counters, &scan, *pose, sink, map);
         }
         Message::Contacts(c) => {
             for contact in c.contacts.iter() {

@@ -25,6 +25,7 @@ use super::{
 };
 use crate::link::RxCounters;
 use crate::link::{BeliefRepr, BELIEF_ROWS};
+use crate::sonar::ping360::Ping360Counters;
 use crate::sonar::{EvidenceMap, Near, MAP_SIDE};
 use crate::world::MAX_MAP_CELLS;
 
@@ -99,6 +100,11 @@ pub trait Inputs {
     /// The newest route the background published, if any (`None` also while it is being
     /// written: the task keeps the one it had).
     fn route(&mut self) -> Option<Route>;
+    /// The Ping360 driver's counters, for telemetry (rows 28 ..= 33). Zero where the firmware
+    /// drives no Ping360 (the default).
+    fn ping360_counters(&mut self) -> Ping360Counters {
+        Ping360Counters::default()
+    }
 }
 
 /// The periodic task's state.
@@ -283,6 +289,7 @@ impl Periodic {
             step_cost: self.last_cost,
             cost_unit: self.cost_unit,
             counters: self.counters,
+            ping360: inputs.ping360_counters(),
         };
         self.send(&Message::Telemetry(telemetry), tx);
         if let Some(m) = map {

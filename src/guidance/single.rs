@@ -11,6 +11,7 @@ use crate::link::{CostUnit, ReplyRepr, RxCounters};
 use crate::params::Params;
 use crate::planner::Command;
 use crate::route::{Route, Router};
+use crate::sonar::ping360::{ConfigError, Ping360, Ping360Config, Ping360Counters};
 use crate::sonar::{EvidenceMap, ExtractorConfig};
 
 use super::{
@@ -28,6 +29,7 @@ struct Queues {
     route: Option<Route>,
     rx: RxCounters,
     bg: BackgroundCounters,
+    ping360: Ping360Counters,
 }
 
 impl Sink for Queues {
@@ -70,7 +72,14 @@ impl Inputs for Queues {
     fn route(&mut self) -> Option<Route> {
         self.route.take()
     }
+    fn ping360_counters(&mut self) -> Ping360Counters {
+        self.ping360
+    }
 }
+
+/// Bytes for the Ping360 waiting to be written: a few `transducer` frames (24 bytes each; one
+/// is outstanding at a time, so two never wait). Full: the driver sends again at its next poll.
+pub const PING360_OUTBOX: usize = 96;
 
 /// The runtime in one context.
 pub struct SingleContext {
@@ -80,6 +89,8 @@ pub struct SingleContext {
     map: EvidenceMap,
     router: Router,
     now_ms: u64,
+    ping360: Option<Ping360>,
+    ping360_out: heapless::Vec<u8, PING360_OUTBOX>,
 }
 
 impl SingleContext {
@@ -110,6 +121,7 @@ impl SingleContext {
                 route: None,
                 rx: RxCounters::default(),
                 bg: BackgroundCounters::default(),
+                ping360: Ping360Counters::default(),
             },
             map: EvidenceMap::empty(),
             router: {
@@ -118,7 +130,54 @@ impl SingleContext {
                 r
             },
             now_ms: 0,
+            ping360: None,
+            ping360_out: heapless::Vec::new(),
         })
+    }
+
+    /// Drives a Ping360 on a port of its own with `cfg` ([`Self::on_ping360_bytes`] takes its
+    /// bytes, [`Self::take_ping360_output`] gives what to write to it). Its first command goes
+    /// out at the next period.
+    pub fn set_ping360(&mut self, cfg: Ping360Config) -> Result<(), ConfigError> {
+        self.ping360 = Some(Ping360::new(cfg)?);
+        Ok(())
+    }
+
+    /// The Ping360 driver, if one is set.
+    pub fn ping360(&self) -> Option<&Ping360> {
+        self.ping360.as_ref()
+    }
+
+    /// Feeds bytes received from the Ping360: each ping becomes a scanline for the extractor
+    /// and the evidence map, placed with the newest navigation when its data began to arrive.
+    /// Ignored without a Ping360 ([`Self::set_ping360`]).
+    pub fn on_ping360_bytes(&mut self, bytes: &[u8]) {
+        let SingleContext {
+            background,
+            queues,
+            map,
+            now_ms,
+            ping360,
+            ping360_out,
+            ..
+        } = self;
+        let Some(driver) = ping360.as_mut() else {
+            return;
+        };
+        let pose = background.pose();
+        driver.on_bytes(
+            bytes,
+            *now_ms,
+            pose,
+            &mut |f| ping360_out.extend_from_slice(f).is_ok(),
+            &mut |scan, pose| background.on_scanline(scan, pose, queues, Some(map)),
+        );
+    }
+
+    /// What is to be written to the Ping360 now (taken: the next call returns only what came
+    /// after).
+    pub fn take_ping360_output(&mut self) -> heapless::Vec<u8, PING360_OUTBOX> {
+        core::mem::take(&mut self.ping360_out)
     }
 
     /// The periodic half (planner, world, counters).
@@ -186,6 +245,11 @@ impl SingleContext {
         tx: &mut impl FnMut(&[u8]) -> bool,
     ) -> Command {
         self.now_ms = now_ms;
+        if let Some(p) = self.ping360.as_mut() {
+            let out = &mut self.ping360_out;
+            p.poll(now_ms, &mut |f| out.extend_from_slice(f).is_ok());
+            self.queues.ping360 = p.counters();
+        }
         self.queues.rx = *self.background.rx_counters();
         self.queues.bg = self.background.counters;
         self.periodic

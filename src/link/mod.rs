@@ -38,6 +38,7 @@ pub mod crc;
 pub mod decoder;
 pub mod frame;
 pub mod message;
+pub mod ping;
 pub mod report;
 pub mod sensors;
 pub mod shape;
@@ -58,7 +59,7 @@ use crate::params::Params;
 
 /// The protocol version this module speaks, first byte of every header. Frames with another
 /// version are refused (and counted): a new version is a new, incompatible layout.
-pub const PROTOCOL_VERSION: u8 = 5;
+pub const PROTOCOL_VERSION: u8 = 6;
 /// The frame delimiter. COBS guarantees it appears nowhere inside a frame.
 pub const DELIMITER: u8 = 0x00;
 /// Length of the frame header: version u8, message type u8, sequence u16.

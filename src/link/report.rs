@@ -10,6 +10,7 @@ use crate::params::ParamProblem;
 use crate::planner::{
     Command, FormationError, HoldReason, Mode, PidSetpoints, StepError, MAX_GHOSTS, MAX_NAV_SPEED,
 };
+use crate::sonar::ping360::Ping360Counters;
 use crate::world::{ObjectError, MAX_AGENTS, MAX_OBSTACLES};
 
 /// The wire codes of a [`Mode`]: (mode, hold reason). Mode 0 hold, 1 transit, 2 escape,
@@ -327,17 +328,20 @@ impl TelemetryCounters {
     }
 }
 
-/// `Telemetry` payload length.
-pub const TELEMETRY_LEN: usize = 98;
+/// `Telemetry` payload length: 98 bytes, then the Ping360 block (rows 28 ..= 33).
+pub const TELEMETRY_LEN: usize = 98 + 4 * Ping360Counters::COUNT;
+/// Row of the first Ping360 counter in `Telemetry`.
+pub const TELEMETRY_PING360_ROW: u8 = 28;
 
 /// `Telemetry` (0x82): health and counters, sent periodically.
 ///
-/// Layout (98 bytes): 0 `time_ms` u64 · 1 `step_cost` u32 · 2..=17 the sixteen u32 counters
+/// Layout (122 bytes): 0 `time_ms` u64 · 1 `step_cost` u32 · 2..=17 the sixteen u32 counters
 /// of [`TelemetryCounters`] in declaration order · 18 `mode` u8 · 19 `hold_reason` u8 ·
 /// 20 `obstacles` u8 (table fill, ≤ `MAX_OBSTACLES`) · 21 `agents` u8 (≤ `MAX_AGENTS`) ·
 /// 22 `ghost_depth` u8 (≤ `MAX_GHOSTS`) · 23 `cost_unit` u8 ([`CostUnit`]) ·
 /// 24 `guard_interventions` u32 · 25 `frozen_nav_holds` u32 · 26 `requests_busy` u32 ·
-/// 27 `requests_unanswered` u32.
+/// 27 `requests_unanswered` u32 · 28..=33 the Ping360 port's six u32 counters of
+/// [`Ping360Counters`] in declaration order (all 0 where no Ping360 is driven).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct TelemetryRepr {
@@ -357,6 +361,8 @@ pub struct TelemetryRepr {
     pub cost_unit: CostUnit,
     /// Counters since boot.
     pub counters: TelemetryCounters,
+    /// The Ping360 port's counters since boot (rows 28 ..= 33; zero without a Ping360).
+    pub ping360: Ping360Counters,
 }
 
 impl TelemetryRepr {
@@ -395,6 +401,10 @@ impl<'a> Payload<'a> for TelemetryRepr {
         let frozen_nav_holds = r.u32()?;
         let requests_busy = r.u32()?;
         let requests_unanswered = r.u32()?;
+        let mut ping360 = [0u32; Ping360Counters::COUNT];
+        for c in ping360.iter_mut() {
+            *c = r.u32()?;
+        }
         r.finish()?;
         let t = TelemetryRepr {
             time_ms,
@@ -411,6 +421,7 @@ impl<'a> Payload<'a> for TelemetryRepr {
                 requests_unanswered,
                 ..TelemetryCounters::from_array(counters)
             },
+            ping360: Ping360Counters::from_array(ping360),
         };
         t.check()?;
         Ok(t)
@@ -444,6 +455,7 @@ impl<'a> Payload<'a> for TelemetryRepr {
         w.u32(self.counters.frozen_nav_holds)?;
         w.u32(self.counters.requests_busy)?;
         w.u32(self.counters.requests_unanswered)?;
+        self.ping360.to_array().iter().try_for_each(|&c| w.u32(c))?;
         Ok(w.len())
     }
 }
@@ -837,6 +849,7 @@ pub(crate) mod tests {
                 requests_unanswered: 20,
                 ..TelemetryCounters::from_array(core::array::from_fn(|i| i as u32 + 1))
             },
+            ping360: Ping360Counters::from_array(core::array::from_fn(|i| i as u32 + 21)),
         }
     }
 
@@ -850,13 +863,21 @@ pub(crate) mod tests {
         }
         want.extend([0, 2, 3, 1, 0, 2]);
         want.extend([17, 0, 0, 0, 18, 0, 0, 0, 19, 0, 0, 0, 20, 0, 0, 0]);
+        // Rows 28..=33, the Ping360 port: data 21, commands 22, timeouts 23, checksum errors
+        // 24, malformed 25, bytes skipped 26.
+        for i in 21..=26u8 {
+            want.extend([i, 0, 0, 0]);
+        }
         assert_eq!(want.len(), TELEMETRY_LEN);
+        assert_eq!(TELEMETRY_LEN, 122);
         let mut out = [0u8; TELEMETRY_LEN];
         assert_eq!(t.emit(&mut out), Ok(TELEMETRY_LEN));
         assert_eq!(&out[..], &want[..]);
         assert_eq!(TelemetryRepr::parse(&want), Ok(t));
         assert_eq!(t.counters.rx_frames, 1);
         assert_eq!(t.counters.features_extracted, 16);
+        assert_eq!(t.ping360.data, 21);
+        assert_eq!(t.ping360.bytes_skipped, 26);
 
         let mut bad = want.clone();
         bad[78] = 33;
@@ -1068,8 +1089,9 @@ pub(crate) mod tests {
             any::<u32>(),
             0u8..4,
             proptest::array::uniform16(any::<u32>()),
+            proptest::array::uniform6(any::<u32>()),
         )
-            .prop_map(|(t, mode, (o, a, g), cost, unit, c)| TelemetryRepr {
+            .prop_map(|(t, mode, (o, a, g), cost, unit, c, p)| TelemetryRepr {
                 time_ms: t,
                 mode,
                 obstacles: o,
@@ -1078,6 +1100,7 @@ pub(crate) mod tests {
                 step_cost: cost,
                 cost_unit: CostUnit::from_code(unit).unwrap(),
                 counters: TelemetryCounters::from_array(c),
+                ping360: Ping360Counters::from_array(p),
             })
     }
 

@@ -62,6 +62,7 @@ pub mod detect;
 pub mod evidence;
 mod extractor;
 mod fit;
+pub mod ping360;
 
 use crate::field::{Shape, ShapeError};
 use crate::math::{Vec2, PI};

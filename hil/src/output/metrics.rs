@@ -34,6 +34,7 @@ use crate::sim::sonar::OtherVehicle;
 use crate::sim::vehicle::wrap_pi;
 use crate::types::{Sample, VehicleRecord, P2};
 use vpf::link::TelemetryCounters;
+use vpf::sonar::ping360::Ping360Counters;
 
 /// Everything `metrics.json` holds; its `Display` is the end-of-run summary.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -103,6 +104,9 @@ pub struct VehicleMetrics {
     /// How the firmware's believed map compared with the truth (`belief.rs`); `None` without
     /// `Belief` messages (contacts, or an older firmware).
     pub perception: Option<Perception>,
+    /// The last telemetry's Ping360 port counters, when the firmware drove a Ping360 (it sent
+    /// commands); null otherwise.
+    pub ping360: Option<Ping360Counters>,
 }
 
 /// A vehicle's error against its goal and its heading set-point at one sample, in its body
@@ -352,6 +356,7 @@ impl VehicleMetrics {
             step_cost,
             counters: v.telemetry.map(|t| t.counters),
             perception: None,
+            ping360: v.telemetry.map(|t| t.ping360).filter(|p| p.commands > 0),
         }
     }
 }
@@ -446,6 +451,13 @@ impl fmt::Display for VehicleMetrics {
                     write!(f, ", error counters: {}", bad.join(", "))?;
                 }
             }
+        }
+        if let Some(p) = &self.ping360 {
+            write!(
+                f,
+                "; Ping360: {} commands, {} pings, {} timeouts, {} checksum errors, {} malformed, {} bytes skipped",
+                p.commands, p.data, p.timeouts, p.checksum_errors, p.malformed, p.bytes_skipped
+            )?;
         }
         f.write_str(".")
     }
@@ -646,6 +658,7 @@ mod tests {
             step_cost: 20,
             cost_unit: vpf::link::CostUnit::Cycles,
             counters,
+            ping360: Default::default(),
         });
         let m = VehicleMetrics::of(&v, 1.0, 0.5);
         assert_eq!(m.step_cost.max, Some(30));

@@ -466,6 +466,26 @@ impl Sonar {
         obstacles: &[SimObstacle],
         others: &[(P2, f64)],
     ) -> Ping {
+        let (bearing, range_m, bins) = (self.bearing, self.cfg.range_m, self.cfg.bins);
+        self.ping_along(tp, t, vehicle, bearing, range_m, bins, obstacles, others)
+    }
+
+    /// Renders one ping at time `tp` along the bow-relative bearing `bearing` (rad,
+    /// counter-clockwise) with `bins` bins over `range_m`, from the state at `t` (extrapolated
+    /// back to `tp` as [`Sonar::poll`] does): a head commanded from outside, as a Ping360's
+    /// is. The head's own pattern does not move; the noise stream is the same one.
+    #[allow(clippy::too_many_arguments)]
+    pub fn ping_along(
+        &mut self,
+        tp: f64,
+        t: f64,
+        vehicle: &VehicleState,
+        bearing: f64,
+        range_m: f64,
+        bins: usize,
+        obstacles: &[SimObstacle],
+        others: &[(P2, f64)],
+    ) -> Ping {
         let back = (t - tp).clamp(0.0, MAX_EXTRAPOLATION_S);
         let fin = |x: f64| if x.is_finite() { x } else { 0.0 };
         let vel = P2::new(fin(vehicle.velocity.x), fin(vehicle.velocity.y));
@@ -474,12 +494,20 @@ impl Sonar {
         let (sh, ch) = heading.sin_cos();
         let off = self.cfg.head_offset;
         let head = pos.add(P2::new(ch * off.x - sh * off.y, sh * off.x + ch * off.y));
-        let bins = self.render(tp, head, heading + self.bearing, obstacles, others);
+        let bins = self.render(
+            tp,
+            head,
+            heading + bearing,
+            range_m,
+            bins,
+            obstacles,
+            others,
+        );
         Ping {
             time_ms: (tp.max(0.0) * 1000.0).round() as u64,
-            bearing_rad: wrap_pi(self.bearing) as f32,
+            bearing_rad: wrap_pi(bearing) as f32,
             step_rad: self.cfg.step_deg.to_radians() as f32,
-            range_m: self.cfg.range_m as f32,
+            range_m: range_m as f32,
             bins,
             pose: Pose {
                 position: pos.to_vpf(),
@@ -488,16 +516,16 @@ impl Sonar {
         }
     }
 
-    /// The first surface along one ray.
+    /// The first surface along one ray, within `max` m.
     fn cast(
         &self,
         tp: f64,
         head: P2,
         dir: P2,
+        max: f64,
         obstacles: &[SimObstacle],
         others: &[(P2, f64)],
     ) -> Option<RayHit> {
-        let max = self.cfg.range_m;
         let mut best: Option<(f64, P2)> = None;
         let mut consider = |r: Option<f64>, normal_at: &dyn Fn(P2) -> P2| {
             if let Some(r) = r.filter(|r| r.is_finite()) {
@@ -519,18 +547,22 @@ impl Sonar {
         })
     }
 
-    /// The bins of one ping whose beam axis points along `look` (world angle, rad).
+    /// The `n` bins over `range_m` of one ping whose beam axis points along `look` (world
+    /// angle, rad).
+    #[allow(clippy::too_many_arguments)]
     fn render(
         &mut self,
         tp: f64,
         head: P2,
         look: f64,
+        range_m: f64,
+        n: usize,
         obstacles: &[SimObstacle],
         others: &[(P2, f64)],
     ) -> Vec<u8> {
         let c = self.cfg;
-        let n = c.bins;
-        let bin_m = c.range_m / n as f64;
+        let n = n.max(1);
+        let bin_m = range_m / n as f64;
         let mut level = vec![0.0f64; n];
         let half_bw = 0.5 * c.beam_width_deg.to_radians();
         for j in 0..c.rays_per_beam {
@@ -543,7 +575,7 @@ impl Sonar {
             let (s, co) = (look + frac * half_bw).sin_cos();
             let weight = 0.25f64.powf(frac * frac);
             let fade = 1.0 + c.echo_fluctuation * (2.0 * self.rng.uniform() - 1.0);
-            let Some(hit) = self.cast(tp, head, P2::new(co, s), obstacles, others) else {
+            let Some(hit) = self.cast(tp, head, P2::new(co, s), range_m, obstacles, others) else {
                 continue;
             };
             if hit.range < c.blanking_m {
@@ -563,7 +595,7 @@ impl Sonar {
             }
         }
         if c.false_echo_prob > 0.0 && self.rng.chance(c.false_echo_prob) {
-            let r = c.blanking_m + self.rng.uniform() * (c.range_m - c.blanking_m);
+            let r = c.blanking_m + self.rng.uniform() * (range_m - c.blanking_m);
             let amp =
                 c.echo_strength * (0.4 + 0.4 * self.rng.uniform()) / (1.0 + c.range_loss_per_m * r);
             let first = (r / bin_m).floor() as usize;
