@@ -13,7 +13,7 @@ use crate::planner::{
 use crate::world::{ObjectError, MAX_AGENTS, MAX_OBSTACLES};
 
 /// The wire codes of a [`Mode`]: (mode, hold reason). Mode 0 hold, 1 transit, 2 escape,
-/// 3 arrived; hold reason 0 none (any mode but hold), 1 no mission, 2 stale navigation,
+/// 3 arrived, 4 guarded, 5 loiter; hold reason 0 none (any mode but hold), 1 no mission, 2 stale navigation,
 /// 3 inside an obstacle, 4 collision imminent.
 pub const fn mode_codes(mode: Mode) -> (u8, u8) {
     match mode {
@@ -32,6 +32,7 @@ pub const fn mode_codes(mode: Mode) -> (u8, u8) {
         Mode::Escape => (2, 0),
         Mode::Arrived => (3, 0),
         Mode::Guarded => (4, 0),
+        Mode::Loiter => (5, 0),
     }
 }
 
@@ -52,6 +53,7 @@ fn mode_from_codes(mode: u8, reason: u8, mode_row: u8) -> Result<Mode, Error> {
         2 => Mode::Escape,
         3 => Mode::Arrived,
         4 => Mode::Guarded,
+        5 => Mode::Loiter,
         _ => return refuse(mode_row, Problem::UnknownCode),
     };
     if mode != 0 && reason != 0 {
@@ -543,7 +545,8 @@ impl ReplyRepr {
             StepError::BadFormation(FormationError::Descriptor) => (3, Problem::UnknownCode),
             StepError::BadFormation(FormationError::NonFinite) => (2, Problem::NonFinite),
             StepError::BadFormation(FormationError::OutOfRange) => (2, Problem::OutOfRange),
-            StepError::BadNav => (FIELD_WHOLE_MESSAGE, Problem::Invalid),
+            // Waypoint missions are checked at the wire, row by row (`super::mission`).
+            StepError::BadNav | StepError::BadMission(_) => (FIELD_WHOLE_MESSAGE, Problem::Invalid),
             StepError::NonFinite => (FIELD_WHOLE_MESSAGE, Problem::NonFinite),
         };
         ReplyRepr::rejected(to, field, problem)
@@ -721,6 +724,7 @@ pub(crate) mod tests {
     use crate::math::Vec2;
     use crate::params::ParamError;
     use proptest::prelude::*;
+    use std::vec;
 
     fn hold_command(heading: f32) -> Command {
         Command::hold(HoldReason::NoMission, heading)
@@ -811,7 +815,7 @@ pub(crate) mod tests {
             with(48, &f32::NEG_INFINITY.to_le_bytes()),
             Err(Error::field(11, Problem::NonFinite))
         );
-        assert_eq!(with(68, &[5]), Err(Error::field(16, Problem::UnknownCode)));
+        assert_eq!(with(68, &[6]), Err(Error::field(16, Problem::UnknownCode)));
         assert_eq!(
             with(68, &[0, 0]),
             Err(Error::field(17, Problem::UnknownCode))
@@ -1017,6 +1021,7 @@ pub(crate) mod tests {
             Just(Mode::Escape),
             Just(Mode::Arrived),
             Just(Mode::Guarded),
+            Just(Mode::Loiter),
             Just(Mode::Hold(HoldReason::NoMission)),
             Just(Mode::Hold(HoldReason::StaleNav)),
             Just(Mode::Hold(HoldReason::InsideObstacle)),

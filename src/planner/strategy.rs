@@ -135,7 +135,8 @@ impl Planner {
     /// angle between the heading and the goal, so that the turn onto it, of radius v²/F_max at
     /// the bounded lateral acceleration, fits inside the circle through the goal tangent to the
     /// heading (diameter d / sin θ; a goal behind counts as θ = 90°). Zero from arrival until
-    /// the vehicle is [`ARRIVAL_RELEASE`] arrival radii away.
+    /// the vehicle is [`ARRIVAL_RELEASE`] arrival radii away. A waypoint that is passed is not
+    /// stopped on: only the turn bounds the speed.
     fn cruise_speed(&self, m: &mut Motion, cx: &Context<'_>) -> f32 {
         let prm = &self.params;
         let d = (cx.mission.goal - cx.nav.position).norm();
@@ -148,10 +149,15 @@ impl Planner {
             bow.cross(to_goal).abs() / max(to_goal.norm(), 1e-6)
         };
         let turn = sqrt(prm.f_max * to_goal.norm() / (2.0 * max(sin_theta, 1e-6)));
+        if cx.leg.passing {
+            // A waypoint to pass (or the loiter circle): no stop on it.
+            m.arrived = false;
+            return min(prm.v_max, turn);
+        }
         m.arrived = if m.arrived {
-            d <= ARRIVAL_RELEASE * prm.arrival_radius_m
+            d <= ARRIVAL_RELEASE * cx.leg.radius
         } else {
-            d <= prm.arrival_radius_m
+            d <= cx.leg.radius
         };
         if m.arrived {
             0.0
