@@ -17,8 +17,8 @@
 //!    critical-section cell and queues sightings and requests.
 //!
 //! Shared state is only: five SPSC queues (bytes in, bytes out, sightings, requests, owed
-//! replies), and four small cells behind `critical_section` (newest navigation, link counters,
-//! firmware time, lockstep tick). A critical section never spans more than a copy of one of those cells.
+//! replies), and five small cells behind `critical_section` (newest navigation, link counters,
+//! firmware time, lockstep tick, the goal flown to). A critical section never spans more than a copy of one of those cells.
 
 #[cfg(feature = "selftest")]
 pub mod selftest;
@@ -89,6 +89,8 @@ static LINK: Mutex<Cell<(RxCounters, BackgroundCounters)>> = Mutex::new(Cell::ne
     },
 )));
 static NOW_MS: Mutex<Cell<u64>> = Mutex::new(Cell::new(0));
+/// The goal the periodic task flies to and its generation, for the route layer (`Sink::goal`).
+static GOAL: Mutex<Cell<(u32, Option<vpf::Vec2>)>> = Mutex::new(Cell::new((0, None)));
 /// Lockstep: `(active, pending tick time)`.
 static LOCKSTEP: Mutex<Cell<(bool, Option<u64>)>> = Mutex::new(Cell::new((false, None)));
 static RX_DROPPED: AtomicU32 = AtomicU32::new(0);
@@ -364,6 +366,8 @@ pub fn on_systick(ctx: &mut PeriodicCtx) {
         &mut send,
     );
     let period_cost = board::cost_now().wrapping_sub(period_start);
+    let goal = ctx.periodic.goal();
+    critical_section::with(|cs| GOAL.borrow(cs).set(goal));
     board::kick_tx();
     board::feed_watchdog();
 
@@ -445,6 +449,9 @@ impl Sink for IdleSink {
     }
     fn route(&mut self, r: Route) {
         ROUTE.publish(&r);
+    }
+    fn goal(&mut self) -> (u32, Option<vpf::Vec2>) {
+        critical_section::with(|cs| GOAL.borrow(cs).get())
     }
 }
 

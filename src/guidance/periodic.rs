@@ -19,6 +19,7 @@ use crate::world::World;
 use super::failsafe::{self, FailsafeConfig, FreezeDetector, Situation, SonarWatch};
 use super::guard::{self, GuardConfig, Verdict};
 use super::tracks::{TrackConfig, Tracks};
+use super::upload::Upload;
 use super::{
     BackgroundCounters, Control, NavSample, Sighting, CONTROL_QUEUE, REPLY_QUEUE,
     SIGHTINGS_PER_PERIOD,
@@ -133,6 +134,8 @@ pub struct Periodic {
     refused_nav_ms: Option<u64>,
     /// Navigation samples refused for coming from the future.
     future_navs: u32,
+    /// A waypoint upload in progress.
+    upload: Upload,
 }
 
 impl Periodic {
@@ -162,12 +165,26 @@ impl Periodic {
             nav: None,
             refused_nav_ms: None,
             future_navs: 0,
+            upload: Upload::default(),
         })
     }
 
     /// The planner (read-only: requests go through [`Control`]).
     pub fn planner(&self) -> &Planner {
         &self.planner
+    }
+
+    /// The goal the planner flies to (the current waypoint) and its generation, for the route
+    /// layer in the background (`crate::route::Router::follow`).
+    pub fn goal(&self) -> (u32, Option<Vec2>) {
+        let goal = self.planner.mission().map(|m| m.goal);
+        (self.planner.goal_generation(), goal)
+    }
+
+    /// How far along its mission the vehicle is (by the newest navigation accepted).
+    pub fn progress(&self) -> Option<crate::planner::MissionProgress> {
+        let p = self.nav.map_or(Vec2::ZERO, |n| n.nav.position);
+        self.planner.progress(p)
     }
 
     /// The newest route read from the background.
@@ -275,6 +292,7 @@ impl Periodic {
         let (rx, bg) = inputs.link_counters();
         self.refresh_counters(&rx, &bg);
         let telemetry = TelemetryRepr {
+            mission: self.progress().unwrap_or_default(),
             time_ms: now_ms,
             mode: cmd.mode,
             obstacles: self.world.obstacles().len() as u8,
@@ -406,7 +424,9 @@ impl Periodic {
         }
     }
 
-    /// Applies one request and says how it went.
+    /// Applies one request and says how it went. Not inlined: a survey's expanded list is on its
+    /// stack, which must not stay reserved under the planner step's.
+    #[inline(never)]
     fn apply(&mut self, c: Control) -> ReplyRepr {
         let reply = |h: Header, r: Result<(), crate::planner::StepError>| match r {
             Ok(()) => ReplyRepr::accepted(h),
@@ -428,6 +448,17 @@ impl Periodic {
                 }
                 ReplyRepr::accepted(h)
             }
+            Control::MissionCount(h, m) => self.upload.open(h, &m),
+            Control::MissionItem(h, m) => self.upload.item(h, &m, &mut self.planner),
+            Control::Survey(h, s) => match crate::planner::Waypoints::survey(&s.survey, s.end) {
+                Ok(w) => reply(h, self.planner.set_waypoints(&w, s.formation)),
+                // The wire checked that it fits; counted with the planner's refusals anyway.
+                Err(e) => {
+                    let c = &mut self.planner.counters.bad_mission;
+                    *c = c.saturating_add(1);
+                    reply(h, Err(crate::planner::StepError::BadMission(e)))
+                }
+            },
         }
     }
 

@@ -13,7 +13,8 @@
 //! - [`decoder`]: the stream decoder: bytes in, one [`Outcome`] per byte or chunk, resync on
 //!   the next 0x00, a counter for every rejection;
 //! - [`shape`]: the wire form of an obstacle [`Shape`](crate::field::Shape);
-//! - [`sensors`], [`control`] (host → firmware) and [`report`] (firmware → host): the messages;
+//! - [`sensors`], [`control`], [`mission`] (host → firmware) and [`report`] (firmware → host):
+//!   the messages;
 //! - [`message`]: [`Message`], every message in one enum, and whole-frame parse/emit.
 //!
 //! **Frame** on the wire: `COBS(header ‖ payload ‖ CRC) ‖ 0x00`, where the header is
@@ -38,6 +39,7 @@ pub mod crc;
 pub mod decoder;
 pub mod frame;
 pub mod message;
+pub mod mission;
 pub mod report;
 pub mod sensors;
 pub mod shape;
@@ -47,6 +49,7 @@ pub use control::{param_index, ChartClearRepr, ChartObstacleRepr, TickRepr, PARA
 pub use decoder::{Decoder, Outcome, RxCounters};
 pub use frame::{encode_frame, frame_buffer_len, split_frame, Direction, Header, MessageType};
 pub use message::{Message, Payload};
+pub use mission::{MissionCountRepr, MissionItemRepr, SurveyRepr};
 pub use report::{
     CommandRepr, CostUnit, LogLevel, LogRepr, ReplyRepr, ReplyStatus, TelemetryCounters,
     TelemetryRepr, FIELD_WHOLE_MESSAGE,
@@ -58,7 +61,7 @@ use crate::params::Params;
 
 /// The protocol version this module speaks, first byte of every header. Frames with another
 /// version are refused (and counted): a new version is a new, incompatible layout.
-pub const PROTOCOL_VERSION: u8 = 5;
+pub const PROTOCOL_VERSION: u8 = 6;
 /// The frame delimiter. COBS guarantees it appears nowhere inside a frame.
 pub const DELIMITER: u8 = 0x00;
 /// Length of the frame header: version u8, message type u8, sequence u16.

@@ -8,7 +8,8 @@ use super::message::Payload;
 use super::{Error, Problem, MAX_LOG_LEN};
 use crate::params::ParamProblem;
 use crate::planner::{
-    Command, FormationError, HoldReason, Mode, PidSetpoints, StepError, MAX_GHOSTS, MAX_NAV_SPEED,
+    Command, FormationError, HoldReason, MissionProgress, Mode, PidSetpoints, StepError,
+    MAX_GHOSTS, MAX_NAV_SPEED, MAX_WAYPOINTS,
 };
 use crate::world::{ObjectError, MAX_AGENTS, MAX_OBSTACLES};
 
@@ -330,7 +331,9 @@ impl TelemetryCounters {
 }
 
 /// `Telemetry` payload length.
-pub const TELEMETRY_LEN: usize = 98;
+pub const TELEMETRY_LEN: usize = 104;
+/// The row of the first mission-progress field (the block appended in version 6).
+pub const TELEMETRY_MISSION_ROW: u8 = 28;
 
 /// `Telemetry` (0x82): health and counters, sent periodically.
 ///
@@ -339,8 +342,11 @@ pub const TELEMETRY_LEN: usize = 98;
 /// 20 `obstacles` u8 (table fill, ≤ `MAX_OBSTACLES`) · 21 `agents` u8 (≤ `MAX_AGENTS`) ·
 /// 22 `ghost_depth` u8 (≤ `MAX_GHOSTS`) · 23 `cost_unit` u8 ([`CostUnit`]) ·
 /// 24 `guard_interventions` u32 · 25 `frozen_nav_holds` u32 · 26 `requests_busy` u32 ·
-/// 27 `requests_unanswered` u32.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+/// 27 `requests_unanswered` u32 · then the **mission progress block** (version 6):
+/// 28 `mission_waypoint` u8 (the waypoint flown to, 0-based; = count once complete) ·
+/// 29 `mission_waypoints` u8 (count, ≤ `MAX_WAYPOINTS`; 0: no mission) · 30 `mission_to_go_m`
+/// f32 (m along the remaining waypoints, finite, ≥ 0).
+#[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct TelemetryRepr {
     /// Firmware time, ms.
@@ -359,10 +365,21 @@ pub struct TelemetryRepr {
     pub cost_unit: CostUnit,
     /// Counters since boot.
     pub counters: TelemetryCounters,
+    /// How far along its mission the vehicle is (all zero: no mission).
+    pub mission: MissionProgress,
 }
 
 impl TelemetryRepr {
     fn check(&self) -> Result<(), Error> {
+        let m = &self.mission;
+        let row = TELEMETRY_MISSION_ROW;
+        if usize::from(m.count) > MAX_WAYPOINTS {
+            return refuse(row + 1, Problem::OutOfRange);
+        }
+        if m.current > m.count {
+            return refuse(row, Problem::OutOfRange);
+        }
+        within(row + 2, m.to_go_m, 0.0, f32::MAX)?;
         if usize::from(self.obstacles) > MAX_OBSTACLES {
             return refuse(20, Problem::OutOfRange);
         }
@@ -397,6 +414,11 @@ impl<'a> Payload<'a> for TelemetryRepr {
         let frozen_nav_holds = r.u32()?;
         let requests_busy = r.u32()?;
         let requests_unanswered = r.u32()?;
+        let mission = MissionProgress {
+            current: r.u8()?,
+            count: r.u8()?,
+            to_go_m: r.f32()?,
+        };
         r.finish()?;
         let t = TelemetryRepr {
             time_ms,
@@ -413,6 +435,7 @@ impl<'a> Payload<'a> for TelemetryRepr {
                 requests_unanswered,
                 ..TelemetryCounters::from_array(counters)
             },
+            mission,
         };
         t.check()?;
         Ok(t)
@@ -446,6 +469,10 @@ impl<'a> Payload<'a> for TelemetryRepr {
         w.u32(self.counters.frozen_nav_holds)?;
         w.u32(self.counters.requests_busy)?;
         w.u32(self.counters.requests_unanswered)?;
+        // Version 6: the mission progress block (rows 28–30).
+        w.u8(self.mission.current)?;
+        w.u8(self.mission.count)?;
+        w.f32(self.mission.to_go_m)?;
         Ok(w.len())
     }
 }
@@ -841,6 +868,11 @@ pub(crate) mod tests {
                 requests_unanswered: 20,
                 ..TelemetryCounters::from_array(core::array::from_fn(|i| i as u32 + 1))
             },
+            mission: MissionProgress {
+                current: 2,
+                count: 5,
+                to_go_m: 40.0,
+            },
         }
     }
 
@@ -854,6 +886,7 @@ pub(crate) mod tests {
         }
         want.extend([0, 2, 3, 1, 0, 2]);
         want.extend([17, 0, 0, 0, 18, 0, 0, 0, 19, 0, 0, 0, 20, 0, 0, 0]);
+        want.extend([2, 5, 0x00, 0x00, 0x20, 0x42]); // waypoint 2 of 5, 40 m to go
         assert_eq!(want.len(), TELEMETRY_LEN);
         let mut out = [0u8; TELEMETRY_LEN];
         assert_eq!(t.emit(&mut out), Ok(TELEMETRY_LEN));
@@ -873,6 +906,23 @@ pub(crate) mod tests {
         assert_eq!(
             TelemetryRepr::parse(&bad),
             Err(Error::field(23, Problem::UnknownCode))
+        );
+        let mut bad = want.clone();
+        bad[98] = 6;
+        assert_eq!(
+            TelemetryRepr::parse(&bad),
+            Err(Error::field(28, Problem::OutOfRange))
+        );
+        bad[99] = 17;
+        assert_eq!(
+            TelemetryRepr::parse(&bad),
+            Err(Error::field(29, Problem::OutOfRange))
+        );
+        let mut bad = want.clone();
+        bad[100..104].copy_from_slice(&f32::NAN.to_le_bytes());
+        assert_eq!(
+            TelemetryRepr::parse(&bad),
+            Err(Error::field(30, Problem::NonFinite))
         );
     }
 
@@ -1073,17 +1123,25 @@ pub(crate) mod tests {
             any::<u32>(),
             0u8..4,
             proptest::array::uniform16(any::<u32>()),
+            (0u8..=16, 0u8..=16, 0.0f32..1e6),
         )
-            .prop_map(|(t, mode, (o, a, g), cost, unit, c)| TelemetryRepr {
-                time_ms: t,
-                mode,
-                obstacles: o,
-                agents: a,
-                ghost_depth: g,
-                step_cost: cost,
-                cost_unit: CostUnit::from_code(unit).unwrap(),
-                counters: TelemetryCounters::from_array(c),
-            })
+            .prop_map(
+                |(t, mode, (o, a, g), cost, unit, c, (i, n, d))| TelemetryRepr {
+                    time_ms: t,
+                    mode,
+                    obstacles: o,
+                    agents: a,
+                    ghost_depth: g,
+                    step_cost: cost,
+                    cost_unit: CostUnit::from_code(unit).unwrap(),
+                    counters: TelemetryCounters::from_array(c),
+                    mission: MissionProgress {
+                        current: i.min(n),
+                        count: n,
+                        to_go_m: d,
+                    },
+                },
+            )
     }
 
     pub(crate) fn arb_reply() -> impl Strategy<Value = ReplyRepr> {

@@ -381,8 +381,8 @@ impl Survey {
     }
 }
 
-/// How far along its mission a vehicle is.
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// How far along its mission a vehicle is (all zero: no mission).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct MissionProgress {
     /// Index of the waypoint being flown to, 0-based; equal to `count` once the last one has

@@ -149,6 +149,8 @@ pub struct Router {
     /// background's stack).
     blocked: Rows,
     goal: Option<Vec2>,
+    /// The periodic task's goal generation last followed (`Router::follow`).
+    generation: u32,
     last_ms: Option<u64>,
     /// Counters.
     pub counters: RouteCounters,
@@ -164,6 +166,7 @@ impl Router {
             wave: Wavefront::new(),
             blocked: [0; ROUTE_SIDE],
             goal: None,
+            generation: 0,
             last_ms: None,
             counters: RouteCounters {
                 replans: 0,
@@ -196,6 +199,18 @@ impl Router {
         if self.goal != goal {
             self.goal = goal;
             self.last_ms = None;
+        }
+    }
+
+    /// The periodic task's goal (`crate::planner::Planner::goal_generation`): taken when its
+    /// generation changes — a waypoint mission accepted, the next waypoint — and replanned at
+    /// the next navigation. (A `Mission` message sets the goal as soon as it is queued,
+    /// [`Router::set_goal`]; the periodic task's same goal follows a period later and changes
+    /// nothing.)
+    pub fn follow(&mut self, generation: u32, goal: Option<Vec2>) {
+        if generation != self.generation {
+            self.generation = generation;
+            self.set_goal(goal);
         }
     }
 

@@ -646,6 +646,7 @@ mod tests {
             step_cost: 20,
             cost_unit: vpf::link::CostUnit::Cycles,
             counters,
+            mission: Default::default(),
         });
         let m = VehicleMetrics::of(&v, 1.0, 0.5);
         assert_eq!(m.step_cost.max, Some(30));
