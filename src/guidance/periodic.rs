@@ -256,11 +256,7 @@ impl Periodic {
         }
         self.world.expire(now_ms, self.config.max_age_ms);
         if let (Some(m), Some(n)) = (map, nav) {
-            let mut near: heapless::Vec<Near, MAX_MAP_CELLS> = heapless::Vec::new();
-            m.nearest(n.nav.position, self.config.map_reach_m, &mut near);
-            // Cells as discs of half their side: neighbours touch, so a wall has no seams.
-            self.world
-                .set_map(near.iter().map(|c| c.center), 0.5 * m.cell_m());
+            self.snapshot(m, n.nav.position);
         }
 
         if let Some(r) = inputs.route() {
@@ -309,7 +305,20 @@ impl Periodic {
         cmd
     }
 
+    /// This period's view of the evidence map: the nearest believed cell per bearing sector.
+    /// Not inlined, nor is [`Self::send_belief`]: their buffers would otherwise stay reserved
+    /// in the period's frame under the planner step, where the stack is deepest.
+    #[inline(never)]
+    fn snapshot(&mut self, m: &EvidenceMap, p: Vec2) {
+        let mut near: heapless::Vec<Near, MAX_MAP_CELLS> = heapless::Vec::new();
+        m.nearest(p, self.config.map_reach_m, &mut near);
+        // Cells as discs of half their side: neighbours touch, so a wall has no seams.
+        self.world
+            .set_map(near.iter().map(|c| c.center), 0.5 * m.cell_m());
+    }
+
     /// Every `belief_every` periods, the next chunk of the evidence map (round-robin).
+    #[inline(never)]
     fn send_belief(&mut self, now_ms: u64, map: &EvidenceMap, tx: &mut impl FnMut(&[u8]) -> bool) {
         let every = u32::from(self.config.belief_every);
         self.belief_tick = self.belief_tick.wrapping_add(1);

@@ -65,6 +65,7 @@ impl Planner {
     /// minimum-potential arc point is chosen (eq. 4–8); in between the vehicle is steered at
     /// it. Within one arc radius of the goal it steers at the goal itself (the last path
     /// element ends there).
+    #[inline(never)]
     pub(super) fn plan_multipoint(&self, m: &mut Motion, cx: &Context<'_>) -> Command {
         let prm = &self.params;
         let p = cx.nav.position;
@@ -115,6 +116,7 @@ impl Planner {
     /// minima, see `navfn.rs`). Outside the free space (inside an enclosing circle, beyond ρ₀)
     /// the vehicle heads out along the way out; with the goal inside a circle there is no
     /// navigation function and it heads straight at the goal.
+    #[inline(never)]
     pub(super) fn plan_navfn(&self, m: &mut Motion, cx: &Context<'_>) -> Command {
         let p = cx.nav.position;
         let straight = (cx.aim - p).normalized(1e-6).unwrap_or(Vec2::ZERO);

@@ -99,6 +99,7 @@ pub fn goal_point(
 impl Planner {
     /// One VPF period: E, its sampled gradient and friction give F; the ghost goal-points
     /// are updated after the shared integration.
+    #[inline(never)]
     pub(super) fn plan_vpf(&self, m: &mut Motion, cx: &Context<'_>) -> Command {
         let p = cx.nav.position;
         let prm = self.params;
