@@ -394,6 +394,29 @@ pub struct MissionProgress {
     pub to_go_m: f32,
 }
 
+/// Look-ahead along a leg, × the cruise reach σ_c ([`along_leg`]).
+pub const LEG_LOOKAHEAD: f32 = 0.5;
+
+/// Where to steer to fly the leg from `a` to `b` from `p`: the point `lookahead` m beyond `p`'s
+/// projection on the leg, or `b` itself within that of it — line-of-sight guidance (Fossen,
+/// "Handbook of Marine Craft Hydrodynamics and Motion Control", 2011, §10.3.2), so that a
+/// vehicle pushed off a survey line by an obstacle comes back onto the line rather than cutting
+/// straight to the next waypoint. The VPF then puts its cruise goal-point towards that point.
+pub fn along_leg(p: Vec2, a: Vec2, b: Vec2, lookahead: f32) -> Vec2 {
+    let d = b - a;
+    let len = d.norm();
+    if len < 1e-3 {
+        return b;
+    }
+    let t = crate::math::max(0.0, crate::math::min((p - a).dot(d) / len, len));
+    let s = t + lookahead;
+    if s >= len {
+        b
+    } else {
+        a + d * (s / len)
+    }
+}
+
 /// Gain k of the loiter vector field, × 1/r: at (d − r) = r/2 the course is 45° off the tangent.
 const LOITER_GAIN: f32 = 2.0;
 

@@ -299,6 +299,8 @@ struct Leg {
     passing: bool,
     /// Circling the last waypoint: (radius, clockwise).
     loiter: Option<(f32, bool)>,
+    /// The waypoint before (the leg's start), from the second leg on.
+    from: Option<Vec2>,
 }
 
 /// Per-obstacle planning shifts for moving obstacles ([`crate::world::Obstacle::predicted_shift`]),
@@ -539,6 +541,10 @@ impl Planner {
             speed: w.and_then(|w| w.speed()).unwrap_or(f32::INFINITY),
             passing: !last || loiter.is_some(),
             loiter: loiter.filter(|_| plan.complete),
+            from: i
+                .checked_sub(1)
+                .and_then(|k| plan.waypoints.get(k))
+                .map(|w| w.position()),
         }
     }
 
@@ -672,9 +678,17 @@ impl Planner {
             clearance = clearance.min((p - a.position).norm() - self.params.agent_radius_m);
         }
         let leg = self.leg();
-        let aim = match leg.loiter {
-            Some((r, clockwise)) => mission::loiter_aim(p, mission.goal, r, clockwise, r),
-            None => self.route.unwrap_or(mission.goal),
+        let reach = vpf::cruise_reach(&self.params);
+        let aim = match (leg.loiter, self.route, leg.from) {
+            (Some((r, clockwise)), _, _) => mission::loiter_aim(p, mission.goal, r, clockwise, r),
+            // The route layer's way round something: follow it.
+            (None, Some(a), _) if a != mission.goal => a,
+            // The goal in plain sight (or no route), on a leg from a waypoint: along the leg,
+            // so that a survey flies its lines.
+            (None, _, Some(from)) => {
+                mission::along_leg(p, from, mission.goal, mission::LEG_LOOKAHEAD * reach)
+            }
+            (None, route, None) => route.unwrap_or(mission.goal),
         };
         let cx = Context {
             now_ms,
