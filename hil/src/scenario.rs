@@ -1474,13 +1474,7 @@ fn vehicle(
             },
             None => return Err(t.missing("goal")),
         },
-        (None, None) => {
-            return Err(t.src.err(
-                &t.span,
-                &t.key("goal"),
-                "missing required key (or give `waypoints` or a `survey`)",
-            ))
-        }
+        (None, None) => return Err(t.src.err(&t.span, &t.key("goal"), "missing required key")),
     };
     let formation = match t.table("formation")? {
         Some(f) => Some(formation(&f)?),

@@ -40,6 +40,11 @@ impl VehicleMission {
     }
 }
 
+/// A limit of the library's as the file writes it (`0.01`, not `0.009999999776482582`).
+fn limit(v: f32) -> f64 {
+    v.to_string().parse().unwrap_or(f64::from(v))
+}
+
 /// A waypoint's position as written, for the checks against obstacles.
 pub(super) struct Placed<'a> {
     pub(super) at: Got<'a, P2>,
@@ -130,7 +135,7 @@ fn end(t: &Table<'_>) -> Result<MissionEnd, ScenarioError> {
             "missing: end = \"loiter\" circles the last waypoint at this radius",
         )
     })?;
-    let radius_m = radius.within(f64::from(lo), f64::from(hi), "m")?;
+    let radius_m = radius.within(limit(lo), limit(hi), "m")?;
     Ok(MissionEnd::Loiter {
         radius_m: radius_m as f32,
         clockwise: clockwise.unwrap_or(false),
@@ -184,7 +189,7 @@ fn list<'a>(
                         }
                         r.within(
                             0.0,
-                            f64::from(vpf::planner::mission::MAX_WAYPOINT_RADIUS_M),
+                            limit(vpf::planner::mission::MAX_WAYPOINT_RADIUS_M),
                             "m",
                         )?
                     }
@@ -192,8 +197,8 @@ fn list<'a>(
                 };
                 let speed = match w.number("speed")? {
                     Some(s) => Some(s.within(
-                        f64::from(vpf::planner::mission::MIN_WAYPOINT_SPEED),
-                        f64::from(vpf::planner::mission::MAX_WAYPOINT_SPEED),
+                        limit(vpf::planner::mission::MIN_WAYPOINT_SPEED),
+                        limit(vpf::planner::mission::MAX_WAYPOINT_SPEED),
                         "m/s",
                     )?),
                     None => None,
@@ -240,7 +245,7 @@ fn survey_of(s: &Table<'_>, params: &Params) -> Result<Survey, ScenarioError> {
         if g.v <= 0.0 {
             return Err(g.fail(format!("must be > 0, got {}", g.v)));
         }
-        g.within(0.0, f64::from(side), "m")
+        g.within(0.0, limit(side), "m")
     };
     let corner = s.req_position("corner")?;
     let length_m = positive("length_m")?;
@@ -254,15 +259,15 @@ fn survey_of(s: &Table<'_>, params: &Params) -> Result<Survey, ScenarioError> {
         Some(r) if r.v <= 0.0 => return Err(r.fail(format!("must be > 0, got {}", r.v))),
         Some(r) => r.within(
             0.0,
-            f64::from(vpf::planner::mission::MAX_WAYPOINT_RADIUS_M),
+            limit(vpf::planner::mission::MAX_WAYPOINT_RADIUS_M),
             "m",
         )?,
         None => f64::from(params.arrival_radius_m),
     };
     let speed = match s.number("speed")? {
         Some(v) => Some(v.within(
-            f64::from(vpf::planner::mission::MIN_WAYPOINT_SPEED),
-            f64::from(vpf::planner::mission::MAX_WAYPOINT_SPEED),
+            limit(vpf::planner::mission::MIN_WAYPOINT_SPEED),
+            limit(vpf::planner::mission::MAX_WAYPOINT_SPEED),
             "m/s",
         )?),
         None => None,
