@@ -375,8 +375,8 @@ fn refusals_at_the_wire_count_as_refused_requests() {
 
 fn waypoint(k: u8) -> Waypoint {
     // A zig-zag east: (10k, ±5), radius 2; every other leg at 0.6 m/s.
-    let y = if k % 2 == 0 { 5.0 } else { -5.0 };
-    let speed = (k % 2 == 1).then_some(0.6);
+    let y = if k.is_multiple_of(2) { 5.0 } else { -5.0 };
+    let speed = (!k.is_multiple_of(2)).then_some(0.6);
     Waypoint::new(Vec2::new(10.0 * f32::from(k + 1), y), 2.0)
         .and_then(|w| w.with_speed(speed))
         .unwrap()

@@ -124,3 +124,17 @@ impl Control {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A queued request is the size of its largest kind (a `Params`, a charted polygon): the
+    /// waypoint messages go up one waypoint at a time so that the four slots do not grow.
+    #[test]
+    fn a_request_slot_stays_152_bytes() {
+        assert_eq!(core::mem::size_of::<Control>(), 152);
+        assert!(core::mem::size_of::<crate::link::SurveyRepr>() < 152);
+        assert!(core::mem::size_of::<crate::link::MissionItemRepr>() <= 24);
+    }
+}
