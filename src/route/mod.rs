@@ -431,6 +431,24 @@ mod tests {
     }
 
     #[test]
+    fn the_goal_follows_the_periodic_tasks_generation_only_when_it_changes() {
+        let mut r = Router::new(RouteConfig::default());
+        // A `Mission` message set the goal when it was queued ...
+        r.set_goal(Some(Vec2::new(50.0, 0.0)));
+        assert!(r.on_nav(Vec2::ZERO, 0, None).is_some());
+        // ... the periodic task's same goal a period later changes nothing (no replan).
+        r.follow(1, Some(Vec2::new(50.0, 0.0)));
+        assert_eq!(r.on_nav(Vec2::ZERO, 100, None), None);
+        // The next waypoint (a new generation) is planned to at once.
+        r.follow(2, Some(Vec2::new(50.0, 40.0)));
+        let route = r.on_nav(Vec2::ZERO, 200, None).unwrap();
+        assert_eq!(route.goal, Vec2::new(50.0, 40.0));
+        // An old generation's goal is not taken again.
+        r.follow(2, Some(Vec2::new(0.0, 99.0)));
+        assert_eq!(r.on_nav(Vec2::ZERO, 300, None), None);
+    }
+
+    #[test]
     fn a_moving_contact_is_not_structure_and_off_means_nothing() {
         let mut r = router_with_wall();
         let boat = Shape::circle(Vec2::new(5.0, 0.0), 3.0).unwrap();
