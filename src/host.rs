@@ -10,7 +10,7 @@
 //!
 //! With `--ping360 DEVICE` the firmware drives a Blue Robotics Ping360 on that serial port
 //! (`vpf::sonar::ping360`): its pings become scanlines like those of the `Scanline` message, its
-//! counters are `Telemetry` rows 28–33. Bytes for the Ping360 are written before the main
+//! counters are `Telemetry` rows 31–36. Bytes for the Ping360 are written before the main
 //! link's of the same event, so a `transducer` sent in a period precedes that period's
 //! `Command` (the HIL harness relies on it in lockstep).
 //!

@@ -27,8 +27,9 @@
 //!   [`Decoder`] fed the same bytes (with the documented moves: requests refused at the wire
 //!   out of `rx_bad_payload` into `bad_params`/`bad_mission`, Ticks back in time into it),
 //!   and `bad_params`/`bad_mission` are the planner's refusals plus those;
-//! - every request (`Params`, `Mission`, `ChartObstacle`, `ChartClear`) with a trusted header
-//!   gets exactly one `Reply`, by the end of the period after the input.
+//! - every request (`Params`, `Mission`, `ChartObstacle`, `ChartClear`, `MissionCount`,
+//!   `MissionItem`, `Survey`) with a trusted header gets exactly one `Reply`, by the end of
+//!   the period after the input.
 //!
 //! A fifth of the inputs are fed in random pieces (as reads of a serial port come), so frames
 //! are also cut across `on_bytes` calls.
@@ -53,10 +54,12 @@ use vpf::guidance::{RuntimeConfig, SingleContext};
 use vpf::link::{
     BeliefRepr, BodyVelocity, ChartClearRepr, ChartObstacleRepr, CommandRepr, Contact, ContactKind,
     ContactList, ContactsRepr, CostUnit, Decoder, Direction, Error, Header, LogLevel, LogRepr,
-    Message, MessageType, NavRepr, Outcome, ReplyRepr, TelemetryCounters, TelemetryRepr, TickRepr,
-    MAX_FRAME,
+    Message, MessageType, MissionCountRepr, MissionItemRepr, NavRepr, Outcome, ReplyRepr,
+    SurveyRepr, TelemetryCounters, TelemetryRepr, TickRepr, MAX_FRAME,
 };
-use vpf::planner::{Formation, HoldReason, MAX_GHOSTS};
+use vpf::planner::{
+    Formation, HoldReason, MissionEnd, MissionProgress, Survey, Waypoint, MAX_GHOSTS,
+};
 use vpf::sonar::Scanline;
 use vpf::{Command, Mission, Mode, NavState, Params, Strategy, Vec2};
 
@@ -303,7 +306,7 @@ fn nav(t: u64, p: Vec2, v: Vec2) -> NavRepr {
 }
 
 /// Host → firmware types, weighted.
-const TO_FIRMWARE: [(u8, u32); 8] = [
+const TO_FIRMWARE: [(u8, u32); 11] = [
     (0x01, 16), // Nav
     (0x02, 10), // Scanline
     (0x03, 10), // Contacts
@@ -312,6 +315,9 @@ const TO_FIRMWARE: [(u8, u32); 8] = [
     (0x06, 4),  // ChartClear
     (0x07, 8),  // Params
     (0x08, 6),  // Tick
+    (0x09, 4),  // MissionCount
+    (0x0A, 8),  // MissionItem
+    (0x0B, 3),  // Survey
 ];
 const TO_HOST: [u8; 5] = [0x81, 0x82, 0x83, 0x84, 0x85];
 
@@ -328,6 +334,26 @@ fn pick_type(rng: &mut Rng) -> u8 {
         x -= w;
     }
     0x01
+}
+
+fn formation(rng: &mut Rng) -> Option<Formation> {
+    rng.chance(0.2).then(|| Formation {
+        q: rng.pick(&[3, 4, 6]),
+        lattice_m: rng.range(0.5, 50.0),
+        orientation: rng.range(-PI, PI),
+        attraction: rng.range(0.01, 100.0),
+    })
+}
+
+fn mission_end(rng: &mut Rng) -> MissionEnd {
+    if rng.chance(0.6) {
+        MissionEnd::Hold
+    } else {
+        MissionEnd::Loiter {
+            radius_m: rng.range(1.0, 30.0),
+            clockwise: rng.chance(0.5),
+        }
+    }
 }
 
 /// A valid payload of type `ty`.
@@ -447,6 +473,48 @@ fn payload(rng: &mut Rng, ctx: &Ctx<'_>, ty: u8) -> Vec<u8> {
             };
             payload_of(&Message::Tick(TickRepr { time_ms }))
         }
+        0x09 => {
+            // Short uploads mostly, so that random items complete some.
+            let count = if rng.chance(0.8) {
+                1 + rng.below(3) as u8
+            } else {
+                1 + rng.below(16) as u8
+            };
+            let m = Message::MissionCount(MissionCountRepr {
+                count,
+                end: mission_end(rng),
+                formation: formation(rng),
+            });
+            payload_of(&m)
+        }
+        0x0A => {
+            let p = near(rng, ctx.p);
+            let w = Waypoint::new(p, rng.range(0.5, 5.0))
+                .and_then(|w| w.with_speed(rng.chance(0.3).then(|| rng.range(0.1, 3.0))))
+                .expect("a valid waypoint");
+            let slots = if rng.chance(0.8) { 3 } else { 16 };
+            payload_of(&Message::MissionItem(MissionItemRepr {
+                index: rng.below(slots) as u8,
+                waypoint: w,
+            }))
+        }
+        0x0B => {
+            let width_m = rng.range(5.0, 60.0);
+            let s = Survey {
+                corner: near(rng, ctx.p),
+                length_m: rng.range(5.0, 80.0),
+                width_m,
+                heading: rng.range(-PI, PI),
+                spacing_m: width_m / rng.range(0.5, 6.9),
+                radius_m: rng.range(0.5, 5.0),
+                speed: rng.chance(0.3).then(|| rng.range(0.1, 3.0)),
+            };
+            payload_of(&Message::Survey(SurveyRepr {
+                survey: s,
+                end: mission_end(rng),
+                formation: formation(rng),
+            }))
+        }
         0x81 => {
             let mut command = Command::hold(HoldReason::NoMission, rng.range(-PI, PI));
             command.clearance_m = f32::INFINITY;
@@ -465,6 +533,7 @@ fn payload(rng: &mut Rng, ctx: &Ctx<'_>, ty: u8) -> Vec<u8> {
             cost_unit: CostUnit::Unknown,
             counters: TelemetryCounters::default(),
             ping360: Default::default(),
+            mission: MissionProgress::default(),
         })),
         0x83 => payload_of(&Message::Reply(ReplyRepr::accepted(Header {
             msg_type: MessageType::Params,
@@ -543,6 +612,11 @@ fn float_offsets(ty: u8, p: &[u8]) -> Vec<usize> {
             shape_floats(p, 6, &mut v);
         }
         0x07 => v.extend(PARAM_F32),
+        // MissionCount: loiter radius and the formation's; MissionItem: x, y, radius, speed;
+        // Survey: rows 0–7, the loiter radius and the formation's.
+        0x09 => v.extend([2, 8, 12, 16]),
+        0x0A => v.extend([1, 5, 9, 13]),
+        0x0B => v.extend([0, 4, 8, 12, 16, 20, 24, 28, 33, 39, 43, 47]),
         0x81 => v.extend((0..15).map(|i| 8 + 4 * i)),
         0x85 => v.push(8),
         _ => {}
@@ -690,6 +764,22 @@ fn mutate_count(rng: &mut Rng, ty: u8, p: &mut Vec<u8>) {
             ]);
             put_u8(p, o, rng.pick(vals));
         }
+        0x09 | 0x0B => {
+            // The count, the end code or the flags (a formation that is or is not there).
+            let base = if ty == 0x09 { 1 } else { 32 };
+            match rng.below(3) {
+                0 if ty == 0x09 => put_u8(p, 0, rng.pick(&[0u8, 1, 2, 16, 17, 255])),
+                0 | 1 => put_u8(p, base, rng.pick(&[0u8, 1, 2, 3, 255])),
+                _ => {
+                    let f = rng.pick(&[0u8, 1, 2, 0xFF]);
+                    put_u8(p, base + 5, f);
+                    if agree {
+                        p.resize(base + 6 + if f & 1 != 0 { 13 } else { 0 }, 0);
+                    }
+                }
+            }
+        }
+        0x0A => put_u8(p, 0, rng.pick(&[0u8, 1, 2, 15, 16, 17, 255])),
         0x81 => {
             let o = rng.pick(&[68usize, 69, 70]);
             put_u8(p, o, rng.pick(&[0u8, 1, 4, 5, 6, 7, 255]));
@@ -747,7 +837,7 @@ fn gen_raw(rng: &mut Rng, ctx: &Ctx<'_>, seq: &mut u16) -> Vec<u8> {
     }
     let ty = pick_type(rng);
     let mut f = Frame {
-        version: 5,
+        version: vpf::link::PROTOCOL_VERSION,
         ty,
         seq: *seq,
         payload: payload(rng, ctx, ty),
@@ -854,11 +944,11 @@ fn mutate_frame(rng: &mut Rng, ctx: &Ctx<'_>, f: &mut Frame, seq: &mut u16) {
         }
         // Header: version, type (the payload read as another type's), sequence.
         10 => match rng.below(3) {
-            0 => f.version = rng.pick(&[0u8, 4, 6, 0x85, 0xFF]),
+            0 => f.version = rng.pick(&[0u8, 5, 7, 0x85, 0xFF]),
             1 => {
                 f.ty = rng.pick(&[
-                    0x00, 0x01, 0x02, 0x03, 0x04, 0x05, 0x06, 0x07, 0x08, 0x09, 0x7F, 0x80, 0x81,
-                    0x82, 0x83, 0x84, 0x85, 0x86, 0xFF,
+                    0x00, 0x01, 0x02, 0x03, 0x04, 0x05, 0x06, 0x07, 0x08, 0x09, 0x0A, 0x0B, 0x0C,
+                    0x7F, 0x80, 0x81, 0x82, 0x83, 0x84, 0x85, 0x86, 0xFF,
                 ])
             }
             _ => {
@@ -981,6 +1071,9 @@ fn is_request(t: MessageType) -> bool {
             | MessageType::Mission
             | MessageType::ChartObstacle
             | MessageType::ChartClear
+            | MessageType::MissionCount
+            | MessageType::MissionItem
+            | MessageType::Survey
     )
 }
 
@@ -1122,9 +1215,11 @@ impl Model {
                         Message::ChartObstacle(c) => {
                             Event::Request(h.msg_type, h.seq, None, c.to_obstacle(0).is_err())
                         }
-                        Message::Mission(_) | Message::ChartClear(_) => {
-                            Event::Request(h.msg_type, h.seq, None, false)
-                        }
+                        Message::Mission(_)
+                        | Message::ChartClear(_)
+                        | Message::MissionCount(_)
+                        | Message::MissionItem(_)
+                        | Message::Survey(_) => Event::Request(h.msg_type, h.seq, None, false),
                         _ => Event::None,
                     }
                 }

@@ -1,7 +1,8 @@
 //! Requests over the wire (docs/protocol.md, issue 11 §5 and §6): every request gets exactly
 //! one reply; a full request queue answers "busy" and counts it; a host that sends again what
 //! was answered "busy" lands a whole start-up burst; every refusal is counted once, in the
-//! counter of its kind.
+//! counter of its kind. And waypoint missions (issue 12 §2): uploaded item by item, flown only
+//! once complete; surveys expanded by the firmware.
 
 use std::collections::HashMap;
 
@@ -11,9 +12,10 @@ use vpf::guidance::{
 };
 use vpf::link::{
     encode_frame, ChartClearRepr, ChartObstacleRepr, CostUnit, Decoder, Direction, Message,
-    MessageType, NavRepr, Outcome, Payload, Problem, ReplyRepr, ReplyStatus, TelemetryRepr,
-    TickRepr, FIELD_WHOLE_MESSAGE, MAX_FRAME,
+    MessageType, MissionCountRepr, MissionItemRepr, NavRepr, Outcome, Payload, Problem, ReplyRepr,
+    ReplyStatus, SurveyRepr, TelemetryRepr, TickRepr, FIELD_WHOLE_MESSAGE, MAX_FRAME,
 };
+use vpf::planner::{MissionEnd, Survey, Waypoint, Waypoints, MAX_WAYPOINTS};
 use vpf::world::{Origin, MAX_OBSTACLES};
 use vpf::{Mission, NavState, Params, Vec2};
 
@@ -369,4 +371,205 @@ fn refusals_at_the_wire_count_as_refused_requests() {
     host.period();
     let t = host.last_telemetry().counters;
     assert_eq!((t.rx_bad_payload, t.bad_nav), (1, 1));
+}
+
+fn waypoint(k: u8) -> Waypoint {
+    // A zig-zag east: (10k, ±5), radius 2; every other leg at 0.6 m/s.
+    let y = if k.is_multiple_of(2) { 5.0 } else { -5.0 };
+    let speed = (!k.is_multiple_of(2)).then_some(0.6);
+    Waypoint::new(Vec2::new(10.0 * f32::from(k + 1), y), 2.0)
+        .and_then(|w| w.with_speed(speed))
+        .unwrap()
+}
+
+/// Sends `burst` paced as docs/protocol.md §9 says (at most the queue's capacity in flight,
+/// again what came back busy) and returns each request's final reply by its first sequence.
+fn paced(host: &mut Host, burst: &[Message<'static>]) -> Vec<ReplyStatus> {
+    let mut pending: Vec<(usize, Message<'static>)> = burst.iter().copied().enumerate().collect();
+    let mut done = vec![None; burst.len()];
+    for _ in 0..20 {
+        if pending.is_empty() {
+            break;
+        }
+        let take = pending.len().min(CONTROL_QUEUE);
+        let batch: Vec<(usize, u16)> = pending
+            .drain(..take)
+            .map(|(i, m)| (i, host.send(m)))
+            .collect();
+        let replies = host.period();
+        answered_once(&replies, &batch.iter().map(|b| b.1).collect::<Vec<_>>());
+        for (i, seq) in batch {
+            let r = replies.iter().find(|r| r.to_seq == seq).unwrap();
+            match r.status {
+                ReplyStatus::Busy => pending.push((i, burst[i])),
+                s => done[i] = Some(s),
+            }
+        }
+    }
+    done.into_iter().map(Option::unwrap).collect()
+}
+
+/// A waypoint mission goes up as `MissionCount` and one `MissionItem` per waypoint (the queue's
+/// slots stay small); until the last item lands the mission in force flies on; then the whole
+/// list replaces it and telemetry shows the progress. Sent in one go, the queue answers the
+/// overflow busy, and a paced host lands it all.
+#[test]
+fn a_waypoint_mission_goes_up_item_by_item_and_flies_only_when_complete() {
+    let mut host = Host::new();
+    host.period();
+    let single = Mission {
+        goal: Vec2::new(80.0, 0.0),
+        formation: None,
+    };
+    assert_eq!(
+        paced(&mut host, &[Message::Mission(single)]),
+        [ReplyStatus::Accepted]
+    );
+    let n = MAX_WAYPOINTS as u8;
+    let count = Message::MissionCount(MissionCountRepr {
+        count: n,
+        end: MissionEnd::Hold,
+        formation: None,
+    });
+    let item = |k: u8| {
+        Message::MissionItem(MissionItemRepr {
+            index: k,
+            waypoint: waypoint(k),
+        })
+    };
+    // The count and all but the last item, in one go: four land, the rest come back busy.
+    let mut burst = vec![count];
+    burst.extend((0..n - 1).map(item));
+    let seqs: Vec<u16> = burst.iter().map(|m| host.send(*m)).collect();
+    let replies = host.period();
+    answered_once(&replies, &seqs);
+    let busy = replies
+        .iter()
+        .filter(|r| r.status == ReplyStatus::Busy)
+        .count();
+    assert_eq!(busy, burst.len() - CONTROL_QUEUE);
+    // Paced, the rest land; the single goal is still flown.
+    let again: Vec<Message<'static>> = replies
+        .iter()
+        .filter(|r| r.status == ReplyStatus::Busy)
+        .map(|r| host.sent[&r.to_seq])
+        .collect();
+    assert!(paced(&mut host, &again)
+        .iter()
+        .all(|s| *s == ReplyStatus::Accepted));
+    let planner = host.fw.periodic().planner();
+    assert_eq!(planner.mission().unwrap().goal, single.goal);
+    assert_eq!(host.last_telemetry().mission.count, 1);
+    // The last item completes it: the list is flown from its first waypoint.
+    assert_eq!(paced(&mut host, &[item(n - 1)]), [ReplyStatus::Accepted]);
+    let planner = host.fw.periodic().planner();
+    let flown = planner.waypoints().unwrap().clone();
+    assert_eq!(flown.len(), MAX_WAYPOINTS);
+    assert!(flown
+        .as_slice()
+        .iter()
+        .zip(0..n)
+        .all(|(w, k)| *w == waypoint(k)));
+    assert_eq!(planner.mission().unwrap().goal, waypoint(0).position());
+    host.period();
+    let m = host.last_telemetry().mission;
+    let to_go = flown.distance_to_go(Vec2::ZERO, 0);
+    assert_eq!((m.current, m.count), (0, n));
+    assert!((m.to_go_m - to_go).abs() < 1e-3, "{m:?} vs {to_go}");
+    assert_eq!(host.last_telemetry().counters.bad_mission, 0);
+}
+
+/// Items that belong to no upload, or beyond its count, are refused (field 0, the index),
+/// counted in `bad_mission`, and change nothing; a new `MissionCount` starts over.
+#[test]
+fn items_outside_an_upload_are_refused_and_counted() {
+    let mut host = Host::new();
+    let item = |k: u8| {
+        Message::MissionItem(MissionItemRepr {
+            index: k,
+            waypoint: waypoint(k),
+        })
+    };
+    let count = |n: u8| {
+        Message::MissionCount(MissionCountRepr {
+            count: n,
+            end: MissionEnd::Loiter {
+                radius_m: 10.0,
+                clockwise: false,
+            },
+            formation: None,
+        })
+    };
+    let rejected = |problem| ReplyStatus::Rejected { field: 0, problem };
+    assert_eq!(paced(&mut host, &[item(0)]), [rejected(Problem::Invalid)]);
+    let got = paced(&mut host, &[count(2), item(2), item(0)]);
+    assert_eq!(
+        got,
+        [
+            ReplyStatus::Accepted,
+            rejected(Problem::OutOfRange),
+            ReplyStatus::Accepted
+        ]
+    );
+    assert!(host.fw.periodic().planner().mission().is_none());
+    // Starting over forgets item 0: one more item does not complete it.
+    let got = paced(&mut host, &[count(2), item(1)]);
+    assert_eq!(got, [ReplyStatus::Accepted, ReplyStatus::Accepted]);
+    assert!(host.fw.periodic().planner().mission().is_none());
+    assert_eq!(paced(&mut host, &[item(0)]), [ReplyStatus::Accepted]);
+    let flown = host.fw.periodic().planner().waypoints().unwrap().clone();
+    assert_eq!(flown.len(), 2);
+    assert!(matches!(flown.end(), MissionEnd::Loiter { .. }));
+    // After completion the upload is closed again.
+    assert_eq!(paced(&mut host, &[item(0)]), [rejected(Problem::Invalid)]);
+    assert_eq!(host.last_telemetry().counters.bad_mission, 3);
+}
+
+/// A `Survey` is expanded by the firmware into the same list the library makes; one that does
+/// not fit is refused on its spacing's row, counted, and the mission in force is kept.
+#[test]
+fn a_survey_is_expanded_by_the_firmware() {
+    let mut host = Host::new();
+    let survey = Survey {
+        corner: Vec2::new(10.0, -20.0),
+        length_m: 60.0,
+        width_m: 30.0,
+        heading: 0.3,
+        spacing_m: 10.0,
+        radius_m: 2.0,
+        speed: Some(0.8),
+    };
+    let msg = |s: Survey| {
+        Message::Survey(SurveyRepr {
+            survey: s,
+            end: MissionEnd::Hold,
+            formation: None,
+        })
+    };
+    assert_eq!(paced(&mut host, &[msg(survey)]), [ReplyStatus::Accepted]);
+    let want = Waypoints::survey(&survey, MissionEnd::Hold).unwrap();
+    assert_eq!(host.fw.periodic().planner().waypoints(), Some(&want));
+    assert_eq!(want.len(), 8);
+    // Nine lines: refused by the wire, on the spacing (row 5), and counted.
+    let mut payload = [0u8; 64];
+    let n = SurveyRepr {
+        survey,
+        end: MissionEnd::Hold,
+        formation: None,
+    }
+    .emit(&mut payload)
+    .unwrap();
+    payload[20..24].copy_from_slice(&3.5f32.to_le_bytes());
+    let s = host.send_raw(MessageType::Survey, &payload[..n]);
+    let replies = host.period();
+    answered_once(&replies, &[s]);
+    assert_eq!(
+        replies[0].status,
+        ReplyStatus::Rejected {
+            field: 5,
+            problem: Problem::OutOfRange
+        }
+    );
+    assert_eq!(host.fw.periodic().planner().waypoints(), Some(&want));
+    assert_eq!(host.last_telemetry().counters.bad_mission, 1);
 }

@@ -326,6 +326,11 @@ impl Firmware {
         Ok(Self::new(Some(child), master, Target::Host))
     }
 
+    /// Sequence number of the last frame sent (a request's reply names it).
+    pub fn last_seq(&self) -> u16 {
+        self.seq
+    }
+
     /// Sends one message as a frame, through the tap.
     pub fn send(&mut self, m: &Message<'_>, tap: &mut dyn Tap) -> std::io::Result<()> {
         let mut buf = [0u8; MAX_FRAME];

@@ -28,3 +28,4 @@ pub mod scenario;
 pub mod sim;
 pub mod sweep;
 pub mod types;
+pub mod upload;

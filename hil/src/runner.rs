@@ -14,9 +14,8 @@ use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
-use vpf::link::{ContactList, ContactsRepr, Message, NavRepr, ReplyStatus, TickRepr};
+use vpf::link::{ContactList, ContactsRepr, Message, NavRepr, TickRepr};
 use vpf::planner::NavState;
-use vpf::Mission;
 
 use crate::faults::{FaultCounts, FaultTap};
 use crate::firmware::{self, Firmware, Reply, Target};
@@ -26,7 +25,8 @@ use crate::scenario::{RunMode, Scenario, Sensing, SonarInterface, Window};
 use crate::sim::nav::{NavConfig, NavSensor};
 use crate::sim::sonar::{self as sonar_sim, OtherVehicle, Sonar, SonarConfig};
 use crate::sim::vehicle::{new_model, ModelKind, VehicleModel};
-use crate::types::{SetPoints, VehicleRecord, VehicleState, P2};
+use crate::types::{SetPoints, VehicleRecord, VehicleState, WaypointMark, P2};
+use crate::upload::{self, Uploader};
 
 /// How long to wait for a period's command before sending its `Tick` again (a Tick lost to a
 /// link fault is otherwise never answered): the emulated board or a real one over a serial
@@ -110,6 +110,8 @@ struct Sim {
     /// The simulated Ping360 on its own port, its fault tap, and the commands the firmware's
     /// last telemetry counted (`[sonar] interface = "ping360"`).
     ping360: Option<(SimPing360, FaultTap, u32)>,
+    /// The set-up requests (parameters, mission) on their way.
+    upload: Uploader,
 }
 
 /// The result of a run: what was written, and the fault counts per vehicle.
@@ -297,6 +299,7 @@ fn simulate(
             record: VehicleRecord {
                 name: v.name.clone(),
                 goal: v.goal,
+                waypoints: marks(v),
                 ..VehicleRecord::default()
             },
             setpoints: SetPoints {
@@ -307,6 +310,12 @@ fn simulate(
             delayed: Default::default(),
             frozen: None,
             ping360,
+            upload: Uploader::new(upload::requests(
+                params,
+                v.goal,
+                v.mission.as_ref(),
+                v.formation,
+            )),
         });
     }
 
@@ -341,24 +350,15 @@ fn simulate(
             }
         }
     }
-    // Parameters and missions go out next; the firmware answers them at its next period.
-    for (s, v) in sims.iter_mut().zip(&sc.vehicles) {
-        let mission = Mission {
-            goal: v.goal.to_vpf(),
-            formation: v.formation,
-        };
-        // Requests are sent without faults: a scenario's set-up is not what a fault run tests.
-        let mut clean = crate::firmware::NoTap;
-        s.fw.send(&Message::Params(params), &mut clean)
-            .map_err(fw_err)?;
-        s.fw.send(&Message::Mission(mission), &mut clean)
-            .map_err(fw_err)?;
+    // Parameters and missions go out next; the firmware answers them at its next period. A
+    // waypoint mission's items follow as the replies come (`upload`).
+    for s in sims.iter_mut() {
+        s.upload.send(&mut s.fw, 0).map_err(fw_err)?;
     }
 
     let steps = (sc.duration_s / sc.dt_s).round().max(1.0) as u64;
     let started = Instant::now();
     let show = how.progress && std::io::stderr().is_terminal();
-    let mut replies_checked = vec![false; sims.len()];
     for k in 0..steps {
         let t = k as f64 * sc.dt_s;
         let t_ms = (t * 1000.0).round() as u64;
@@ -402,13 +402,20 @@ fn simulate(
         }
         let hulls: Vec<(P2, f64)> = fleet.iter().map(|o| (o.position, o.hull_radius)).collect();
         for (i, s) in sims.iter_mut().enumerate() {
-            collect(s, sc.mode, t_ms, &mut replies_checked[i])?;
+            collect(s, sc.mode, t_ms)?;
+            if !s.upload.done() {
+                s.upload.send(&mut s.fw, k).map_err(fw_err)?;
+            }
             let state = s.model.state();
             let near = nearest(sc, t, &state, hull_radius(s.kind), &hulls, i);
             if let Some(last) = s.record.samples.last_mut() {
                 last.t = t;
                 last.state = state;
                 last.nearest_m = near;
+            }
+            let next = s.record.waypoints.get(s.record.waypoints_reached);
+            if next.is_some_and(|m| state.position.sub(m.position).norm() <= m.radius_m) {
+                s.record.waypoints_reached += 1;
             }
             s.model.step(sc.dt_s, &s.setpoints, sc.current.velocity);
         }
@@ -453,16 +460,35 @@ fn simulate(
 }
 
 /// Whether a run can end early: a vehicle has collided at the last sample, or every vehicle's
-/// last sample is within `arrival_radius_m` of its goal.
+/// last sample is within `arrival_radius_m` of its goal (a waypoint mission: every waypoint
+/// reached, in order).
 fn finished(sims: &[Sim], arrival_radius_m: f64) -> bool {
     let last = |s: &Sim| s.record.samples.last().cloned();
     let collided = sims
         .iter()
         .any(|s| last(s).is_some_and(|x| x.nearest_m < 0.0));
     let arrived = sims.iter().all(|s| {
+        if !s.record.waypoints.is_empty() {
+            return s.record.waypoints_reached == s.record.waypoints.len();
+        }
         last(s).is_some_and(|x| x.state.position.sub(s.record.goal).norm() <= arrival_radius_m)
     });
     collided || arrived
+}
+
+/// A vehicle's waypoints as the harness judges them (`WaypointMark`): empty for a single goal.
+fn marks(v: &crate::scenario::Vehicle) -> Vec<WaypointMark> {
+    let slack = v.formation.map_or(0.0, |f| f64::from(f.lattice_m));
+    v.mission.as_ref().map_or_else(Vec::new, |m| {
+        m.positions()
+            .into_iter()
+            .zip(m.waypoints.as_slice())
+            .map(|(position, w)| WaypointMark {
+                position,
+                radius_m: f64::from(w.radius_m()) + slack,
+            })
+            .collect()
+    })
 }
 
 /// Sends this period's navigation and sonar, with the scenario's sensor faults. A Ping360 of
@@ -564,12 +590,7 @@ fn send_contacts(
 }
 
 /// Collects the firmware's answer for this period and records it.
-fn collect(
-    s: &mut Sim,
-    mode: RunMode,
-    t_ms: u64,
-    replies_checked: &mut bool,
-) -> Result<(), RunError> {
+fn collect(s: &mut Sim, mode: RunMode, t_ms: u64) -> Result<(), RunError> {
     let got = match mode {
         RunMode::Lockstep => {
             let mut attempt = 1;
@@ -605,25 +626,8 @@ fn collect(
     };
     for r in &got {
         match r {
-            Reply::Reply(rep) if !*replies_checked => {
-                match rep.status {
-                    ReplyStatus::Rejected { field, problem } => {
-                        return Err(RunError::Refused(format!(
-                            "the scenario's {:?} message (field {field}: {problem:?})",
-                            rep.to_type
-                        )));
-                    }
-                    // Two requests never fill the firmware's queue of four: a busy answer
-                    // (another host talking to it?) means the set-up did not land.
-                    ReplyStatus::Busy => {
-                        return Err(RunError::Refused(format!(
-                            "the scenario's {:?} message (the firmware answered busy)",
-                            rep.to_type
-                        )));
-                    }
-                    _ => {}
-                }
-            }
+            // A rejected set-up request ends the run; a busy one goes again.
+            Reply::Reply(rep) => s.upload.on_reply(rep).map_err(RunError::Refused)?,
             Reply::Belief(c) => {
                 let position = s.model.state().position;
                 s.record.belief.apply(c, t_ms as f64 * 1e-3, position);
@@ -640,9 +644,6 @@ fn collect(
             }
             _ => {}
         }
-    }
-    if got.iter().any(|r| matches!(r, Reply::Reply(_))) {
-        *replies_checked = true;
     }
     let command = got.iter().rev().find_map(|r| match r {
         Reply::Command(c) => Some(c.command),

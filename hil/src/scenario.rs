@@ -27,6 +27,9 @@ pub use crate::sim::vehicle::Autopilot;
 pub use crate::sim::vehicle::ModelKind;
 use crate::types::{SimObstacle, SimShape, P2};
 
+mod mission;
+pub use mission::VehicleMission;
+
 /// Largest coordinate accepted for a position, m (the firmware's `MAX_POSITION_M`).
 pub const MAX_POSITION_M: f64 = vpf::sonar::MAX_POSITION_M as f64;
 /// Most vehicles in a scenario: each firmware tracks at most `vpf::world::MAX_AGENTS` others.
@@ -113,8 +116,10 @@ pub struct Vehicle {
     pub start: P2,
     /// Start heading, rad (counter-clockwise from +x).
     pub heading: f64,
-    /// Goal-point, m.
+    /// Goal-point, m: the last waypoint of a waypoint mission.
     pub goal: P2,
+    /// A waypoint mission (`waypoints` or `survey`), if any; `None`: the single `goal`.
+    pub mission: Option<VehicleMission>,
     /// Formation request, if any (orientation in rad).
     pub formation: Option<Formation>,
     /// How it senses obstacles.
@@ -1469,19 +1474,18 @@ fn vehicle(
     shapes: &[Shape],
     earlier: &[Vehicle],
 ) -> Result<Vehicle, ScenarioError> {
-    t.allow(
-        &[
-            "name",
-            "model",
-            "start",
-            "heading_deg",
-            "goal",
-            "formation",
-            "sensing",
-            "autopilot",
-        ],
-        "a [[vehicle]]",
-    )?;
+    let mut keys = vec![
+        "name",
+        "model",
+        "start",
+        "heading_deg",
+        "goal",
+        "formation",
+        "sensing",
+        "autopilot",
+    ];
+    keys.extend(mission::KEYS);
+    t.allow(&keys, "a [[vehicle]]")?;
     let name = t.req_string("name")?;
     check_name(&name)?;
     if let Some(i) = earlier.iter().position(|v| v.name == name.v) {
@@ -1506,7 +1510,25 @@ fn vehicle(
         Some(h) => h.within(-360.0, 360.0, "degrees")?.to_radians(),
         None => 0.0,
     };
-    let goal = t.req_position("goal")?;
+    let mission = mission::parse(t, params)?;
+    let goal = match (t.position("goal")?, &mission) {
+        (Some(g), None) => g,
+        (Some(g), Some(_)) => {
+            return Err(
+                g.fail("give a `goal` or a waypoint mission (`waypoints`, `survey`), not both")
+            )
+        }
+        (None, Some((_, placed))) => match placed.last() {
+            Some(p) => Got {
+                v: p.at.v,
+                span: p.at.span.clone(),
+                key: p.at.key.clone(),
+                src: p.at.src,
+            },
+            None => return Err(t.missing("goal")),
+        },
+        (None, None) => return Err(t.src.err(&t.span, &t.key("goal"), "missing required key")),
+    };
     let formation = match t.table("formation")? {
         Some(f) => Some(formation(&f)?),
         None => None,
@@ -1546,6 +1568,14 @@ fn vehicle(
                 goal.v.x, goal.v.y
             )));
         }
+        for (k, w) in mission.iter().flat_map(|(_, placed)| placed).enumerate() {
+            if o.velocity == P2::default() && s.signed_distance(w.at.v.to_vpf()) <= 0.0 {
+                return Err(w.at.fail(format!(
+                    "waypoint {k} [{:.2}, {:.2}] is inside the static obstacle[{i}]",
+                    w.at.v.x, w.at.v.y
+                )));
+            }
+        }
     }
     let hull = 2.0 * f64::from(params.agent_radius_m);
     if let Some(other) = earlier.iter().find(|v| v.start.sub(start.v).norm() < hull) {
@@ -1561,6 +1591,7 @@ fn vehicle(
         start: start.v,
         heading,
         goal: goal.v,
+        mission: mission.map(|(m, _)| m),
         formation,
         sensing,
         autopilot,

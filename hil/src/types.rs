@@ -150,13 +150,44 @@ pub struct Sample {
     pub nearest_m: f64,
 }
 
+/// A waypoint of a vehicle's mission as the harness judges it: reached when the true position
+/// comes within `radius_m` of it, in order.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct WaypointMark {
+    /// Where, m.
+    pub position: P2,
+    /// The waypoint's arrival radius, m, plus the formation's lattice length when the vehicle
+    /// keeps one (a fleet is judged at its centre: `vpf::planner` advances so).
+    pub radius_m: f64,
+}
+
+/// The times (s) at which `samples` reached each of `marks`, in order: waypoint k counts only
+/// after waypoint k − 1, one per sample.
+pub fn waypoint_arrivals(marks: &[WaypointMark], samples: &[Sample]) -> Vec<Option<f64>> {
+    let mut times = vec![None; marks.len()];
+    let mut next = 0;
+    for s in samples {
+        if let (Some(m), Some(slot)) = (marks.get(next), times.get_mut(next)) {
+            if s.t.is_finite() && s.state.position.sub(m.position).norm() <= m.radius_m {
+                *slot = Some(s.t);
+                next += 1;
+            }
+        }
+    }
+    times
+}
+
 /// Everything one run produced for one vehicle.
 #[derive(Clone, Debug, Default)]
 pub struct VehicleRecord {
     /// Vehicle name from the scenario.
     pub name: String,
-    /// Its goal, m.
+    /// Its goal, m (the last waypoint of a waypoint mission).
     pub goal: P2,
+    /// A waypoint mission's waypoints, in order (empty for a single goal).
+    pub waypoints: Vec<WaypointMark>,
+    /// Waypoints reached so far, in order (the runner's running count, for ending a run).
+    pub waypoints_reached: usize,
     /// The samples, one per period.
     pub samples: Vec<Sample>,
     /// Ghost goal-points the firmware used (target positions that were not the goal), m.

@@ -1,4 +1,5 @@
-//! A fixed slice of `hil bench`: one generated world of every family (seed 1), flown by the
+//! A fixed slice of `hil bench`: one generated world of every family (seed 1; the waypoint
+//! mission families too, which pass on their seed 1 as they are), flown by the
 //! VideoRay with its own sonar (scanlines), default parameters, VPF, on the host-process
 //! firmware. Nothing may be touched; the perception columns must be filled (the firmware
 //! reported its map) and honest (a perfect-perception run reports none).
@@ -7,7 +8,7 @@
 //! change that makes the vehicle drive into what it saw fails here.
 
 use hil::bench::case::{self, Case};
-use hil::bench::worlds::FAMILIES;
+use hil::bench::worlds::{FAMILIES, MISSION_FAMILIES};
 use hil::runner::QuietRun;
 use hil::scenario::Sensing;
 use hil::sim::ModelKind;
@@ -27,6 +28,7 @@ fn one_world_of_every_family_is_flown_without_contact() {
     let run = quiet();
     let rows: Vec<_> = FAMILIES
         .iter()
+        .chain(&MISSION_FAMILIES)
         .map(|&family| {
             let c = Case {
                 family,

@@ -9,7 +9,7 @@ use vpf::link::ReplyRepr;
 use vpf::route::{Route, Router};
 
 use super::queues::Producers;
-use super::{LinkCounters, Lockstep, Stats, CONTROL_RX_SLOTS, EVIDENCE, ROUTE};
+use super::{GoalFlown, LinkCounters, Lockstep, Stats, CONTROL_RX_SLOTS, EVIDENCE, ROUTE};
 
 /// What the background shares with the periodic task: RTIC's shared resources seen from idle,
 /// each access one short lock at the periodic task's priority (the UART's is above it, so no
@@ -21,6 +21,8 @@ pub trait Exchange {
     fn publish_counters(&mut self, counters: LinkCounters);
     /// Firmware time now, ms.
     fn now_ms(&mut self) -> u64;
+    /// The waypoint the periodic task flies to, and its generation.
+    fn goal(&mut self) -> GoalFlown;
     /// Lockstep: asks for a period at the host's time `time_ms`.
     fn request_period(&mut self, time_ms: u64);
     /// Whether a requested period has not run yet.
@@ -34,13 +36,15 @@ pub trait Exchange {
 }
 
 /// Idle's view of the shared resources: RTIC's lock proxies, one per resource.
-pub struct IdleShared<Nav, Counters, Now, Step, Report> {
+pub struct IdleShared<Nav, Counters, Now, Goal, Step, Report> {
     /// The newest navigation.
     pub nav: Nav,
     /// The link's counters.
     pub link_counters: Counters,
     /// Firmware time.
     pub now_ms: Now,
+    /// The waypoint flown to.
+    pub goal: Goal,
     /// Lockstep state.
     pub lockstep: Step,
     /// The periodic task's statistics (read by the self-test).
@@ -48,11 +52,13 @@ pub struct IdleShared<Nav, Counters, Now, Step, Report> {
     pub stats: Report,
 }
 
-impl<Nav, Counters, Now, Step, Report> Exchange for IdleShared<Nav, Counters, Now, Step, Report>
+impl<Nav, Counters, Now, Goal, Step, Report> Exchange
+    for IdleShared<Nav, Counters, Now, Goal, Step, Report>
 where
     Nav: Mutex<T = Option<NavSample>>,
     Counters: Mutex<T = LinkCounters>,
     Now: Mutex<T = u64>,
+    Goal: Mutex<T = GoalFlown>,
     Step: Mutex<T = Lockstep>,
     Report: Mutex<T = Stats>,
 {
@@ -64,6 +70,9 @@ where
     }
     fn now_ms(&mut self) -> u64 {
         self.now_ms.lock(|t| *t)
+    }
+    fn goal(&mut self) -> GoalFlown {
+        self.goal.lock(|g| *g)
     }
     fn request_period(&mut self, time_ms: u64) {
         self.lockstep.lock(|l| {
@@ -132,6 +141,9 @@ impl<X: Exchange> Sink for Outlet<'_, X> {
     }
     fn route(&mut self, r: Route) {
         ROUTE.publish(&r);
+    }
+    fn goal(&mut self) -> (u32, Option<vpf::Vec2>) {
+        self.exchange.goal()
     }
 }
 

@@ -20,8 +20,9 @@
 //!
 //! What they share: the byte queues and the background→periodic queues (sightings, requests,
 //! owed replies; [`queues`]), whose ends are RTIC `#[local]`s of the one task that uses each;
-//! four `#[shared]` resources with ceiling locks at the periodic task's priority (newest
-//! navigation, link counters, firmware time, lockstep state) and the self-test's statistics;
+//! five `#[shared]` resources with ceiling locks at the periodic task's priority (newest
+//! navigation, link counters, firmware time, the waypoint flown to, lockstep state) and the
+//! self-test's statistics;
 //! and two lock-free structures written by the background and read by the periodic task (the
 //! evidence map and the route slot: sequence-counted atomics, no lock).
 
@@ -60,6 +61,10 @@ pub type ControlOutbox = link::Outbox<CONTROL_TX_SLOTS>;
 
 /// The decoder's and the background's counters, as the telemetry reports them.
 pub type LinkCounters = (RxCounters, BackgroundCounters);
+
+/// The waypoint the periodic task flies to and its generation (`Periodic::goal`), for the
+/// background's route layer.
+pub type GoalFlown = (u32, Option<vpf::Vec2>);
 
 /// Lockstep state, shared by the background (which decodes `Tick`s) and the periodic task.
 #[derive(Clone, Copy, Debug, Default)]

@@ -8,7 +8,7 @@ use vpf::link::ReplyRepr;
 use vpf::route::Route;
 
 use super::queues::Consumers;
-use super::{ControlOutbox, LinkCounters, Lockstep, Stats, EVIDENCE, ROUTE};
+use super::{ControlOutbox, GoalFlown, LinkCounters, Lockstep, Stats, EVIDENCE, ROUTE};
 use crate::board::active as board;
 use crate::board::systick::PeriodTimer;
 
@@ -47,6 +47,8 @@ pub struct PeriodShared<'a> {
     pub link_counters: &'a LinkCounters,
     /// Firmware time, for the background's time stamps.
     pub now_ms: &'a mut u64,
+    /// The waypoint flown to, for the background's route layer.
+    pub goal: &'a mut GoalFlown,
     /// Lockstep: whether the host runs the clock, and the `Tick` waiting to run.
     pub lockstep: &'a mut Lockstep,
     /// What the periodic task has done, for reports.
@@ -163,6 +165,7 @@ impl PeriodicTask {
             &mut send,
         );
         let period_cost = board::cost_now().wrapping_sub(period_start);
+        *shared.goal = self.runtime.goal();
         board::kick_tx();
         self.watchdog.feed();
 

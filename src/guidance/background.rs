@@ -29,6 +29,9 @@ pub trait Sink {
     fn tick(&mut self, time_ms: u64);
     /// Publishes the newest route (overwrites the previous one).
     fn route(&mut self, r: Route);
+    /// The mission goal the periodic task flies to and its generation
+    /// (`crate::planner::Planner::goal_generation`): the route layer follows it.
+    fn goal(&mut self) -> (u32, Option<crate::math::Vec2>);
 }
 
 /// What the background dropped, for telemetry.
@@ -44,8 +47,9 @@ pub struct BackgroundCounters {
     /// `Params` messages refused at the wire (the decoder counted them in its `bad_payload`;
     /// telemetry moves them to `bad_params`).
     pub params_refused: u32,
-    /// `Mission`, `ChartObstacle` and `ChartClear` messages refused at the wire (moved from
-    /// the decoder's `bad_payload` to `bad_mission` as above).
+    /// `Mission`, `MissionCount`, `MissionItem`, `Survey`, `ChartObstacle` and `ChartClear`
+    /// messages refused at the wire (moved from the decoder's `bad_payload` to `bad_mission`
+    /// as above).
     pub mission_refused: u32,
     /// `Nav` messages refused at the wire (moved from `bad_payload` to `bad_nav`).
     pub nav_refused: u32,
@@ -215,7 +219,16 @@ impl Background {
 
 fn is_request(t: MessageType) -> bool {
     use MessageType as T;
-    matches!(t, T::Mission | T::Params | T::ChartObstacle | T::ChartClear)
+    matches!(
+        t,
+        T::Mission
+            | T::Params
+            | T::ChartObstacle
+            | T::ChartClear
+            | T::MissionCount
+            | T::MissionItem
+            | T::Survey
+    )
 }
 
 /// Queues a reply owed outside the request queue; when the ring is full too the request goes
@@ -309,9 +322,14 @@ fn dispatch(
                 nav: n.nav,
                 time_ms,
             });
-            // The slow part of the route layer runs here, at most once per `replan_ms`.
-            if let Some(r) = router.and_then(|r| r.on_nav(n.nav.position, time_ms, map)) {
-                sink.route(r);
+            // The slow part of the route layer runs here, at most once per `replan_ms`, to the
+            // waypoint the periodic task flies to.
+            if let Some(r) = router {
+                let (generation, goal) = sink.goal();
+                r.follow(generation, goal);
+                if let Some(route) = r.on_nav(n.nav.position, time_ms, map) {
+                    sink.route(route);
+                }
             }
         }
         Message::Scanline(scan) => {
@@ -375,6 +393,17 @@ fn dispatch(
             if let (true, Some(r)) = (queued, router) {
                 r.forget_charts();
             }
+        }
+        // Waypoint missions reach the route layer through the periodic task's goal (`Sink::goal`),
+        // once they are complete and accepted.
+        Message::MissionCount(c) => {
+            request(sink, Control::MissionCount(header, c), counters);
+        }
+        Message::MissionItem(i) => {
+            request(sink, Control::MissionItem(header, i), counters);
+        }
+        Message::Survey(s) => {
+            request(sink, Control::Survey(header, s), counters);
         }
         Message::Tick(t) => sink.tick(t.time_ms),
         // Firmware → host messages are refused by the decoder (Direction::ToFirmware).

@@ -36,6 +36,7 @@ pub mod guard;
 pub mod periodic;
 pub mod single;
 pub mod tracks;
+pub mod upload;
 
 pub use background::{Background, BackgroundCounters, Sink};
 pub use failsafe::FailsafeConfig;
@@ -44,7 +45,7 @@ pub use periodic::{Inputs, Periodic, RuntimeConfig};
 pub use single::SingleContext;
 pub use tracks::TrackConfig;
 
-use crate::link::{ChartClearRepr, Header};
+use crate::link::{ChartClearRepr, Header, MissionCountRepr, MissionItemRepr, SurveyRepr};
 use crate::params::Params;
 use crate::planner::{Mission, NavState};
 use crate::sonar::Feature;
@@ -101,6 +102,12 @@ pub enum Control {
     Chart(Header, Obstacle),
     /// Remove charted obstacles.
     ChartClear(Header, ChartClearRepr),
+    /// Open a waypoint upload (`crate::guidance::upload`).
+    MissionCount(Header, MissionCountRepr),
+    /// One waypoint of the upload.
+    MissionItem(Header, MissionItemRepr),
+    /// Fly a lawnmower survey.
+    Survey(Header, SurveyRepr),
 }
 
 impl Control {
@@ -110,7 +117,24 @@ impl Control {
             Control::Mission(h, _)
             | Control::Params(h, _)
             | Control::Chart(h, _)
-            | Control::ChartClear(h, _) => *h,
+            | Control::ChartClear(h, _)
+            | Control::MissionCount(h, _)
+            | Control::MissionItem(h, _)
+            | Control::Survey(h, _) => *h,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A queued request is the size of its largest kind (a `Params`, a charted polygon): the
+    /// waypoint messages go up one waypoint at a time so that the four slots do not grow.
+    #[test]
+    fn a_request_slot_stays_152_bytes() {
+        assert_eq!(core::mem::size_of::<Control>(), 152);
+        assert!(core::mem::size_of::<crate::link::SurveyRepr>() < 152);
+        assert!(core::mem::size_of::<crate::link::MissionItemRepr>() <= 24);
     }
 }

@@ -19,6 +19,7 @@ use crate::world::World;
 use super::failsafe::{self, FailsafeConfig, FreezeDetector, Situation, SonarWatch};
 use super::guard::{self, GuardConfig, Verdict};
 use super::tracks::{TrackConfig, Tracks};
+use super::upload::Upload;
 use super::{
     BackgroundCounters, Control, NavSample, Sighting, CONTROL_QUEUE, REPLY_QUEUE,
     SIGHTINGS_PER_PERIOD,
@@ -100,7 +101,7 @@ pub trait Inputs {
     /// The newest route the background published, if any (`None` also while it is being
     /// written: the task keeps the one it had).
     fn route(&mut self) -> Option<Route>;
-    /// The Ping360 driver's counters, for telemetry (rows 28 ..= 33). Zero where the firmware
+    /// The Ping360 driver's counters, for telemetry (rows 31 ..= 36). Zero where the firmware
     /// drives no Ping360 (the default).
     fn ping360_counters(&mut self) -> Ping360Counters {
         Ping360Counters::default()
@@ -139,6 +140,8 @@ pub struct Periodic {
     refused_nav_ms: Option<u64>,
     /// Navigation samples refused for coming from the future.
     future_navs: u32,
+    /// A waypoint upload in progress.
+    upload: Upload,
 }
 
 impl Periodic {
@@ -168,12 +171,26 @@ impl Periodic {
             nav: None,
             refused_nav_ms: None,
             future_navs: 0,
+            upload: Upload::default(),
         })
     }
 
     /// The planner (read-only: requests go through [`Control`]).
     pub fn planner(&self) -> &Planner {
         &self.planner
+    }
+
+    /// The goal the planner flies to (the current waypoint) and its generation, for the route
+    /// layer in the background (`crate::route::Router::follow`).
+    pub fn goal(&self) -> (u32, Option<Vec2>) {
+        let goal = self.planner.mission().map(|m| m.goal);
+        (self.planner.goal_generation(), goal)
+    }
+
+    /// How far along its mission the vehicle is (by the newest navigation accepted).
+    pub fn progress(&self) -> Option<crate::planner::MissionProgress> {
+        let p = self.nav.map_or(Vec2::ZERO, |n| n.nav.position);
+        self.planner.progress(p)
     }
 
     /// The newest route read from the background.
@@ -245,11 +262,7 @@ impl Periodic {
         }
         self.world.expire(now_ms, self.config.max_age_ms);
         if let (Some(m), Some(n)) = (map, nav) {
-            let mut near: heapless::Vec<Near, MAX_MAP_CELLS> = heapless::Vec::new();
-            m.nearest(n.nav.position, self.config.map_reach_m, &mut near);
-            // Cells as discs of half their side: neighbours touch, so a wall has no seams.
-            self.world
-                .set_map(near.iter().map(|c| c.center), 0.5 * m.cell_m());
+            self.snapshot(m, n.nav.position);
         }
 
         if let Some(r) = inputs.route() {
@@ -281,6 +294,7 @@ impl Periodic {
         let (rx, bg) = inputs.link_counters();
         self.refresh_counters(&rx, &bg);
         let telemetry = TelemetryRepr {
+            mission: self.progress().unwrap_or_default(),
             time_ms: now_ms,
             mode: cmd.mode,
             obstacles: self.world.obstacles().len() as u8,
@@ -298,7 +312,20 @@ impl Periodic {
         cmd
     }
 
+    /// This period's view of the evidence map: the nearest believed cell per bearing sector.
+    /// Not inlined, nor is [`Self::send_belief`]: their buffers would otherwise stay reserved
+    /// in the period's frame under the planner step, where the stack is deepest.
+    #[inline(never)]
+    fn snapshot(&mut self, m: &EvidenceMap, p: Vec2) {
+        let mut near: heapless::Vec<Near, MAX_MAP_CELLS> = heapless::Vec::new();
+        m.nearest(p, self.config.map_reach_m, &mut near);
+        // Cells as discs of half their side: neighbours touch, so a wall has no seams.
+        self.world
+            .set_map(near.iter().map(|c| c.center), 0.5 * m.cell_m());
+    }
+
     /// Every `belief_every` periods, the next chunk of the evidence map (round-robin).
+    #[inline(never)]
     fn send_belief(&mut self, now_ms: u64, map: &EvidenceMap, tx: &mut impl FnMut(&[u8]) -> bool) {
         let every = u32::from(self.config.belief_every);
         self.belief_tick = self.belief_tick.wrapping_add(1);
@@ -420,7 +447,9 @@ impl Periodic {
         }
     }
 
-    /// Applies one request and says how it went.
+    /// Applies one request and says how it went. Not inlined: a survey's expanded list is on its
+    /// stack, which must not stay reserved under the planner step's.
+    #[inline(never)]
     fn apply(&mut self, c: Control) -> ReplyRepr {
         let reply = |h: Header, r: Result<(), crate::planner::StepError>| match r {
             Ok(()) => ReplyRepr::accepted(h),
@@ -442,6 +471,17 @@ impl Periodic {
                 }
                 ReplyRepr::accepted(h)
             }
+            Control::MissionCount(h, m) => self.upload.open(h, &m),
+            Control::MissionItem(h, m) => self.upload.item(h, &m, &mut self.planner),
+            Control::Survey(h, s) => match crate::planner::Waypoints::survey(&s.survey, s.end) {
+                Ok(w) => reply(h, self.planner.set_waypoints(&w, s.formation)),
+                // The wire checked that it fits; counted with the planner's refusals anyway.
+                Err(e) => {
+                    let c = &mut self.planner.counters.bad_mission;
+                    *c = c.saturating_add(1);
+                    reply(h, Err(crate::planner::StepError::BadMission(e)))
+                }
+            },
         }
     }
 

@@ -27,6 +27,8 @@ struct Queues {
     replies: Deque<ReplyRepr, REPLY_QUEUE>,
     tick: Option<u64>,
     route: Option<Route>,
+    /// The periodic task's goal after its last period (`Periodic::goal`).
+    goal: (u32, Option<crate::math::Vec2>),
     rx: RxCounters,
     bg: BackgroundCounters,
     ping360: Ping360Counters,
@@ -50,6 +52,9 @@ impl Sink for Queues {
     }
     fn route(&mut self, r: Route) {
         self.route = Some(r);
+    }
+    fn goal(&mut self) -> (u32, Option<crate::math::Vec2>) {
+        self.goal
     }
 }
 
@@ -119,6 +124,7 @@ impl SingleContext {
                 replies: Deque::new(),
                 tick: None,
                 route: None,
+                goal: (0, None),
                 rx: RxCounters::default(),
                 bg: BackgroundCounters::default(),
                 ping360: Ping360Counters::default(),
@@ -252,7 +258,10 @@ impl SingleContext {
         }
         self.queues.rx = *self.background.rx_counters();
         self.queues.bg = self.background.counters;
-        self.periodic
-            .on_tick(now_ms, &mut self.queues, Some(&self.map), cost, tx)
+        let cmd = self
+            .periodic
+            .on_tick(now_ms, &mut self.queues, Some(&self.map), cost, tx);
+        self.queues.goal = self.periodic.goal();
+        cmd
     }
 }

@@ -45,6 +45,12 @@ pub enum MessageType {
     Params = 0x07,
     /// Lockstep time advance ([`TickRepr`](super::TickRepr)).
     Tick = 0x08,
+    /// Opens a waypoint upload ([`MissionCountRepr`](super::MissionCountRepr)).
+    MissionCount = 0x09,
+    /// One waypoint of an upload ([`MissionItemRepr`](super::MissionItemRepr)).
+    MissionItem = 0x0A,
+    /// A lawnmower survey ([`SurveyRepr`](super::SurveyRepr)).
+    Survey = 0x0B,
     /// The planner's output ([`CommandRepr`](super::CommandRepr)).
     Command = 0x81,
     /// Health and counters ([`TelemetryRepr`](super::TelemetryRepr)).
@@ -60,7 +66,7 @@ pub enum MessageType {
 
 impl MessageType {
     /// Every message type, in code order.
-    pub const ALL: [MessageType; 13] = [
+    pub const ALL: [MessageType; 16] = [
         MessageType::Nav,
         MessageType::Scanline,
         MessageType::Contacts,
@@ -69,6 +75,9 @@ impl MessageType {
         MessageType::ChartClear,
         MessageType::Params,
         MessageType::Tick,
+        MessageType::MissionCount,
+        MessageType::MissionItem,
+        MessageType::Survey,
         MessageType::Command,
         MessageType::Telemetry,
         MessageType::Reply,
@@ -92,6 +101,9 @@ impl MessageType {
             0x06 => MessageType::ChartClear,
             0x07 => MessageType::Params,
             0x08 => MessageType::Tick,
+            0x09 => MessageType::MissionCount,
+            0x0A => MessageType::MissionItem,
+            0x0B => MessageType::Survey,
             0x81 => MessageType::Command,
             0x82 => MessageType::Telemetry,
             0x83 => MessageType::Reply,

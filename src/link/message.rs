@@ -22,6 +22,7 @@ use super::control::{
     ChartClearRepr, ChartObstacleRepr, TickRepr, MISSION_LEN_WITH_FORMATION, PARAMS_LEN,
 };
 use super::frame::{encode_frame, split_frame, Header, MessageType};
+use super::mission::{MissionCountRepr, MissionItemRepr, SurveyRepr};
 use super::report::{CommandRepr, LogRepr, ReplyRepr, TelemetryRepr, COMMAND_LEN, TELEMETRY_LEN};
 use super::sensors::{
     ContactsRepr, NavRepr, CONTACTS_HEAD_LEN, MAX_CONTACT_LEN, NAV_LEN_WITH_BODY, SCANLINE_HEAD_LEN,
@@ -78,6 +79,12 @@ pub enum Message<'a> {
     Params(Params),
     /// Lockstep time advance (host → firmware).
     Tick(TickRepr),
+    /// Opens a waypoint upload (host → firmware).
+    MissionCount(MissionCountRepr),
+    /// One waypoint of an upload (host → firmware).
+    MissionItem(MissionItemRepr),
+    /// A lawnmower survey, expanded by the firmware (host → firmware).
+    Survey(SurveyRepr),
     /// The planner's output (firmware → host).
     Command(CommandRepr),
     /// Health and counters (firmware → host).
@@ -102,6 +109,9 @@ macro_rules! each {
             Message::ChartClear($p) => $f,
             Message::Params($p) => $f,
             Message::Tick($p) => $f,
+            Message::MissionCount($p) => $f,
+            Message::MissionItem($p) => $f,
+            Message::Survey($p) => $f,
             Message::Command($p) => $f,
             Message::Telemetry($p) => $f,
             Message::Reply($p) => $f,
@@ -132,6 +142,9 @@ impl<'a> Message<'a> {
             MessageType::ChartClear => Message::ChartClear(Payload::parse(payload)?),
             MessageType::Params => Message::Params(Payload::parse(payload)?),
             MessageType::Tick => Message::Tick(Payload::parse(payload)?),
+            MessageType::MissionCount => Message::MissionCount(Payload::parse(payload)?),
+            MessageType::MissionItem => Message::MissionItem(Payload::parse(payload)?),
+            MessageType::Survey => Message::Survey(Payload::parse(payload)?),
             MessageType::Command => Message::Command(Payload::parse(payload)?),
             MessageType::Telemetry => Message::Telemetry(Payload::parse(payload)?),
             MessageType::Reply => Message::Reply(Payload::parse(payload)?),
@@ -203,6 +216,9 @@ from_payload!(
     ChartClear(ChartClearRepr),
     Params(Params),
     Tick(TickRepr),
+    MissionCount(MissionCountRepr),
+    MissionItem(MissionItemRepr),
+    Survey(SurveyRepr),
     Command(CommandRepr),
     Telemetry(TelemetryRepr),
     Reply(ReplyRepr),

@@ -13,7 +13,8 @@
 //! - [`decoder`]: the stream decoder: bytes in, one [`Outcome`] per byte or chunk, resync on
 //!   the next 0x00, a counter for every rejection;
 //! - [`shape`]: the wire form of an obstacle [`Shape`](crate::field::Shape);
-//! - [`sensors`], [`control`] (host → firmware) and [`report`] (firmware → host): the messages;
+//! - [`sensors`], [`control`], [`mission`] (host → firmware) and [`report`] (firmware → host):
+//!   the messages;
 //! - [`message`]: [`Message`], every message in one enum, and whole-frame parse/emit.
 //!
 //! **Frame** on the wire: `COBS(header ‖ payload ‖ CRC) ‖ 0x00`, where the header is
@@ -38,6 +39,7 @@ pub mod crc;
 pub mod decoder;
 pub mod frame;
 pub mod message;
+pub mod mission;
 pub mod ping;
 pub mod report;
 pub mod sensors;
@@ -48,6 +50,7 @@ pub use control::{param_index, ChartClearRepr, ChartObstacleRepr, TickRepr, PARA
 pub use decoder::{Decoder, Outcome, RxCounters};
 pub use frame::{encode_frame, frame_buffer_len, split_frame, Direction, Header, MessageType};
 pub use message::{Message, Payload};
+pub use mission::{MissionCountRepr, MissionItemRepr, SurveyRepr};
 pub use report::{
     CommandRepr, CostUnit, LogLevel, LogRepr, ReplyRepr, ReplyStatus, TelemetryCounters,
     TelemetryRepr, FIELD_WHOLE_MESSAGE,

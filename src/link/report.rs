@@ -8,13 +8,14 @@ use super::message::Payload;
 use super::{Error, Problem, MAX_LOG_LEN};
 use crate::params::ParamProblem;
 use crate::planner::{
-    Command, FormationError, HoldReason, Mode, PidSetpoints, StepError, MAX_GHOSTS, MAX_NAV_SPEED,
+    Command, FormationError, HoldReason, MissionProgress, Mode, PidSetpoints, StepError,
+    MAX_GHOSTS, MAX_NAV_SPEED, MAX_WAYPOINTS,
 };
 use crate::sonar::ping360::Ping360Counters;
 use crate::world::{ObjectError, MAX_AGENTS, MAX_OBSTACLES};
 
 /// The wire codes of a [`Mode`]: (mode, hold reason). Mode 0 hold, 1 transit, 2 escape,
-/// 3 arrived; hold reason 0 none (any mode but hold), 1 no mission, 2 stale navigation,
+/// 3 arrived, 4 guarded, 5 loiter; hold reason 0 none (any mode but hold), 1 no mission, 2 stale navigation,
 /// 3 inside an obstacle, 4 collision imminent.
 pub const fn mode_codes(mode: Mode) -> (u8, u8) {
     match mode {
@@ -33,6 +34,7 @@ pub const fn mode_codes(mode: Mode) -> (u8, u8) {
         Mode::Escape => (2, 0),
         Mode::Arrived => (3, 0),
         Mode::Guarded => (4, 0),
+        Mode::Loiter => (5, 0),
     }
 }
 
@@ -53,6 +55,7 @@ fn mode_from_codes(mode: u8, reason: u8, mode_row: u8) -> Result<Mode, Error> {
         2 => Mode::Escape,
         3 => Mode::Arrived,
         4 => Mode::Guarded,
+        5 => Mode::Loiter,
         _ => return refuse(mode_row, Problem::UnknownCode),
     };
     if mode != 0 && reason != 0 {
@@ -328,21 +331,27 @@ impl TelemetryCounters {
     }
 }
 
-/// `Telemetry` payload length: 98 bytes, then the Ping360 block (rows 28 ..= 33).
-pub const TELEMETRY_LEN: usize = 98 + 4 * Ping360Counters::COUNT;
+/// `Telemetry` payload length: 98 bytes, the mission progress block (rows 28 ..= 30, 6 bytes)
+/// and the Ping360 block (rows 31 ..= 36).
+pub const TELEMETRY_LEN: usize = 104 + 4 * Ping360Counters::COUNT;
+/// The row of the first mission-progress field.
+pub const TELEMETRY_MISSION_ROW: u8 = 28;
 /// Row of the first Ping360 counter in `Telemetry`.
-pub const TELEMETRY_PING360_ROW: u8 = 28;
+pub const TELEMETRY_PING360_ROW: u8 = 31;
 
 /// `Telemetry` (0x82): health and counters, sent periodically.
 ///
-/// Layout (122 bytes): 0 `time_ms` u64 · 1 `step_cost` u32 · 2..=17 the sixteen u32 counters
+/// Layout (128 bytes): 0 `time_ms` u64 · 1 `step_cost` u32 · 2..=17 the sixteen u32 counters
 /// of [`TelemetryCounters`] in declaration order · 18 `mode` u8 · 19 `hold_reason` u8 ·
 /// 20 `obstacles` u8 (table fill, ≤ `MAX_OBSTACLES`) · 21 `agents` u8 (≤ `MAX_AGENTS`) ·
 /// 22 `ghost_depth` u8 (≤ `MAX_GHOSTS`) · 23 `cost_unit` u8 ([`CostUnit`]) ·
 /// 24 `guard_interventions` u32 · 25 `frozen_nav_holds` u32 · 26 `requests_busy` u32 ·
-/// 27 `requests_unanswered` u32 · 28..=33 the Ping360 port's six u32 counters of
-/// [`Ping360Counters`] in declaration order (all 0 where no Ping360 is driven).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+/// 27 `requests_unanswered` u32 · then the **mission progress block**:
+/// 28 `mission_waypoint` u8 (the waypoint flown to, 0-based; = count once complete) ·
+/// 29 `mission_waypoints` u8 (count, ≤ `MAX_WAYPOINTS`; 0: no mission) · 30 `mission_to_go_m`
+/// f32 (m along the remaining waypoints, finite, ≥ 0) · 31..=36 the Ping360 port's six u32
+/// counters of [`Ping360Counters`] in declaration order (all 0 where no Ping360 is driven).
+#[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct TelemetryRepr {
     /// Firmware time, ms.
@@ -361,12 +370,23 @@ pub struct TelemetryRepr {
     pub cost_unit: CostUnit,
     /// Counters since boot.
     pub counters: TelemetryCounters,
-    /// The Ping360 port's counters since boot (rows 28 ..= 33; zero without a Ping360).
+    /// How far along its mission the vehicle is (all zero: no mission).
+    pub mission: MissionProgress,
+    /// The Ping360 port's counters since boot (rows 31 ..= 36; zero without a Ping360).
     pub ping360: Ping360Counters,
 }
 
 impl TelemetryRepr {
     fn check(&self) -> Result<(), Error> {
+        let m = &self.mission;
+        let row = TELEMETRY_MISSION_ROW;
+        if usize::from(m.count) > MAX_WAYPOINTS {
+            return refuse(row + 1, Problem::OutOfRange);
+        }
+        if m.current > m.count {
+            return refuse(row, Problem::OutOfRange);
+        }
+        within(row + 2, m.to_go_m, 0.0, f32::MAX)?;
         if usize::from(self.obstacles) > MAX_OBSTACLES {
             return refuse(20, Problem::OutOfRange);
         }
@@ -401,6 +421,11 @@ impl<'a> Payload<'a> for TelemetryRepr {
         let frozen_nav_holds = r.u32()?;
         let requests_busy = r.u32()?;
         let requests_unanswered = r.u32()?;
+        let mission = MissionProgress {
+            current: r.u8()?,
+            count: r.u8()?,
+            to_go_m: r.f32()?,
+        };
         let mut ping360 = [0u32; Ping360Counters::COUNT];
         for c in ping360.iter_mut() {
             *c = r.u32()?;
@@ -421,6 +446,7 @@ impl<'a> Payload<'a> for TelemetryRepr {
                 requests_unanswered,
                 ..TelemetryCounters::from_array(counters)
             },
+            mission,
             ping360: Ping360Counters::from_array(ping360),
         };
         t.check()?;
@@ -455,6 +481,10 @@ impl<'a> Payload<'a> for TelemetryRepr {
         w.u32(self.counters.frozen_nav_holds)?;
         w.u32(self.counters.requests_busy)?;
         w.u32(self.counters.requests_unanswered)?;
+        // Version 6: the mission progress block (rows 28–30), then the Ping360 block (rows 31–36).
+        w.u8(self.mission.current)?;
+        w.u8(self.mission.count)?;
+        w.f32(self.mission.to_go_m)?;
         self.ping360.to_array().iter().try_for_each(|&c| w.u32(c))?;
         Ok(w.len())
     }
@@ -555,7 +585,8 @@ impl ReplyRepr {
             StepError::BadFormation(FormationError::Descriptor) => (3, Problem::UnknownCode),
             StepError::BadFormation(FormationError::NonFinite) => (2, Problem::NonFinite),
             StepError::BadFormation(FormationError::OutOfRange) => (2, Problem::OutOfRange),
-            StepError::BadNav => (FIELD_WHOLE_MESSAGE, Problem::Invalid),
+            // Waypoint missions are checked at the wire, row by row (`super::mission`).
+            StepError::BadNav | StepError::BadMission(_) => (FIELD_WHOLE_MESSAGE, Problem::Invalid),
             StepError::NonFinite => (FIELD_WHOLE_MESSAGE, Problem::NonFinite),
         };
         ReplyRepr::rejected(to, field, problem)
@@ -733,6 +764,7 @@ pub(crate) mod tests {
     use crate::math::Vec2;
     use crate::params::ParamError;
     use proptest::prelude::*;
+    use std::vec;
 
     fn hold_command(heading: f32) -> Command {
         Command::hold(HoldReason::NoMission, heading)
@@ -823,7 +855,7 @@ pub(crate) mod tests {
             with(48, &f32::NEG_INFINITY.to_le_bytes()),
             Err(Error::field(11, Problem::NonFinite))
         );
-        assert_eq!(with(68, &[5]), Err(Error::field(16, Problem::UnknownCode)));
+        assert_eq!(with(68, &[6]), Err(Error::field(16, Problem::UnknownCode)));
         assert_eq!(
             with(68, &[0, 0]),
             Err(Error::field(17, Problem::UnknownCode))
@@ -849,6 +881,11 @@ pub(crate) mod tests {
                 requests_unanswered: 20,
                 ..TelemetryCounters::from_array(core::array::from_fn(|i| i as u32 + 1))
             },
+            mission: MissionProgress {
+                current: 2,
+                count: 5,
+                to_go_m: 40.0,
+            },
             ping360: Ping360Counters::from_array(core::array::from_fn(|i| i as u32 + 21)),
         }
     }
@@ -863,13 +900,14 @@ pub(crate) mod tests {
         }
         want.extend([0, 2, 3, 1, 0, 2]);
         want.extend([17, 0, 0, 0, 18, 0, 0, 0, 19, 0, 0, 0, 20, 0, 0, 0]);
-        // Rows 28..=33, the Ping360 port: data 21, commands 22, timeouts 23, checksum errors
-        // 24, malformed 25, bytes skipped 26.
+        want.extend([2, 5, 0x00, 0x00, 0x20, 0x42]); // waypoint 2 of 5, 40 m to go
+                                                     // Rows 31..=36, the Ping360 port: data 21, commands 22, timeouts 23, checksum errors
+                                                     // 24, malformed 25, bytes skipped 26.
         for i in 21..=26u8 {
             want.extend([i, 0, 0, 0]);
         }
         assert_eq!(want.len(), TELEMETRY_LEN);
-        assert_eq!(TELEMETRY_LEN, 122);
+        assert_eq!(TELEMETRY_LEN, 128);
         let mut out = [0u8; TELEMETRY_LEN];
         assert_eq!(t.emit(&mut out), Ok(TELEMETRY_LEN));
         assert_eq!(&out[..], &want[..]);
@@ -890,6 +928,23 @@ pub(crate) mod tests {
         assert_eq!(
             TelemetryRepr::parse(&bad),
             Err(Error::field(23, Problem::UnknownCode))
+        );
+        let mut bad = want.clone();
+        bad[98] = 6;
+        assert_eq!(
+            TelemetryRepr::parse(&bad),
+            Err(Error::field(28, Problem::OutOfRange))
+        );
+        bad[99] = 17;
+        assert_eq!(
+            TelemetryRepr::parse(&bad),
+            Err(Error::field(29, Problem::OutOfRange))
+        );
+        let mut bad = want.clone();
+        bad[100..104].copy_from_slice(&f32::NAN.to_le_bytes());
+        assert_eq!(
+            TelemetryRepr::parse(&bad),
+            Err(Error::field(30, Problem::NonFinite))
         );
     }
 
@@ -1038,6 +1093,7 @@ pub(crate) mod tests {
             Just(Mode::Escape),
             Just(Mode::Arrived),
             Just(Mode::Guarded),
+            Just(Mode::Loiter),
             Just(Mode::Hold(HoldReason::NoMission)),
             Just(Mode::Hold(HoldReason::StaleNav)),
             Just(Mode::Hold(HoldReason::InsideObstacle)),
@@ -1089,19 +1145,27 @@ pub(crate) mod tests {
             any::<u32>(),
             0u8..4,
             proptest::array::uniform16(any::<u32>()),
+            (0u8..=16, 0u8..=16, 0.0f32..1e6),
             proptest::array::uniform6(any::<u32>()),
         )
-            .prop_map(|(t, mode, (o, a, g), cost, unit, c, p)| TelemetryRepr {
-                time_ms: t,
-                mode,
-                obstacles: o,
-                agents: a,
-                ghost_depth: g,
-                step_cost: cost,
-                cost_unit: CostUnit::from_code(unit).unwrap(),
-                counters: TelemetryCounters::from_array(c),
-                ping360: Ping360Counters::from_array(p),
-            })
+            .prop_map(
+                |(t, mode, (o, a, g), cost, unit, c, (i, n, d), p)| TelemetryRepr {
+                    time_ms: t,
+                    mode,
+                    obstacles: o,
+                    agents: a,
+                    ghost_depth: g,
+                    step_cost: cost,
+                    cost_unit: CostUnit::from_code(unit).unwrap(),
+                    counters: TelemetryCounters::from_array(c),
+                    mission: MissionProgress {
+                        current: i.min(n),
+                        count: n,
+                        to_go_m: d,
+                    },
+                    ping360: Ping360Counters::from_array(p),
+                },
+            )
     }
 
     pub(crate) fn arb_reply() -> impl Strategy<Value = ReplyRepr> {

@@ -30,6 +30,7 @@ pub mod bound;
 pub mod escape;
 pub mod formation;
 pub mod gradient;
+pub mod mission;
 pub mod multipoint;
 pub mod navfn;
 pub mod setpoints;
@@ -46,6 +47,10 @@ use crate::world::{World, MAX_OBSTACLES};
 pub use escape::{EscapeCounters, GhostGoal, StallCause, MAX_GHOSTS};
 pub use formation::{Formation, FormationError};
 pub use gradient::SampleCircle;
+pub use mission::{
+    MissionEnd, MissionError, MissionProgress, Survey, Waypoint, WaypointError, Waypoints,
+    MAX_WAYPOINTS,
+};
 pub use setpoints::PidSetpoints;
 
 use escape::Escape;
@@ -73,7 +78,9 @@ pub struct NavState {
     pub velocity: Vec2,
 }
 
-/// The mission: where to go, and optionally which formation to keep.
+/// The mission: where to go, and optionally which formation to keep. A single goal is the
+/// one-waypoint, hold-at-last case of a waypoint mission ([`Planner::set_waypoints`],
+/// [`mission`]); while one is flown, [`Planner::mission`] gives the waypoint being flown to.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Mission {
@@ -116,6 +123,9 @@ pub enum Mode {
     Escape,
     /// Within the arrival radius of the goal (the field keeps station).
     Arrived,
+    /// The waypoint mission is complete and the vehicle circles its last waypoint
+    /// ([`MissionEnd::Loiter`]).
+    Loiter,
     /// The planner's command was turned, slowed or stopped by the guard, because it would have
     /// driven into something believed (`crate::guidance::guard`).
     Guarded,
@@ -196,6 +206,8 @@ pub enum StepError {
     BadGoal,
     /// The mission's formation request is invalid.
     BadFormation(FormationError),
+    /// The waypoint mission is invalid.
+    BadMission(MissionError),
     /// A parameter is invalid.
     BadParams(ParamError),
     /// The computation produced a non-finite number (never expected; the step is discarded).
@@ -208,6 +220,7 @@ impl core::fmt::Display for StepError {
             StepError::BadNav => f.write_str("navigation state non-finite or out of range"),
             StepError::BadGoal => f.write_str("goal non-finite or out of range"),
             StepError::BadFormation(e) => write!(f, "formation refused: {e}"),
+            StepError::BadMission(e) => write!(f, "mission refused: {e}"),
             StepError::BadParams(e) => write!(f, "{e}"),
             StepError::NonFinite => f.write_str("planner produced a non-finite number"),
         }
@@ -266,6 +279,34 @@ impl Motion {
     }
 }
 
+/// The waypoint mission in force and how far along it the vehicle is.
+#[derive(Clone, Debug)]
+struct Plan {
+    /// The waypoints (one for a single-goal mission, whose radius is then 0: the parameter's).
+    waypoints: Waypoints,
+    /// Index of the waypoint being flown to.
+    current: u8,
+    /// The last waypoint has been reached (holding or loitering there).
+    complete: bool,
+    /// Counts changes of the goal (a new mission, the next waypoint), for the route layer.
+    generation: u32,
+}
+
+/// The leg being flown: what the current waypoint asks of the strategies.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Leg {
+    /// Arrival radius, m.
+    radius: f32,
+    /// The leg's own speed bound, m/s (∞: none).
+    speed: f32,
+    /// Not braked onto: an intermediate waypoint, or the last one of a mission that loiters.
+    passing: bool,
+    /// Circling the last waypoint: (radius, clockwise).
+    loiter: Option<(f32, bool)>,
+    /// The waypoint before (the leg's start), from the second leg on.
+    from: Option<Vec2>,
+}
+
 /// Per-obstacle planning shifts for moving obstacles ([`crate::world::Obstacle::predicted_shift`]),
 /// in table order.
 type Shifts = Vec<Vec2, MAX_OBSTACLES>;
@@ -276,6 +317,8 @@ struct Context<'a> {
     nav: &'a NavState,
     world: &'a World,
     mission: Mission,
+    /// The leg to `mission.goal`.
+    leg: Leg,
     /// Where the strategy steers for: the route layer's goal-point, else the mission goal.
     aim: Vec2,
     /// Whether the route layer gave `aim` (VPF then cruises to it).
@@ -308,7 +351,10 @@ pub struct Planner {
     agent_stator: Stator,
     /// Stator of the evidence map (A_s⁺ = `params.a_plus`, as sensed obstacles).
     map_stator: Stator,
+    /// The leg being flown: its goal is the current waypoint's.
     mission: Option<Mission>,
+    /// The waypoints of the mission.
+    plan: Plan,
     /// The route layer's goal-point for the next step, if it has one (`set_route`).
     route: Option<Vec2>,
     motion: Motion,
@@ -345,6 +391,12 @@ impl Planner {
             agent_stator: Stator::new(params.agent_a_plus),
             map_stator: Stator::new(params.a_plus),
             mission: None,
+            plan: Plan {
+                waypoints: Waypoints::single(Waypoint::with_parameter_radius(Vec2::ZERO)),
+                current: 0,
+                complete: false,
+                generation: 0,
+            },
             route: None,
             motion: Motion::new(params.seed),
             counters: PlannerCounters::default(),
@@ -370,13 +422,46 @@ impl Planner {
         Ok(())
     }
 
-    /// The mission in force.
+    /// The mission in force; its goal is the waypoint being flown to.
     pub fn mission(&self) -> Option<&Mission> {
         self.mission.as_ref()
     }
 
-    /// Sets a new mission (ghosts are cleared; the planned velocity is kept, so a goal change on
-    /// the move is smooth). An invalid mission is refused and the old one kept.
+    /// The waypoints of the mission in force (one, with radius 0 — `Params::arrival_radius_m`
+    /// — for a single-goal mission).
+    pub fn waypoints(&self) -> Option<&Waypoints> {
+        self.mission.map(|_| &self.plan.waypoints)
+    }
+
+    /// How far along its mission the vehicle at `p` is.
+    pub fn progress(&self, p: Vec2) -> Option<MissionProgress> {
+        self.mission?;
+        let wps = &self.plan.waypoints;
+        let count = wps.len() as u8;
+        Some(if self.plan.complete {
+            MissionProgress {
+                current: count,
+                count,
+                to_go_m: 0.0,
+            }
+        } else {
+            MissionProgress {
+                current: self.plan.current,
+                count,
+                to_go_m: wps.distance_to_go(p, usize::from(self.plan.current)),
+            }
+        })
+    }
+
+    /// Counts goal changes (a new mission, the next waypoint): the runtime hands the route
+    /// layer the new goal when it changes.
+    pub fn goal_generation(&self) -> u32 {
+        self.plan.generation
+    }
+
+    /// Sets a new single-goal mission: the one-waypoint, hold-at-last case (ghosts are cleared;
+    /// the planned velocity is kept, so a goal change on the move is smooth). An invalid mission
+    /// is refused and the old one kept.
     pub fn set_mission(&mut self, mission: Mission) -> Result<(), StepError> {
         let checked = if !finite_coord(mission.goal) {
             Err(StepError::BadGoal)
@@ -389,13 +474,131 @@ impl Planner {
             self.counters.bad_mission = self.counters.bad_mission.saturating_add(1);
             return checked;
         }
-        self.mission = Some(mission);
+        let single = Waypoint::with_parameter_radius(mission.goal);
+        self.start(Waypoints::single(single), mission.formation);
+        Ok(())
+    }
+
+    /// Sets a waypoint mission, flown by every vehicle of a formation alike (ghosts are
+    /// cleared, the planned velocity kept). An invalid formation is refused and the old mission
+    /// kept; the waypoints were checked when they were made.
+    pub fn set_waypoints(
+        &mut self,
+        waypoints: &Waypoints,
+        formation: Option<Formation>,
+    ) -> Result<(), StepError> {
+        let checked = match (formation.map(|f| f.validate()), waypoints.end().validate()) {
+            (Some(Err(e)), _) => Err(StepError::BadFormation(e)),
+            (_, Err(e)) => Err(StepError::BadMission(e)),
+            _ if waypoints.is_empty() => Err(StepError::BadMission(MissionError::Empty)),
+            _ => Ok(()),
+        };
+        if checked.is_err() {
+            self.counters.bad_mission = self.counters.bad_mission.saturating_add(1);
+            return checked;
+        }
+        self.start(waypoints.clone(), formation);
+        Ok(())
+    }
+
+    /// Flies `waypoints` from the first.
+    fn start(&mut self, waypoints: Waypoints, formation: Option<Formation>) {
+        let goal = waypoints.get(0).map_or(Vec2::ZERO, |w| w.position());
+        self.plan = Plan {
+            waypoints,
+            current: 0,
+            complete: false,
+            generation: self.plan.generation.wrapping_add(1),
+        };
+        self.mission = Some(Mission { goal, formation });
+        self.next_goal();
+    }
+
+    /// Ghosts, the rotor sense, the multipoint arc and the arrival latch belong to one goal.
+    fn next_goal(&mut self) {
         self.motion.escape.reset();
         self.motion.rotor_sense = RotorSense::Free;
         self.motion.arc = ArcState::default();
         self.motion.descent = Vec2::ZERO;
         self.motion.arrived = false;
-        Ok(())
+    }
+
+    /// The leg to the current waypoint.
+    fn leg(&self) -> Leg {
+        let plan = &self.plan;
+        let i = usize::from(plan.current);
+        let w = plan.waypoints.get(i);
+        let last = i + 1 >= plan.waypoints.len();
+        let loiter = match plan.waypoints.end() {
+            MissionEnd::Loiter {
+                radius_m,
+                clockwise,
+            } => Some((radius_m, clockwise)),
+            MissionEnd::Hold => None,
+        };
+        let radius = w.map_or(0.0, |w| w.radius_m());
+        Leg {
+            radius: if radius > 0.0 {
+                radius
+            } else {
+                self.params.arrival_radius_m
+            },
+            speed: w.and_then(|w| w.speed()).unwrap_or(f32::INFINITY),
+            passing: !last || loiter.is_some(),
+            loiter: loiter.filter(|_| plan.complete),
+            from: i
+                .checked_sub(1)
+                .and_then(|k| plan.waypoints.get(k))
+                .map(|w| w.position()),
+        }
+    }
+
+    /// After a step: within the current waypoint's radius, the next waypoint becomes the goal,
+    /// or the mission is complete.
+    ///
+    /// In formation, arrival is judged at the formation's centre — the mean position of this
+    /// vehicle and the others within its footprint λ·√(N + 1) (N + 1 lattice cells) — within
+    /// the radius plus λ: a fleet cannot all pass within a few metres of one point, and vehicles
+    /// judging by their own positions would turn one by one and drag each other apart. Every
+    /// vehicle that sees the same fleet sees the same centre, so they turn together.
+    fn advance(&mut self, p: Vec2, agents: &[crate::world::Agent]) {
+        let Some(m) = self.mission.as_mut() else {
+            return;
+        };
+        if self.plan.complete {
+            return;
+        }
+        let (centre, slack) = match m.formation {
+            None => (p, 0.0),
+            Some(f) => {
+                let reach = f.lattice_m * crate::math::sqrt(agents.len() as f32 + 1.0);
+                let (sum, n) = agents
+                    .iter()
+                    .filter(|a| (a.position - p).norm2() <= reach * reach)
+                    .fold((p, 1.0f32), |(s, n), a| (s + a.position, n + 1.0));
+                (sum * (1.0 / n), f.lattice_m)
+            }
+        };
+        let current = self.plan.waypoints.get(usize::from(self.plan.current));
+        let radius = current.map_or(0.0, |w| w.radius_m());
+        let radius = if radius > 0.0 {
+            radius
+        } else {
+            self.params.arrival_radius_m
+        };
+        if (m.goal - centre).norm() > radius + slack {
+            return;
+        }
+        let next = usize::from(self.plan.current) + 1;
+        match self.plan.waypoints.get(next) {
+            Some(w) => {
+                m.goal = w.position();
+                self.plan.current = next as u8;
+                self.plan.generation = self.plan.generation.wrapping_add(1);
+                self.next_goal();
+            }
+            None => self.plan.complete = true,
+        }
     }
 
     /// The route layer's goal-point for this step (`crate::route`: an intermediate one, or the
@@ -480,12 +683,26 @@ impl Planner {
         for a in world.agents() {
             clearance = clearance.min((p - a.position).norm() - self.params.agent_radius_m);
         }
+        let leg = self.leg();
+        let reach = vpf::cruise_reach(&self.params);
+        let aim = match (leg.loiter, self.route, leg.from) {
+            (Some((r, clockwise)), _, _) => mission::loiter_aim(p, mission.goal, r, clockwise, r),
+            // The route layer's way round something: follow it.
+            (None, Some(a), _) if a != mission.goal => a,
+            // The goal in plain sight (or no route), on a leg from a waypoint: along the leg,
+            // so that a survey flies its lines.
+            (None, _, Some(from)) => {
+                mission::along_leg(p, from, mission.goal, mission::LEG_LOOKAHEAD * reach)
+            }
+            (None, route, None) => route.unwrap_or(mission.goal),
+        };
         let cx = Context {
             now_ms,
             nav,
             world,
             mission,
-            aim: self.route.unwrap_or(mission.goal),
+            leg,
+            aim,
             routed: self.route.is_some(),
             shifts: &shifts,
             clearance,
@@ -501,6 +718,7 @@ impl Planner {
             return Err(StepError::NonFinite);
         }
         self.motion = motion;
+        self.advance(p, world.agents());
         Ok(cmd)
     }
 
@@ -508,12 +726,15 @@ impl Planner {
     /// ghost goal-point is up, else in transit.
     fn mode(&self, m: &Motion, cx: &Context<'_>) -> Mode {
         let d = (cx.mission.goal - cx.nav.position).norm();
-        if d <= self.params.arrival_radius_m || m.arrived {
+        let ghosts = !m.escape.ghosts().is_empty();
+        if cx.leg.loiter.is_some() && !ghosts {
+            Mode::Loiter
+        } else if (!cx.leg.passing && d <= cx.leg.radius) || m.arrived {
             Mode::Arrived
-        } else if m.escape.ghosts().is_empty() {
-            Mode::Transit
-        } else {
+        } else if ghosts {
             Mode::Escape
+        } else {
+            Mode::Transit
         }
     }
 
@@ -523,13 +744,17 @@ impl Planner {
     /// halfway into the arrival circle; unbounded otherwise. None of the seeds brakes: their
     /// goal-point field slows the vehicle by itself, with the time constant μσ²/(A⁻ε) of
     /// its Gaussian's core (≈ 50 s with the defaults), which is what makes arrivals crawl.
+    ///
+    /// A waypoint that is passed (not the last, or the last of a mission that loiters) is
+    /// not braked onto.
     fn arrival_speed(&self, m: &Motion, cx: &Context<'_>) -> f32 {
         let goal = cx.mission.goal;
-        if !cx.routed || cx.aim != goal || m.escape.active_target(cx.aim) != goal {
+        if cx.leg.passing || !cx.routed || cx.aim != goal || m.escape.active_target(cx.aim) != goal
+        {
             return f32::INFINITY;
         }
         let prm = &self.params;
-        let to_go = (goal - cx.nav.position).norm() - 0.5 * prm.arrival_radius_m;
+        let to_go = (goal - cx.nav.position).norm() - 0.5 * cx.leg.radius;
         crate::math::sqrt(2.0 * ARRIVAL_BRAKE * prm.f_max * crate::math::max(0.0, to_go))
     }
 
@@ -547,6 +772,8 @@ impl Planner {
         let f_bar = bound::bound(f, prm.f_max, e1, prm.bounding);
         let v_c = (f_bar + m.integrator.force) * (0.5 * prm.period_s) + m.integrator.velocity;
         let v_lim = crate::math::min(prm.v_max, self.arrival_speed(m, cx));
+        // A waypoint's own speed bounds the leg to it.
+        let v_lim = crate::math::min(v_lim, cx.leg.speed);
         let v_bar = bound::bound(v_c, v_lim, e1, prm.bounding);
         let sp = m.setpoints.decompose(prm.period_s, f_bar, v_bar, &measured);
         m.integrator = Integrator {

@@ -71,6 +71,7 @@ impl Planner {
     /// minimum-potential arc point is chosen (eq. 4–8); in between the vehicle is steered at
     /// it. Within one arc radius of the goal it steers at the goal itself (the last path
     /// element ends there).
+    #[inline(never)]
     pub(super) fn plan_multipoint(&self, m: &mut Motion, cx: &Context<'_>) -> Command {
         let prm = &self.params;
         let p = cx.nav.position;
@@ -130,6 +131,7 @@ impl Planner {
     /// (cosine below [`SADDLE_REVERSAL`] with the last one) away from the goal, it steers for
     /// that period square to the line to the goal, to its left. Off the stable manifold,
     /// descent carries the vehicle away from the saddle.
+    #[inline(never)]
     pub(super) fn plan_navfn(&self, m: &mut Motion, cx: &Context<'_>) -> Command {
         let p = cx.nav.position;
         let straight = (cx.aim - p).normalized(1e-6).unwrap_or(Vec2::ZERO);
@@ -156,7 +158,8 @@ impl Planner {
     /// angle between the heading and the goal, so that the turn onto it, of radius v²/F_max at
     /// the bounded lateral acceleration, fits inside the circle through the goal tangent to the
     /// heading (diameter d / sin θ; a goal behind counts as θ = 90°). Zero from arrival until
-    /// the vehicle is [`ARRIVAL_RELEASE`] arrival radii away.
+    /// the vehicle is [`ARRIVAL_RELEASE`] arrival radii away. A waypoint that is passed is not
+    /// stopped on: only the turn bounds the speed.
     fn cruise_speed(&self, m: &mut Motion, cx: &Context<'_>) -> f32 {
         let prm = &self.params;
         let d = (cx.mission.goal - cx.nav.position).norm();
@@ -169,10 +172,15 @@ impl Planner {
             bow.cross(to_goal).abs() / max(to_goal.norm(), 1e-6)
         };
         let turn = sqrt(prm.f_max * to_goal.norm() / (2.0 * max(sin_theta, 1e-6)));
+        if cx.leg.passing {
+            // A waypoint to pass (or the loiter circle): no stop on it.
+            m.arrived = false;
+            return min(prm.v_max, turn);
+        }
         m.arrived = if m.arrived {
-            d <= ARRIVAL_RELEASE * prm.arrival_radius_m
+            d <= ARRIVAL_RELEASE * cx.leg.radius
         } else {
-            d <= prm.arrival_radius_m
+            d <= cx.leg.radius
         };
         if m.arrived {
             0.0

@@ -65,7 +65,18 @@ pub enum Approach {
 ///   `Planner::arrival_speed`; the paper's field, whose final approach has the time constant
 ///   μσ²/(A⁻ε) ≈ 50 s, then holds it there), for an intermediate goal-point all the way (it is
 ///   passed, not stopped on).
-pub fn goal_point(p: Vec2, target: Vec2, how: Approach, prm: &crate::params::Params) -> GoalPdf {
+///
+/// `arrival_m` is the goal's arrival radius (`Params::arrival_radius_m`, or a waypoint's own).
+/// An intermediate waypoint of a mission, and the last one of a mission that loiters, are
+/// approached as [`Approach::Detour`] — passed at speed — whether routed or not: the papers fly
+/// one goal and say nothing of waypoints.
+pub fn goal_point(
+    p: Vec2,
+    target: Vec2,
+    how: Approach,
+    prm: &crate::params::Params,
+    arrival_m: f32,
+) -> GoalPdf {
     let d = target - p;
     let n2 = d.norm2();
     let (ahead, sigma) = match how {
@@ -76,7 +87,7 @@ pub fn goal_point(p: Vec2, target: Vec2, how: Approach, prm: &crate::params::Par
         Approach::Unrouted => ahead,
         // Brought in at speed (`Planner::arrival_speed` brakes): the paper's field only
         // once arrived, to hold the vehicle there.
-        Approach::Routed => prm.arrival_radius_m,
+        Approach::Routed => arrival_m,
         Approach::Detour => 0.0,
     };
     if n2 <= near * near || n2 < 1e-12 {
@@ -88,13 +99,20 @@ pub fn goal_point(p: Vec2, target: Vec2, how: Approach, prm: &crate::params::Par
 impl Planner {
     /// One VPF period: E, its sampled gradient and friction give F; the ghost goal-points
     /// are updated after the shared integration.
+    #[inline(never)]
     pub(super) fn plan_vpf(&self, m: &mut Motion, cx: &Context<'_>) -> Command {
         let p = cx.nav.position;
         let prm = self.params;
         let world = cx.world;
         let target = m.escape.active_target(cx.aim);
-        let how = if !cx.routed || target != cx.aim {
-            // No route, or a ghost goal-point is up: the field as published.
+        let how = if target != cx.aim {
+            // A ghost goal-point is up: the field as published.
+            Approach::Unrouted
+        } else if cx.leg.passing {
+            // A waypoint to pass, or the loiter circle: cruise all the way.
+            Approach::Detour
+        } else if !cx.routed {
+            // No route: the field as published.
             Approach::Unrouted
         } else if cx.aim == cx.mission.goal {
             Approach::Routed
@@ -104,7 +122,7 @@ impl Planner {
 
         // Attractors: the active goal-point — as a cruise goal-point when far — and the
         // virtual leader (001 Table 1).
-        let goal = goal_point(p, target, how, &prm);
+        let goal = goal_point(p, target, how, &prm, cx.leg.radius);
         let formation = cx
             .mission
             .formation
@@ -220,25 +238,64 @@ mod tests {
         let drop = |g: GoalPdf| g.potential(Vec2::ZERO) - g.potential(e);
         let far = Vec2::new(300.0, 0.0);
         // Routed, 300 m away: the drop across ε balances friction at v_max.
-        let routed = goal_point(Vec2::ZERO, far, Approach::Routed, &prm);
+        let routed = goal_point(
+            Vec2::ZERO,
+            far,
+            Approach::Routed,
+            &prm,
+            prm.arrival_radius_m,
+        );
         assert!((drop(routed) - prm.mu * prm.v_max).abs() < 0.03 * prm.mu);
         // Closer than σ_c it still pulls at cruise (the arrival brake slows the vehicle) ...
         let near = Vec2::new(0.5 * sigma_c, 0.0);
-        let brought = goal_point(Vec2::ZERO, near, Approach::Routed, &prm);
+        let brought = goal_point(
+            Vec2::ZERO,
+            near,
+            Approach::Routed,
+            &prm,
+            prm.arrival_radius_m,
+        );
         assert!((brought.center - Vec2::new(sigma_c, 0.0)).norm() < 1e-3);
         // ... and once arrived, eq. 13 as published holds it there.
         let there = Vec2::new(0.9 * prm.arrival_radius_m, 0.0);
         let paper = GoalPdf::new(there, prm.a_minus, prm.sigma_m);
-        assert_eq!(goal_point(Vec2::ZERO, there, Approach::Routed, &prm), paper);
+        assert_eq!(
+            goal_point(
+                Vec2::ZERO,
+                there,
+                Approach::Routed,
+                &prm,
+                prm.arrival_radius_m
+            ),
+            paper
+        );
         // A route's intermediate goal-point 3 m off pulls as hard as a far goal.
-        let via = goal_point(Vec2::ZERO, Vec2::new(0.0, 3.0), Approach::Detour, &prm);
+        let via = goal_point(
+            Vec2::ZERO,
+            Vec2::new(0.0, 3.0),
+            Approach::Detour,
+            &prm,
+            prm.arrival_radius_m,
+        );
         assert!((via.center - Vec2::new(0.0, sigma_c)).norm() < 1e-3);
         // Unrouted: carried 2σ ahead, the paper's field within 2σ.
-        let carrot = goal_point(Vec2::ZERO, far, Approach::Unrouted, &prm);
+        let carrot = goal_point(
+            Vec2::ZERO,
+            far,
+            Approach::Unrouted,
+            &prm,
+            prm.arrival_radius_m,
+        );
         assert!((carrot.center - Vec2::new(80.0, 0.0)).norm() < 1e-3);
         let fifty = Vec2::new(50.0, 0.0);
         assert_eq!(
-            goal_point(Vec2::ZERO, fifty, Approach::Unrouted, &prm),
+            goal_point(
+                Vec2::ZERO,
+                fifty,
+                Approach::Unrouted,
+                &prm,
+                prm.arrival_radius_m
+            ),
             GoalPdf::new(fifty, prm.a_minus, prm.sigma_m)
         );
     }

@@ -149,6 +149,8 @@ pub struct Router {
     /// background's stack).
     blocked: Rows,
     goal: Option<Vec2>,
+    /// The periodic task's goal generation last followed (`Router::follow`).
+    generation: u32,
     last_ms: Option<u64>,
     /// Counters.
     pub counters: RouteCounters,
@@ -164,6 +166,7 @@ impl Router {
             wave: Wavefront::new(),
             blocked: [0; ROUTE_SIDE],
             goal: None,
+            generation: 0,
             last_ms: None,
             counters: RouteCounters {
                 replans: 0,
@@ -196,6 +199,18 @@ impl Router {
         if self.goal != goal {
             self.goal = goal;
             self.last_ms = None;
+        }
+    }
+
+    /// The periodic task's goal (`crate::planner::Planner::goal_generation`): taken when its
+    /// generation changes — a waypoint mission accepted, the next waypoint — and replanned at
+    /// the next navigation. (A `Mission` message sets the goal as soon as it is queued,
+    /// [`Router::set_goal`]; the periodic task's same goal follows a period later and changes
+    /// nothing.)
+    pub fn follow(&mut self, generation: u32, goal: Option<Vec2>) {
+        if generation != self.generation {
+            self.generation = generation;
+            self.set_goal(goal);
         }
     }
 
@@ -413,6 +428,24 @@ mod tests {
         let route = r.on_nav(Vec2::new(-10.0, 10.0), 0, None).unwrap();
         assert_eq!(route.status, RouteStatus::Blocked);
         assert_eq!(r.counters.blocked, 1);
+    }
+
+    #[test]
+    fn the_goal_follows_the_periodic_tasks_generation_only_when_it_changes() {
+        let mut r = Router::new(RouteConfig::default());
+        // A `Mission` message set the goal when it was queued ...
+        r.set_goal(Some(Vec2::new(50.0, 0.0)));
+        assert!(r.on_nav(Vec2::ZERO, 0, None).is_some());
+        // ... the periodic task's same goal a period later changes nothing (no replan).
+        r.follow(1, Some(Vec2::new(50.0, 0.0)));
+        assert_eq!(r.on_nav(Vec2::ZERO, 100, None), None);
+        // The next waypoint (a new generation) is planned to at once.
+        r.follow(2, Some(Vec2::new(50.0, 40.0)));
+        let route = r.on_nav(Vec2::ZERO, 200, None).unwrap();
+        assert_eq!(route.goal, Vec2::new(50.0, 40.0));
+        // An old generation's goal is not taken again.
+        r.follow(2, Some(Vec2::new(0.0, 99.0)));
+        assert_eq!(r.on_nav(Vec2::ZERO, 300, None), None);
     }
 
     #[test]

@@ -20,6 +20,9 @@ pub struct Vehicle {
     pub v: Vec2,
     pub heading: f32,
     pub last: Option<Command>,
+    /// Play the route layer in open water: tell the planner each period that its goal is in
+    /// plain sight (`Planner::set_route`), as the runtime does. Off: the papers' planner.
+    pub route_clear: bool,
 }
 
 impl Vehicle {
@@ -38,6 +41,7 @@ impl Vehicle {
             v: Vec2::ZERO,
             heading,
             last: None,
+            route_clear: false,
         }
     }
 
@@ -62,6 +66,10 @@ impl Vehicle {
 
     /// One period: plan, then move (000 eq. 8).
     pub fn step(&mut self, now_ms: u64) -> Command {
+        if self.route_clear {
+            let goal = self.planner.mission().map(|m| m.goal);
+            self.planner.set_route(goal);
+        }
         let cmd = self
             .planner
             .step(now_ms, &self.nav(), &self.world)

@@ -108,7 +108,8 @@ pub struct Row {
 }
 
 /// The world of `case`, feasible for its craft: (world, attempt, shortest path of the
-/// longest mission, m).
+/// longest mission, m). A waypoint mission is feasible when every leg is (from the start to the
+/// first waypoint, and from each to the next), and its shortest path is the legs' sum.
 pub fn feasible_world(case: &Case) -> Result<(World, u64, f64), Infeasible> {
     let clearance = hull_radius(case.model) + FEASIBLE_MARGIN_M;
     let mut last = Infeasible::NoPath;
@@ -116,15 +117,21 @@ pub fn feasible_world(case: &Case) -> Result<(World, u64, f64), Infeasible> {
         let w = worlds::generate(case.family, case.seed, attempt);
         let mut longest: f64 = 0.0;
         let mut ok = true;
-        for c in &w.crafts {
-            match feasible::shortest_path(&w.obstacles, c.start, c.goal, clearance) {
-                Ok(d) => longest = longest.max(d),
-                Err(e) => {
-                    last = e;
-                    ok = false;
-                    break;
+        'crafts: for c in &w.crafts {
+            let mut from = c.start;
+            let mut total = 0.0;
+            for to in w.legs(c) {
+                match feasible::shortest_path(&w.obstacles, from, to, clearance) {
+                    Ok(d) => total += d,
+                    Err(e) => {
+                        last = e;
+                        ok = false;
+                        break 'crafts;
+                    }
                 }
+                from = to;
             }
+            longest = longest.max(total);
         }
         if ok {
             return Ok((w, attempt, longest));
@@ -159,19 +166,36 @@ pub fn scenario_text(world: &World, attempt: u64, case: &Case, duration_s: f64) 
         Sensing::Contacts => "contacts",
     };
     for (k, c) in world.crafts.iter().enumerate() {
+        // A survey's goal is its last waypoint.
+        let goal = match world.survey {
+            Some(_) => String::new(),
+            None => format!("goal = [{:.3}, {:.3}]\n", c.goal.x, c.goal.y),
+        };
         let _ = writeln!(
             t,
             "\n[[vehicle]]\nname = \"v{k}\"\nmodel = \"{}\"\nstart = [{:.3}, {:.3}]\n\
-             heading_deg = {:.3}\ngoal = [{:.3}, {:.3}]\nsensing = \"{sensing}\"",
+             heading_deg = {:.3}\n{goal}sensing = \"{sensing}\"",
             case.model.name(),
             c.start.x,
             c.start.y,
             wrap_deg(c.heading.to_degrees()),
-            c.goal.x,
-            c.goal.y
         );
         if let Some(l) = world.formation_m {
             let _ = writeln!(t, "formation = {{ q = 4, lattice_m = {l:.1} }}");
+        }
+        if let Some(s) = world.survey {
+            let _ = writeln!(
+                t,
+                "\n[vehicle.survey]\ncorner = [{:.4}, {:.4}]\nlength_m = {:.4}\n\
+                     width_m = {:.4}\nheading_deg = {:.6}\nspacing_m = {:.4}\nradius_m = {:.2}",
+                s.corner.x,
+                s.corner.y,
+                s.length_m,
+                s.width_m,
+                f64::from(s.heading).to_degrees(),
+                s.spacing_m,
+                s.radius_m
+            );
         }
     }
     for o in &world.obstacles {
@@ -296,11 +320,11 @@ fn keep_failure(dir: &Path, case: &Case, text: &str, out: &RunOutput) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use worlds::FAMILIES;
+    use worlds::{FAMILIES, MISSION_FAMILIES};
 
     #[test]
     fn every_family_gives_a_feasible_scenario_the_parser_accepts() {
-        for family in FAMILIES {
+        for family in FAMILIES.into_iter().chain(MISSION_FAMILIES) {
             for seed in 0..3 {
                 let case = Case {
                     family,
@@ -326,6 +350,51 @@ mod tests {
                     .unwrap_or_else(|e| panic!("{}: {e}\n{text}", case.id()));
                 assert_eq!(sc.vehicles.len(), w.crafts.len());
                 assert_eq!(sc.obstacles.len(), w.obstacles.len());
+            }
+        }
+    }
+
+    /// A survey world: 4–8 lines, every waypoint clear of the rocks, every leg flyable (the
+    /// reference is the legs' sum, longer than the waypoints' polyline), and the scenario file
+    /// gives the firmware the same lawnmower (to the millimetre).
+    #[test]
+    fn survey_worlds_are_lawnmowers_over_rocks_flyable_leg_by_leg() {
+        for seed in 0..6 {
+            let case = Case {
+                family: Family::Survey,
+                seed,
+                strategy: Strategy::Vpf,
+                model: ModelKind::VideoRay,
+                sensing: Sensing::Sonar,
+            };
+            let (w, attempt, shortest) = feasible_world(&case).unwrap();
+            let s = w.survey.unwrap();
+            let lines = s.lines().unwrap();
+            assert!((4..=8).contains(&lines), "{lines}");
+            let legs = w.legs(&w.crafts[0]);
+            assert_eq!(legs.len(), 2 * lines);
+            assert!(w.obstacles.len() >= 3, "{}", w.obstacles.len());
+            for p in &legs {
+                let near = w
+                    .obstacles
+                    .iter()
+                    .map(|o| o.signed_distance(0.0, *p))
+                    .fold(f64::INFINITY, f64::min);
+                assert!(near >= 4.9, "seed {seed}: a waypoint {near} m from a rock");
+            }
+            let mut polyline = 0.0;
+            let mut from = w.crafts[0].start;
+            for p in &legs {
+                polyline += p.sub(from).norm();
+                from = *p;
+            }
+            assert!(shortest >= polyline - 1.0, "{shortest} < {polyline}");
+            let text = scenario_text(&w, attempt, &case, duration_s(shortest));
+            let sc = scenario::parse(&text, &case.id()).unwrap_or_else(|e| panic!("{e}\n{text}"));
+            let m = sc.vehicles[0].mission.as_ref().unwrap();
+            assert!(m.survey.is_some());
+            for (a, b) in m.positions().iter().zip(&legs) {
+                assert!(a.sub(*b).norm() < 1e-3, "{a:?} vs {b:?}");
             }
         }
     }

@@ -6,7 +6,8 @@
 //!           [--sensing scanlines,contacts] [--params RECIPE.toml] [--jobs N] [--out DIR] [--quiet]
 //! ```
 //!
-//! - [`worlds`]: the twelve families, each world deterministic from (family, seed);
+//! - [`worlds`]: the twelve families, and the waypoint-mission family `survey` (flown when
+//!   named), each world deterministic from (family, seed);
 //! - [`feasible`]: the grid search that checks a world is flyable by the craft and gives the
 //!   shortest feasible path (the reference time is that path at cruise speed);
 //! - [`case`]: one run — world, scenario file, flight, measurements;
@@ -48,8 +49,9 @@ const USAGE: &str = "usage: hil bench [options]
 Flies generated worlds the planner was not tuned on and tabulates how it did.
 
 options:
-  --families a,b,...        world families (default: all): clutter, boxes, wall_gap, harbour,
-                            utrap, ltrap, channel, serpentine, rocks, crossing, head_on, formation
+  --families a,b,...        world families (default: these twelve): clutter, boxes, wall_gap,
+                            harbour, utrap, ltrap, channel, serpentine, rocks, crossing, head_on,
+                            formation; and, when named, the waypoint missions: survey
   --seeds N                 worlds per family, seeds 0 .. N-1 (default 17: 204 worlds)
   --strategies a,b,...      vpf, multipoint, navfn (default vpf)
   --models a,b,...          videoray, flatfish (default videoray)

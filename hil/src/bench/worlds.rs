@@ -12,7 +12,11 @@ use std::f64::consts::PI;
 use crate::sim::Rng;
 use crate::types::{SimObstacle, SimShape, P2};
 
-/// The families, in table order.
+/// Families of waypoint missions, flown when named (`--families survey`): not in the default
+/// set, so that its 204 worlds stay comparable from one change to the next.
+pub const MISSION_FAMILIES: [Family; 1] = [Family::Survey];
+
+/// The families, in table order (the default set).
 pub const FAMILIES: [Family; 12] = [
     Family::Clutter,
     Family::Boxes,
@@ -57,6 +61,10 @@ pub enum Family {
     /// know each other's positions (`[sonar] vehicle_contacts`): seed 001's virtual leader is
     /// built on them; the obstacles still come from each vehicle's own sonar.
     Formation,
+    /// A lawnmower survey (4–8 lines 8–12 m apart, 30–120 m long) over a field of rocks
+    /// scattered across the area, none within 5 m of a waypoint: a waypoint mission of 8–16
+    /// legs, every one checked flyable; the reference time is the sum of the legs'.
+    Survey,
 }
 
 impl Family {
@@ -75,12 +83,17 @@ impl Family {
             Family::Crossing => "crossing",
             Family::HeadOn => "head_on",
             Family::Formation => "formation",
+            Family::Survey => "survey",
         }
     }
 
     /// The family named `s`.
     pub fn parse(s: &str) -> Option<Family> {
-        FAMILIES.iter().copied().find(|f| f.name() == s)
+        FAMILIES
+            .iter()
+            .chain(&MISSION_FAMILIES)
+            .copied()
+            .find(|f| f.name() == s)
     }
 }
 
@@ -108,6 +121,25 @@ pub struct World {
     pub crafts: Vec<Craft>,
     /// A square formation of this lattice, m, for every vehicle (formation worlds).
     pub formation_m: Option<f64>,
+    /// The survey the (one) vehicle flies, world frame (survey worlds; its goal is the last
+    /// waypoint).
+    pub survey: Option<vpf::planner::Survey>,
+}
+
+impl World {
+    /// Each vehicle's waypoints in order (for a single goal, just the goal).
+    pub fn legs(&self, craft: &Craft) -> Vec<P2> {
+        match self.survey.and_then(|s| s.waypoints().ok()) {
+            Some(list) => list
+                .iter()
+                .map(|w| {
+                    let p = w.position();
+                    P2::new(f64::from(p.x), f64::from(p.y))
+                })
+                .collect(),
+            None => vec![craft.goal],
+        }
+    }
 }
 
 fn between(rng: &mut Rng, lo: f64, hi: f64) -> f64 {
@@ -212,6 +244,7 @@ pub fn generate(family: Family, seed: u64, attempt: u64) -> World {
         goal,
     }];
     let mut formation_m = None;
+    let mut survey = None;
     match family {
         Family::Clutter | Family::Boxes => {
             let boxes = family == Family::Boxes;
@@ -378,6 +411,55 @@ pub fn generate(family: Family, seed: u64, attempt: u64) -> World {
                 &mut |r, c| circle(c, between(r, 0.8, 2.0)),
             );
         }
+        Family::Survey => {
+            // Lines ⌈width / spacing⌉ + 1 = `lines` (the width a little under a whole number of
+            // spacings); the area to the left of +x from the origin, the start short of it.
+            let spacing = between(&mut rng, 8.0, 12.0);
+            let lines = 4 + (rng.uniform() * 5.0) as usize;
+            let width = spacing * (lines as f64 - 1.0) - 0.5;
+            let long = (0.4 * length).max(30.0);
+            let s = vpf::planner::Survey {
+                corner: vpf::Vec2::ZERO,
+                length_m: long as f32,
+                width_m: width as f32,
+                heading: 0.0,
+                spacing_m: spacing as f32,
+                radius_m: 2.0,
+                speed: None,
+            };
+            crafts[0].start = P2::new(-between(&mut rng, 5.0, 15.0), -between(&mut rng, 3.0, 10.0));
+            let half = 0.5 * width;
+            // Rocks over the area and 5 m round it, in a frame centred on the area's midline.
+            let mut away: Vec<P2> = s
+                .waypoints()
+                .map(|l| l.to_vec())
+                .unwrap_or_default()
+                .iter()
+                .map(|w| P2::new(f64::from(w.position().x), f64::from(w.position().y) - half))
+                .collect();
+            away.push(crafts[0].start.sub(P2::new(0.0, half)));
+            let area = (long + 10.0) * (width + 10.0);
+            let n = (area / between(&mut rng, 150.0, 250.0)) as usize;
+            shapes = scatter(
+                &mut rng,
+                n,
+                (-5.0, long + 5.0),
+                half + 5.0,
+                2.0,
+                &away,
+                5.0,
+                &mut |r, c| circle(c, between(r, 0.8, 2.5)),
+            )
+            .iter()
+            .map(|sh| match sh {
+                SimShape::Circle { center, radius } => {
+                    circle(center.add(P2::new(0.0, half)), *radius)
+                }
+                other => other.clone(),
+            })
+            .collect();
+            survey = Some(s);
+        }
         Family::Formation => {
             let lattice = 4.0;
             formation_m = Some(lattice);
@@ -415,13 +497,27 @@ pub fn generate(family: Family, seed: u64, attempt: u64) -> World {
         c.goal = rot(c.goal, turn);
         c.heading += turn;
     }
-    World {
+    // The survey turned with the world (its heading kept within ±180°), its goal the last
+    // waypoint.
+    let survey = survey.map(|s: vpf::planner::Survey| vpf::planner::Survey {
+        corner: rot(P2::new(f64::from(s.corner.x), f64::from(s.corner.y)), turn).to_vpf(),
+        heading: (turn - if turn > PI { 2.0 * PI } else { 0.0 }) as f32,
+        ..s
+    });
+    let mut world = World {
         family,
         seed,
         obstacles,
         crafts,
         formation_m,
+        survey,
+    };
+    if let Some(c) = world.crafts.first() {
+        if let Some(&last) = world.legs(c).last() {
+            world.crafts[0].goal = last;
+        }
     }
+    world
 }
 
 #[cfg(test)]

@@ -6,6 +6,10 @@
 //!   vehicle that touched the goal and was pushed away; "at the end" alone would miss one that
 //!   holds station just outside the radius under current. The factor 2 tolerates the latter.
 //! - **time_to_goal_s**: t of the first sample within the arrival radius (null if none).
+//! - **waypoints** (waypoint missions only; absent for a single goal): per waypoint its
+//!   position, radius and `reached_s`, the first sample within its radius after the one before
+//!   was reached (`types::waypoint_arrivals`). Such a mission is **reached** when every waypoint
+//!   was, in order; its `time_to_goal_s` is the last one's.
 //! - **path_length_m**: sum of the distances between consecutive finite positions.
 //! - **min_clearance_m**: minimum of `nearest_m` (signed; negative means a collision).
 //! - **collisions**: separate episodes of `nearest_m < 0` (a NaN sample neither starts nor
@@ -32,7 +36,7 @@ use super::belief::Perception;
 use super::RunOutput;
 use crate::sim::sonar::OtherVehicle;
 use crate::sim::vehicle::wrap_pi;
-use crate::types::{Sample, VehicleRecord, P2};
+use crate::types::{waypoint_arrivals, Sample, VehicleRecord, WaypointMark, P2};
 use vpf::link::TelemetryCounters;
 use vpf::sonar::ping360::Ping360Counters;
 
@@ -107,6 +111,19 @@ pub struct VehicleMetrics {
     /// The last telemetry's Ping360 port counters, when the firmware drove a Ping360 (it sent
     /// commands); null otherwise.
     pub ping360: Option<Ping360Counters>,
+    /// A waypoint mission's waypoints and when each was reached (absent for a single goal).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub waypoints: Option<Vec<WaypointArrival>>,
+}
+
+/// One waypoint of a mission and when the vehicle reached it.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct WaypointArrival {
+    /// The waypoint as judged (position, radius).
+    #[serde(flatten)]
+    pub mark: WaypointMark,
+    /// First time within its radius after the one before was reached, s (null: never).
+    pub reached_s: Option<f64>,
 }
 
 /// A vehicle's error against its goal and its heading set-point at one sample, in its body
@@ -321,8 +338,23 @@ impl VehicleMetrics {
             max_ghost = max_ghost.max(s.ghost_depth);
         }
         let final_distance = last_pos.map(dist);
-        let reached =
+        let mut reached =
             time_to_goal.is_some() && final_distance.is_some_and(|d| d <= 2.0 * arrival_radius_m);
+        let waypoints = (!v.waypoints.is_empty()).then(|| {
+            let times = waypoint_arrivals(&v.waypoints, &v.samples);
+            v.waypoints
+                .iter()
+                .zip(times)
+                .map(|(mark, reached_s)| WaypointArrival {
+                    mark: *mark,
+                    reached_s,
+                })
+                .collect::<Vec<_>>()
+        });
+        if let Some(w) = &waypoints {
+            reached = w.iter().all(|a| a.reached_s.is_some());
+            time_to_goal = w.last().and_then(|a| a.reached_s);
+        }
         let costs = &v.step_costs;
         let step_cost = StepCost {
             max: costs.iter().copied().max(),
@@ -357,6 +389,7 @@ impl VehicleMetrics {
             counters: v.telemetry.map(|t| t.counters),
             perception: None,
             ping360: v.telemetry.map(|t| t.ping360).filter(|p| p.commands > 0),
+            waypoints,
         }
     }
 }
@@ -383,6 +416,19 @@ impl fmt::Display for VehicleMetrics {
         write!(f, "{name}: ")?;
         if self.samples == 0 {
             f.write_str("no samples recorded")?;
+        }
+        if let Some(w) = &self.waypoints {
+            let times: Vec<String> = w
+                .iter()
+                .map(|a| a.reached_s.map_or("–".into(), |t| format!("{t:.1}")))
+                .collect();
+            let n = w.iter().filter(|a| a.reached_s.is_some()).count();
+            write!(
+                f,
+                "{n} of {} waypoints (at t = {} s); ",
+                w.len(),
+                times.join(", ")
+            )?;
         }
         match (self.reached_goal, self.time_to_goal_s) {
             _ if self.samples == 0 => {}
@@ -659,6 +705,7 @@ mod tests {
             cost_unit: vpf::link::CostUnit::Cycles,
             counters,
             ping360: Default::default(),
+            mission: Default::default(),
         });
         let m = VehicleMetrics::of(&v, 1.0, 0.5);
         assert_eq!(m.step_cost.max, Some(30));

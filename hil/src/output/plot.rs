@@ -91,7 +91,11 @@ pub fn render(run: &RunOutput) -> String {
     }
     let r_arr = run.arrival_radius_m;
     for (i, v) in run.vehicles.iter().enumerate() {
-        draw_goal(&mut s, &frame, v.goal, r_arr, svg::colour(i));
+        if v.waypoints.is_empty() {
+            draw_goal(&mut s, &frame, v.goal, r_arr, svg::colour(i));
+        } else {
+            draw_waypoints(&mut s, &frame, v, svg::colour(i));
+        }
     }
     let mut any_collision = false;
     for (i, v) in run.vehicles.iter().enumerate() {
@@ -167,6 +171,9 @@ fn layout(run: &RunOutput, t_end: f64) -> Frame {
     };
     for v in &run.vehicles {
         b.circle(v.goal, r_arr);
+        v.waypoints
+            .iter()
+            .for_each(|w| b.circle(w.position, w.radius_m));
         v.samples.iter().for_each(|s| b.add(s.state.position));
         v.ghosts.iter().for_each(|&g| b.add(g));
     }
@@ -563,6 +570,47 @@ fn draw_goal(s: &mut Svg, f: &Frame, g: P2, r: f64, colour: &str) {
     let st = format!("stroke=\"{colour}\" stroke-width=\"2.2\"");
     s.line(x - k, y - k, x + k, y + k, &st);
     s.line(x - k, y + k, x + k, y - k, &st);
+}
+
+/// A waypoint mission: the route as a dashed line, each waypoint's arrival circle, its number
+/// and when it was reached (`types::waypoint_arrivals`), the last one as a goal.
+fn draw_waypoints(s: &mut Svg, f: &Frame, v: &VehicleRecord, colour: &str) {
+    let pts: Vec<(f64, f64)> = v
+        .waypoints
+        .iter()
+        .map(|w| (f.px(w.position.x), f.py(w.position.y)))
+        .collect();
+    let mut d = PathData::new();
+    pts.iter().for_each(|&(x, y)| d.to(x, y));
+    s.path(
+        &d,
+        &format!(r#"fill="none" stroke="{colour}" stroke-width="1" stroke-dasharray="6 4" stroke-opacity="0.6""#),
+    );
+    let times = crate::types::waypoint_arrivals(&v.waypoints, &v.samples);
+    for (k, (w, t)) in v.waypoints.iter().zip(times).enumerate() {
+        let (x, y) = (f.px(w.position.x), f.py(w.position.y));
+        if k + 1 == v.waypoints.len() {
+            draw_goal(s, f, w.position, w.radius_m, colour);
+        } else if w.radius_m.is_finite() && w.radius_m > 0.0 {
+            s.circle(
+                x,
+                y,
+                w.radius_m * f.sx(),
+                &format!(r#"fill="{colour}" fill-opacity="0.08" stroke="{colour}""#),
+            );
+            s.circle(x, y, 2.5, &format!(r#"fill="{colour}""#));
+        }
+        let label = match t {
+            Some(t) => format!("{} ({t:.0} s)", k + 1),
+            None => format!("{} (–)", k + 1),
+        };
+        s.text(
+            x + 6.0,
+            y - 6.0,
+            &label,
+            &format!(r#"font-size="11" fill="{colour}""#),
+        );
+    }
 }
 
 fn diamond(s: &mut Svg, x: f64, y: f64, k: f64, attrs: &str) {

@@ -14,7 +14,7 @@ mod app {
     use crate::firmware::link::{Receiver, Transmitter};
     use crate::firmware::periodic::{PeriodShared, PeriodicTask};
     use crate::firmware::{
-        fault, LinkCounters, Lockstep, Memory, Stats, CONTROL_RX_SLOTS, CONTROL_TX_SLOTS,
+        fault, GoalFlown, LinkCounters, Lockstep, Memory, Stats, CONTROL_RX_SLOTS, CONTROL_TX_SLOTS,
     };
 
     /// Shared by idle (the background) and the periodic task: ceiling = the periodic task's
@@ -27,6 +27,8 @@ mod app {
         link_counters: LinkCounters,
         /// Firmware time, ms (periodic → background, for time stamps).
         now_ms: u64,
+        /// The waypoint flown to and its generation (periodic → background, for the route).
+        goal: GoalFlown,
         /// Lockstep: the host's clock and the `Tick` waiting to run (both ways).
         lockstep: Lockstep,
         /// What the periodic task has done (periodic → the self-test).
@@ -72,6 +74,7 @@ mod app {
                 nav: None,
                 link_counters: LinkCounters::default(),
                 now_ms: 0,
+                goal: (0, None),
                 lockstep: Lockstep::default(),
                 stats: Stats::default(),
             },
@@ -85,13 +88,14 @@ mod app {
     }
 
     /// The background (thread mode, priority 0): decodes, extracts, maps and routes.
-    #[idle(local = [background], shared = [nav, link_counters, now_ms, lockstep, stats])]
+    #[idle(local = [background], shared = [nav, link_counters, now_ms, goal, lockstep, stats])]
     fn idle(cx: idle::Context) -> ! {
         let s = cx.shared;
         let mut shared = IdleShared {
             nav: s.nav,
             link_counters: s.link_counters,
             now_ms: s.now_ms,
+            goal: s.goal,
             lockstep: s.lockstep,
             stats: s.stats,
         };
@@ -101,21 +105,28 @@ mod app {
     /// The periodic task: every SysTick interrupt (absolute schedule), or when idle pends
     /// SysTick for a lockstep `Tick`. At the shared resources' ceiling: its locks are free.
     #[task(binds = SysTick, priority = 2, local = [periodic],
-           shared = [nav, link_counters, now_ms, lockstep, stats])]
+           shared = [nav, link_counters, now_ms, goal, lockstep, stats])]
     fn period(cx: period::Context) {
         let task = cx.local.periodic;
         let s = cx.shared;
-        (s.nav, s.link_counters, s.now_ms, s.lockstep, s.stats).lock(
-            |nav, link_counters, now_ms, lockstep, stats| {
+        (
+            s.nav,
+            s.link_counters,
+            s.now_ms,
+            s.goal,
+            s.lockstep,
+            s.stats,
+        )
+            .lock(|nav, link_counters, now_ms, goal, lockstep, stats| {
                 task.on_interrupt(PeriodShared {
                     nav,
                     link_counters,
                     now_ms,
+                    goal,
                     lockstep,
                     stats,
                 });
-            },
-        );
+            });
     }
 
     /// UART0 receive: every waiting byte into the control link's queue.
