@@ -494,9 +494,9 @@ fn payload(rng: &mut Rng, ctx: &Ctx<'_>, ty: u8) -> Vec<u8> {
 // Layout knowledge for the mutations (payload offsets from docs/protocol.md §5–§6)
 
 /// Offsets of the f32 parameters in `Params`.
-const PARAM_F32: [usize; 27] = [
+const PARAM_F32: [usize; 29] = [
     0, 4, 9, 13, 17, 21, 25, 29, 33, 38, 42, 46, 50, 54, 58, 62, 66, 70, 80, 84, 89, 93, 97, 101,
-    106, 110, 114,
+    106, 110, 114, 118, 122,
 ];
 
 /// Floats of a shape starting at `o` (its kind byte); returns the shape's length.
@@ -746,7 +746,7 @@ fn gen_raw(rng: &mut Rng, ctx: &Ctx<'_>, seq: &mut u16) -> Vec<u8> {
     }
     let ty = pick_type(rng);
     let mut f = Frame {
-        version: 5,
+        version: 6,
         ty,
         seq: *seq,
         payload: payload(rng, ctx, ty),
@@ -853,7 +853,7 @@ fn mutate_frame(rng: &mut Rng, ctx: &Ctx<'_>, f: &mut Frame, seq: &mut u16) {
         }
         // Header: version, type (the payload read as another type's), sequence.
         10 => match rng.below(3) {
-            0 => f.version = rng.pick(&[0u8, 4, 6, 0x85, 0xFF]),
+            0 => f.version = rng.pick(&[0u8, 5, 7, 0x85, 0xFF]),
             1 => {
                 f.ty = rng.pick(&[
                     0x00, 0x01, 0x02, 0x03, 0x04, 0x05, 0x06, 0x07, 0x08, 0x09, 0x7F, 0x80, 0x81,

@@ -251,29 +251,29 @@ mod tests {
         };
         let mut b = [0u8; 4];
         assert_eq!(h.emit(&mut b), Ok(4));
-        assert_eq!(b, [0x05, 0x08, 0x01, 0x02]);
+        assert_eq!(b, [0x06, 0x08, 0x01, 0x02]);
         assert_eq!(Header::parse(&b), Ok(h));
         assert_eq!(Header::parse(&[1, 8, 0, 0]), Err(Error::Version(1)));
         assert_eq!(
-            Header::parse(&[5, 0x42, 0, 0]),
+            Header::parse(&[6, 0x42, 0, 0]),
             Err(Error::UnknownType(0x42))
         );
         assert_eq!(Header::parse(&[3, 8, 0]), Err(Error::Truncated));
     }
 
     /// A Tick frame worked by hand (the example in docs/protocol.md):
-    /// raw = 05 08 01 00 | e8 03 00 00 00 00 00 00 | CRC. The CRC was computed independently
-    /// with Python's `binascii.crc_hqx(raw, 0xFFFF)` = 0xF1F2, sent LE as f2 f1.
-    /// COBS: "05 08 01" + zero → 04 05 08 01; "e8 03" + zero → 03 e8 03; five single zeros
-    /// → 01 ×5; the tail "f2 f1" → 03 f2 f1; then the delimiter 00.
+    /// raw = 06 08 01 00 | e8 03 00 00 00 00 00 00 | CRC. The CRC was computed independently
+    /// with Python's `binascii.crc_hqx(raw, 0xFFFF)` = 0xF46D, sent LE as 6d f4.
+    /// COBS: "06 08 01" + zero → 04 06 08 01; "e8 03" + zero → 03 e8 03; five single zeros
+    /// → 01 ×5; the tail "6d f4" → 03 6d f4; then the delimiter 00.
     #[test]
     fn tick_frame_vector() {
         let raw = [
-            0x05, 0x08, 0x01, 0x00, 0xe8, 0x03, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0xf2, 0xf1,
+            0x06, 0x08, 0x01, 0x00, 0xe8, 0x03, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x6d, 0xf4,
         ];
         let wire = [
-            0x04, 0x05, 0x08, 0x01, 0x03, 0xe8, 0x03, 0x01, 0x01, 0x01, 0x01, 0x01, 0x03, 0xf2,
-            0xf1, 0x00,
+            0x04, 0x06, 0x08, 0x01, 0x03, 0xe8, 0x03, 0x01, 0x01, 0x01, 0x01, 0x01, 0x03, 0x6d,
+            0xf4, 0x00,
         ];
         let mut out = [0u8; 32];
         let n = encode_frame(
@@ -301,9 +301,9 @@ mod tests {
 
     #[test]
     fn split_frame_checks_in_order() {
-        assert_eq!(split_frame(&[5, 8, 0, 0, 0]), Err(Error::Truncated));
+        assert_eq!(split_frame(&[6, 8, 0, 0, 0]), Err(Error::Truncated));
         let mut raw = [
-            0x05, 0x08, 0x01, 0x00, 0xe8, 0x03, 0, 0, 0, 0, 0, 0, 0xf2, 0xf1,
+            0x06, 0x08, 0x01, 0x00, 0xe8, 0x03, 0, 0, 0, 0, 0, 0, 0x6d, 0xf4,
         ];
         raw[5] ^= 0x10;
         assert_eq!(split_frame(&raw), Err(Error::Crc));
@@ -312,7 +312,7 @@ mod tests {
         let crc = crate::link::crc::crc16(&v1);
         v1.extend(crc.to_le_bytes());
         assert_eq!(split_frame(&v1), Err(Error::Version(1)));
-        let mut t: Vec<u8> = std::vec![5, 0x55, 0, 0];
+        let mut t: Vec<u8> = std::vec![6, 0x55, 0, 0];
         let crc = crate::link::crc::crc16(&t);
         t.extend(crc.to_le_bytes());
         assert_eq!(split_frame(&t), Err(Error::UnknownType(0x55)));

@@ -255,24 +255,24 @@ pub(crate) mod tests {
     use std::vec::Vec;
 
     /// The worked example of docs/protocol.md: Mission {goal (10, −5), no formation}, seq 7.
-    /// CRC from Python's binascii.crc_hqx(raw, 0xFFFF) = 0xA625 (independent of this crate).
+    /// CRC from Python's binascii.crc_hqx(raw, 0xFFFF) = 0x6980 (independent of this crate).
     #[test]
     fn worked_example_mission_frame() {
         let raw = [
-            0x05, 0x04, 0x07, 0x00, // version 5, Mission, seq 7
+            0x06, 0x04, 0x07, 0x00, // version 6, Mission, seq 7
             0x00, 0x00, 0x20, 0x41, // goal_x 10.0
             0x00, 0x00, 0xa0, 0xc0, // goal_y -5.0
             0x00, // flags: no formation
-            0x25, 0xa6, // CRC-16 LE
+            0x80, 0x69, // CRC-16 LE
         ];
         let wire = [
-            0x04, 0x05, 0x04, 0x07, // "05 04 07" then a zero
+            0x04, 0x06, 0x04, 0x07, // "06 04 07" then a zero
             0x01, // another zero
             0x01, // another zero
             0x03, 0x20, 0x41, // "20 41" then a zero
             0x01, // zero
             0x03, 0xa0, 0xc0, // "a0 c0" then a zero (the flags)
-            0x03, 0x25, 0xa6, // "25 a6", end of frame
+            0x03, 0x80, 0x69, // "80 69", end of frame
             0x00, // delimiter
         ];
         let m = Message::Mission(Mission {

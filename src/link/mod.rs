@@ -43,7 +43,9 @@ pub mod sensors;
 pub mod shape;
 
 pub use belief::{BeliefRepr, BELIEF_ROWS};
-pub use control::{param_index, ChartClearRepr, ChartObstacleRepr, TickRepr, PARAM_NAMES};
+pub use control::{
+    param_index, ChartClearRepr, ChartObstacleRepr, TickRepr, PARAMS_LEN, PARAM_NAMES,
+};
 pub use decoder::{Decoder, Outcome, RxCounters};
 pub use frame::{encode_frame, frame_buffer_len, split_frame, Direction, Header, MessageType};
 pub use message::{Message, Payload};
@@ -58,7 +60,7 @@ use crate::params::Params;
 
 /// The protocol version this module speaks, first byte of every header. Frames with another
 /// version are refused (and counted): a new version is a new, incompatible layout.
-pub const PROTOCOL_VERSION: u8 = 5;
+pub const PROTOCOL_VERSION: u8 = 6;
 /// The frame delimiter. COBS guarantees it appears nowhere inside a frame.
 pub const DELIMITER: u8 = 0x00;
 /// Length of the frame header: version u8, message type u8, sequence u16.

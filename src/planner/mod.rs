@@ -561,6 +561,18 @@ impl Planner {
         } else {
             crate::math::max(0.0, v_bar.dot(Vec2::from_angle(sp.phi_c)))
         };
+        // A craft that turns slowly goes where it points, not where it is told: while its
+        // heading is off the commanded one by e, the speed set-point is cut to cos e of the
+        // plan (none from 90° on: it turns first), so it turns on a tighter circle and does
+        // not run on along its old heading (`Params::turn_rate_rps`; our addition, none of the
+        // seeds has it: 000 and 001 fly a craft that turns at once). The planned velocity v̄
+        // is not cut: the field's motion, the stall test and the set-points stay the paper's.
+        let v_set = if prm.turn_rate_rps > 0.0 {
+            let e = crate::math::wrap_angle(sp.phi_c - cx.nav.heading);
+            v_set * crate::math::max(0.0, crate::math::cos(e))
+        } else {
+            v_set
+        };
         Command {
             psi_set: sp.phi_c,
             v_set: v_set.min(v_lim),
