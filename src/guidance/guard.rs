@@ -302,7 +302,16 @@ impl Helm<'_> {
         let s = max(v, self.speed);
         let brake = prm.brake();
         let rate = prm.turn_rate_rps;
-        arc(self.p, self.heading, psi, s, prm.period_s, brake, rate, cfg.margin_m)
+        arc(
+            self.p,
+            self.heading,
+            psi,
+            s,
+            prm.period_s,
+            brake,
+            rate,
+            cfg.margin_m,
+        )
     }
 
     /// Whether the command (`psi`, `v`) is blocked ([`Believed::blocked`]).
@@ -334,6 +343,8 @@ fn with_motion(mut cmd: Command, heading: f32, speed: f32, verdict: Verdict) -> 
     cmd.setpoints.alpha_c = 0.0;
     cmd.setpoints.omega_c = 0.0;
     if verdict != Verdict::Clear {
+        // Not the plan: no integral push (the planner restarts it, `restart_integral`).
+        cmd.setpoints.i_surge = 0.0;
         cmd.mode = Mode::Guarded;
     }
     cmd

@@ -432,6 +432,7 @@ impl Planner {
                 force: Vec2::ZERO,
                 velocity,
             };
+            self.motion.setpoints.restart_integral();
         }
     }
 
@@ -548,7 +549,9 @@ impl Planner {
         let v_c = (f_bar + m.integrator.force) * (0.5 * prm.period_s) + m.integrator.velocity;
         let v_lim = crate::math::min(prm.v_max, self.arrival_speed(m, cx));
         let v_bar = bound::bound(v_c, v_lim, e1, prm.bounding);
-        let sp = m.setpoints.decompose(prm.period_s, f_bar, v_bar, &measured);
+        let sp = m
+            .setpoints
+            .decompose(prm.period_s, f_bar, v_bar, &measured, prm.turn_rate_rps);
         m.integrator = Integrator {
             force: f_bar,
             velocity: v_bar,

@@ -8,9 +8,10 @@ use serde::{Deserialize, Serialize};
 use vpf::{Params, Strategy};
 
 use super::feasible::{self, Infeasible};
+use super::turning;
 use super::worlds::{self, Family, World};
 use crate::output::{plot, RunOutput, Summary};
-use crate::runner::{hull_radius, run_quiet, QuietRun};
+use crate::runner::{hull_radius, run_quiet, turning_radius, QuietRun};
 use crate::scenario::{self, Sensing};
 use crate::sim::ModelKind;
 use crate::sweep::generate::{obstacle_table, wrap_deg};
@@ -108,16 +109,31 @@ pub struct Row {
 }
 
 /// The world of `case`, feasible for its craft: (world, attempt, shortest path of the
-/// longest mission, m).
+/// longest mission, m). Feasible: every vehicle has a way to its goal that keeps its hull and
+/// [`FEASIBLE_MARGIN_M`] from every static obstacle (`feasible`), and, for a craft with a
+/// turning radius (`crate::runner::turning_radius`), one it can fly on that radius from its
+/// start pose without slowing to turn (`turning`). Worlds are drawn for the craft's hull
+/// (`worlds::generate`: a formation's lattice).
 pub fn feasible_world(case: &Case) -> Result<(World, u64, f64), Infeasible> {
-    let clearance = hull_radius(case.model) + FEASIBLE_MARGIN_M;
+    let hull = hull_radius(case.model);
+    let clearance = hull + FEASIBLE_MARGIN_M;
+    let radius = turning_radius(case.model);
     let mut last = Infeasible::NoPath;
     for attempt in 0..MAX_ATTEMPTS {
-        let w = worlds::generate(case.family, case.seed, attempt);
+        let w = worlds::generate(case.family, case.seed, attempt, hull);
         let mut longest: f64 = 0.0;
         let mut ok = true;
         for c in &w.crafts {
-            match feasible::shortest_path(&w.obstacles, c.start, c.goal, clearance) {
+            let turnable = || {
+                if radius > 0.0 {
+                    turning::reachable(&w.obstacles, c.start, c.heading, c.goal, clearance, radius)
+                } else {
+                    Ok(())
+                }
+            };
+            match feasible::shortest_path(&w.obstacles, c.start, c.goal, clearance)
+                .and_then(|d| turnable().map(|()| d))
+            {
                 Ok(d) => longest = longest.max(d),
                 Err(e) => {
                     last = e;
