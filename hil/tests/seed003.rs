@@ -32,8 +32,11 @@ use hil::firmware::Target;
 use hil::runner::{run, RunConfig};
 use hil::scenario;
 
-/// (time to goal s, path to arrival m, arrival error (surge m, sway m, yaw °), collisions).
-fn fly(file: &str, horizon: Option<f32>) -> (Option<f64>, f64, Option<(f64, f64, f64)>, u32) {
+/// Arrival error: surge m, sway m, yaw °.
+type ArrivalError = (f64, f64, f64);
+
+/// (time to goal s, path to arrival m, arrival error, collisions).
+fn fly(file: &str, horizon: Option<f32>) -> (Option<f64>, f64, Option<ArrivalError>, u32) {
     let path = Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("scenarios")
         .join(file);
@@ -71,7 +74,9 @@ fn fly(file: &str, horizon: Option<f32>) -> (Option<f64>, f64, Option<(f64, f64,
 fn seed_003_cases_arrive_at_cruise_speed_with_the_papers_sway_and_yaw_errors() {
     for file in ["seed003_case1_static.toml", "seed003_case2_moving.toml"] {
         let (t, length, e, collisions) = fly(file, None);
-        println!("{file}: time to goal {t:?} s, path to arrival {length:.1} m, arrival error {e:?}");
+        println!(
+            "{file}: time to goal {t:?} s, path to arrival {length:.1} m, arrival error {e:?}"
+        );
         let t = t.unwrap_or_else(|| panic!("{file}: did not arrive"));
         let (surge, sway, yaw) = e.unwrap_or_else(|| panic!("{file}: no arrival error"));
         assert_eq!(collisions, 0, "{file}");
@@ -94,6 +99,11 @@ fn seed_003_cases_arrive_at_cruise_speed_with_the_papers_sway_and_yaw_errors() {
 #[test]
 fn seed_003_case_2_with_movers_planned_where_they_are_is_run_into() {
     let (t, length, _, collisions) = fly("seed003_case2_moving.toml", Some(0.0));
-    println!("case 2, horizon_s = 0: time to goal {t:?} s, path {length:.1} m, {collisions} contacts");
-    assert!(collisions > 0, "the paper's method no longer meets a mover: update the docs");
+    println!(
+        "case 2, horizon_s = 0: time to goal {t:?} s, path {length:.1} m, {collisions} contacts"
+    );
+    assert!(
+        collisions > 0,
+        "the paper's method no longer meets a mover: update the docs"
+    );
 }

@@ -270,7 +270,7 @@ fn arc(
         } else {
             max(0.0, speed - brake * (t - hold_s))
         };
-        at = at + Vec2::from_angle(heading_at(t)) * (v * dt);
+        at += Vec2::from_angle(heading_at(t)) * (v * dt);
         *pt = at;
     }
     if let Some(last) = pts.last_mut() {
