@@ -309,7 +309,7 @@ fn a_busy_request_changes_nothing() {
 fn refusals_at_the_wire_count_as_refused_requests() {
     let mut host = Host::new();
     // Params with a NaN epsilon (row 1, bytes 4..8): the wire refuses non-finite numbers.
-    let mut payload = [0u8; 118];
+    let mut payload = [0u8; vpf::link::PARAMS_LEN];
     let n = Params::default().emit(&mut payload).unwrap();
     assert_eq!(n, payload.len());
     payload[4..8].copy_from_slice(&f32::NAN.to_le_bytes());

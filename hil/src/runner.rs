@@ -53,6 +53,15 @@ pub fn hull_radius(model: ModelKind) -> f64 {
     }
 }
 
+/// The radius a model turns on at its cruise speed with the heading autopilot at its limit, m
+/// (0: it turns on the spot): what a world must leave room for (`crate::bench::turning`).
+pub fn turning_radius(model: ModelKind) -> f64 {
+    match model {
+        ModelKind::Kinematic | ModelKind::VideoRay => 0.0,
+        ModelKind::FlatFish => crate::sim::flatfish::FLATFISH_TURN_RADIUS_M,
+    }
+}
+
 /// How to run.
 #[derive(Clone, Debug)]
 pub struct RunConfig {

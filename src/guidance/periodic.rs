@@ -318,7 +318,7 @@ impl Periodic {
     #[inline(never)]
     fn snapshot(&mut self, m: &EvidenceMap, p: Vec2) {
         let mut near: heapless::Vec<Near, MAX_MAP_CELLS> = heapless::Vec::new();
-        m.nearest(p, self.config.map_reach_m, &mut near);
+        m.nearest(p, self.map_reach(m.cell_m()), &mut near);
         // Cells as discs of half their side: neighbours touch, so a wall has no seams.
         self.world
             .set_map(near.iter().map(|c| c.center), 0.5 * m.cell_m());
@@ -445,6 +445,18 @@ impl Periodic {
             // Refused input (counted by the planner): hold, with the last heading.
             Err(_) => Command::hold(crate::planner::HoldReason::StaleNav, self.last_heading),
         }
+    }
+
+    /// How far round the vehicle the evidence map's cells enter the world, m: `map_reach_m`,
+    /// or farther when the guard needs it to see a whole stopping distance beyond the hull at
+    /// v_max (a large craft that brakes gently: the flat-fish's 2.25 m hull and 3.3 m from
+    /// 1 m/s at 0.15 m/s²). The map's scan stops at `MAX_REACH_CELLS` cells either way.
+    fn map_reach(&self, cell_m: f32) -> f32 {
+        let p = self.planner.params();
+        let g = &self.config.guard;
+        let stop = p.v_max * p.period_s + p.v_max * p.v_max / (2.0 * p.brake()) + g.margin_m;
+        let need = p.agent_radius_m + g.hull_margin_m + stop + cell_m;
+        crate::math::max(self.config.map_reach_m, need)
     }
 
     /// Applies one request and says how it went. Not inlined: a survey's expanded list is on its

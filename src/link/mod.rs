@@ -46,7 +46,9 @@ pub mod sensors;
 pub mod shape;
 
 pub use belief::{BeliefRepr, BELIEF_ROWS};
-pub use control::{param_index, ChartClearRepr, ChartObstacleRepr, TickRepr, PARAM_NAMES};
+pub use control::{
+    param_index, ChartClearRepr, ChartObstacleRepr, TickRepr, PARAMS_LEN, PARAM_NAMES,
+};
 pub use decoder::{Decoder, Outcome, RxCounters};
 pub use frame::{encode_frame, frame_buffer_len, split_frame, Direction, Header, MessageType};
 pub use message::{Message, Payload};
