@@ -103,6 +103,11 @@ struct Sim {
     setpoints: SetPoints,
     /// `Tick`s sent again because no command came back in time.
     tick_retries: u32,
+    /// Of those, the ones whose first sending was answered after all (a second command for the
+    /// same period came back): the firmware was slow, nothing was lost.
+    ticks_slow: u32,
+    /// The last period whose `Tick` was sent again, while its answers are still counted.
+    resent: Option<u64>,
     /// Navigation samples waiting out the configured delay: (due time, sample).
     delayed: std::collections::VecDeque<(f64, NavState)>,
     frozen: Option<NavState>,
@@ -118,6 +123,9 @@ pub struct RunResult {
     pub faults: Vec<FaultCounts>,
     /// `Tick`s sent again per vehicle (a lost Tick, or a slow firmware).
     pub tick_retries: Vec<u32>,
+    /// Of those, per vehicle, the ones the firmware had only been slow to answer (the period
+    /// was answered twice); the rest were lost on the link.
+    pub ticks_slow: Vec<u32>,
 }
 
 /// How [`run_quiet`] runs a scenario: the many short runs of a parameter sweep.
@@ -166,6 +174,7 @@ pub fn run(sc: &Scenario, cfg: &RunConfig) -> Result<RunResult, RunError> {
         summary,
         faults: sim.faults,
         tick_retries: sim.tick_retries,
+        ticks_slow: sim.ticks_slow,
     })
 }
 
@@ -196,6 +205,7 @@ struct Simulated {
     output: RunOutput,
     faults: Vec<FaultCounts>,
     tick_retries: Vec<u32>,
+    ticks_slow: Vec<u32>,
 }
 
 /// The run itself.
@@ -268,6 +278,8 @@ fn simulate(
                 ..SetPoints::default()
             },
             tick_retries: 0,
+            ticks_slow: 0,
+            resent: None,
             delayed: Default::default(),
             frozen: None,
         });
@@ -371,6 +383,7 @@ fn simulate(
 
     let faults = sims.iter().map(|s| s.tap.counts).collect();
     let tick_retries = sims.iter().map(|s| s.tick_retries).collect();
+    let ticks_slow = sims.iter().map(|s| s.ticks_slow).collect();
     let vehicles: Vec<VehicleRecord> = sims.into_iter().map(|s| s.record).collect();
     let output = RunOutput {
         scenario_name: sc.name.clone(),
@@ -385,6 +398,7 @@ fn simulate(
         output,
         faults,
         tick_retries,
+        ticks_slow,
     })
 }
 
@@ -503,6 +517,7 @@ fn collect(
                     {
                         attempt += 1;
                         s.tick_retries += 1;
+                        s.resent = Some(t_ms);
                         s.fw.send(&Message::Tick(TickRepr { time_ms: t_ms }), &mut s.tap)
                             .map_err(fw_err)?;
                     }
@@ -515,6 +530,20 @@ fn collect(
                 .map_err(fw_err)?
         }
     };
+    if let Some(resent) = s.resent {
+        // A period whose Tick went out twice and came back answered twice (now, or with the
+        // next period's answers) had only been slow; once, and a Tick was lost.
+        let answers = got
+            .iter()
+            .filter(|r| matches!(r, Reply::Command(c) if c.time_ms == resent))
+            .count();
+        if answers >= 2 || (answers == 1 && resent != t_ms) {
+            s.ticks_slow += 1;
+        }
+        if answers >= 2 || resent != t_ms {
+            s.resent = None;
+        }
+    }
     for r in &got {
         match r {
             Reply::Reply(rep) if !*replies_checked => {

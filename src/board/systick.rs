@@ -41,10 +41,29 @@ impl PeriodTimer {
         k as u32
     }
 
-    /// Lockstep: the timer stops raising periods (it keeps counting, for the cost counter);
-    /// periods then run only when the background pends SysTick for the host's `Tick`.
+    /// Lockstep: the timer stops raising periods; periods then run only when the background
+    /// pends SysTick for the host's `Tick`. It counts only while a period runs (the cost
+    /// counter, [`PeriodTimer::count`]): a counter left running between periods is a timer
+    /// that QEMU's `-icount sleep=off` jumps its virtual clock to whenever the firmware waits
+    /// for the host, over and over, keeping a host core busy while the bytes wait for it.
     pub fn enter_lockstep(&mut self) {
         self.syst.disable_interrupt();
+        self.syst.disable_counter();
+    }
+
+    /// Lockstep: starts (`true`) or stops (`false`) the count. Started, it counts from its
+    /// reload value, as at the start of a timed period, so a period's costs never straddle a
+    /// reload.
+    pub fn count(&mut self, on: bool) {
+        let s = &mut self.syst;
+        s.disable_counter();
+        if on {
+            s.clear_current();
+            s.enable_counter();
+            // The counter loads the reload value on its next clock: wait (boundedly) for it,
+            // or the first cost reading would count a whole interval.
+            let _ = (0..1024).any(|_| SYST::get_current() != 0);
+        }
     }
 
     /// Whether the timer has fired again since the current period began (a missed deadline).
