@@ -89,7 +89,7 @@ impl Tap for NoTap {
 /// A running firmware and its link.
 pub struct Firmware {
     child: Option<Child>,
-    port: File,
+    port: Port,
     decoder: Decoder,
     seq: u16,
     inbox: Vec<Reply>,
@@ -107,6 +107,82 @@ impl Drop for Firmware {
             let _ = c.kill();
             let _ = c.wait();
         }
+    }
+}
+
+/// Where the link's bytes go.
+enum Port {
+    /// A pty, socket, serial device or datagram socket.
+    File(File),
+    /// The firmware's runtime in this process ([`Firmware::in_process`]).
+    InProcess(Box<InProcess>),
+}
+
+/// The host firmware's runtime (`vpf::guidance::SingleContext`, what the `vpf-firmware` process
+/// runs) called directly: bytes in, a lockstep `Tick` runs its period at once, bytes out.
+struct InProcess {
+    runtime: vpf::guidance::SingleContext,
+    /// What the runtime sent, not yet read.
+    out: Vec<u8>,
+    /// The step cost's clock (microseconds, as the host process reports them).
+    start: Instant,
+}
+
+impl InProcess {
+    fn feed(&mut self, bytes: &[u8]) {
+        let start = self.start;
+        let mut cost = || start.elapsed().as_micros() as u32;
+        let out = &mut self.out;
+        self.runtime.on_bytes(bytes, &mut cost, &mut |f: &[u8]| {
+            out.extend_from_slice(f);
+            true
+        });
+    }
+}
+
+impl Port {
+    fn write_all(&mut self, bytes: &[u8]) -> std::io::Result<()> {
+        match self {
+            Port::File(f) => f.write_all(bytes),
+            Port::InProcess(p) => {
+                p.feed(bytes);
+                Ok(())
+            }
+        }
+    }
+
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        match self {
+            Port::File(f) => f.read(buf),
+            Port::InProcess(p) => {
+                let n = p.out.len().min(buf.len());
+                buf[..n].copy_from_slice(&p.out[..n]);
+                p.out.drain(..n);
+                Ok(n)
+            }
+        }
+    }
+
+    /// Waits at most `ms` for something to read.
+    fn wait_readable(&self, ms: i32) -> std::io::Result<bool> {
+        let f = match self {
+            Port::File(f) => f,
+            Port::InProcess(p) => return Ok(!p.out.is_empty()),
+        };
+        let mut pfd = libc::pollfd {
+            fd: f.as_raw_fd(),
+            events: libc::POLLIN,
+            revents: 0,
+        };
+        // SAFETY: one valid pollfd for a descriptor we own.
+        let ready = unsafe { libc::poll(&mut pfd, 1, ms) };
+        if ready < 0 {
+            let e = std::io::Error::last_os_error();
+            if e.kind() != std::io::ErrorKind::Interrupted {
+                return Err(e);
+            }
+        }
+        Ok(ready > 0)
     }
 }
 
@@ -229,12 +305,12 @@ impl Firmware {
                     .write(true)
                     .open(path)?;
                 make_raw(&port)?;
-                Ok(Self::new(None, port, target.clone()))
+                Ok(Self::new(None, Port::File(port), target.clone()))
             }
         }
     }
 
-    fn new(child: Option<Child>, port: File, target: Target) -> Self {
+    fn new(child: Option<Child>, port: Port, target: Target) -> Self {
         Firmware {
             child,
             port,
@@ -311,7 +387,7 @@ impl Firmware {
         stdin.write_all(b"cont\n")?;
         stdin.flush()?;
         std::mem::forget(stdin); // the monitor stays open while QEMU runs
-        let port = File::from(std::os::fd::OwnedFd::from(ours));
+        let port = Port::File(File::from(std::os::fd::OwnedFd::from(ours)));
         let mut fw = Self::new(Some(child), port, Target::Qemu);
         fw.ethernet = true;
         if lockstep {
@@ -342,20 +418,7 @@ impl Firmware {
 
     /// Waits at most `ms` for something to read.
     fn wait_readable(&self, ms: i32) -> std::io::Result<bool> {
-        let mut pfd = libc::pollfd {
-            fd: self.port.as_raw_fd(),
-            events: libc::POLLIN,
-            revents: 0,
-        };
-        // SAFETY: one valid pollfd for a descriptor we own.
-        let ready = unsafe { libc::poll(&mut pfd, 1, ms) };
-        if ready < 0 {
-            let e = std::io::Error::last_os_error();
-            if e.kind() != std::io::ErrorKind::Interrupted {
-                return Err(e);
-            }
-        }
-        Ok(ready > 0)
+        self.port.wait_readable(ms)
     }
 
     /// Writes link bytes: as they are on a stream, in frames on ethernet.
@@ -406,6 +469,7 @@ impl Firmware {
             .write(true)
             .open(&path)?;
         make_raw(&port)?;
+        let port = Port::File(port);
         let mut stdin = child
             .stdin
             .take()
@@ -427,8 +491,28 @@ impl Firmware {
             .stdout(Stdio::from(std::os::fd::OwnedFd::from(theirs_out)))
             .stderr(Stdio::null())
             .spawn()?;
-        let port = File::from(std::os::fd::OwnedFd::from(ours));
+        let port = Port::File(File::from(std::os::fd::OwnedFd::from(ours)));
         Ok(Self::new(Some(child), port, Target::Host))
+    }
+
+    /// The host firmware's runtime in this process: the same code the `vpf-firmware` process
+    /// runs on its input (`vpf::guidance::SingleContext`), called directly, so a lockstep
+    /// period costs no process wake-up and no system call (the sweep's, the benchmark's and the
+    /// fault campaign's runs: see `hil/sweeps/README.md`). Only for lockstep: it has no clock
+    /// of its own.
+    pub fn in_process() -> std::io::Result<Self> {
+        let runtime = vpf::guidance::SingleContext::new(
+            vpf::Params::default(),
+            vpf::guidance::RuntimeConfig::default(),
+            vpf::link::CostUnit::Microseconds,
+        )
+        .map_err(|e| std::io::Error::other(e.to_string()))?;
+        let port = Port::InProcess(Box::new(InProcess {
+            runtime,
+            out: Vec::new(),
+            start: Instant::now(),
+        }));
+        Ok(Self::new(None, port, Target::Host))
     }
 
     /// The host-process firmware on the slave side of a fresh pty.
@@ -441,7 +525,7 @@ impl Firmware {
             .stdout(Stdio::null())
             .stderr(Stdio::null())
             .spawn()?;
-        Ok(Self::new(Some(child), master, Target::Host))
+        Ok(Self::new(Some(child), Port::File(master), Target::Host))
     }
 
     /// Sends one message as a frame, through the tap.

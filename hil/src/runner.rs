@@ -141,6 +141,10 @@ pub struct QuietRun {
     /// The host-process firmware on a Unix socket pair instead of a pty
     /// ([`Firmware::start_host_socket`]); other targets ignore it.
     pub socket: bool,
+    /// In lockstep, the host firmware's runtime in this process instead of a process
+    /// ([`Firmware::in_process`]: the same code, no wake-up or system call per period); other
+    /// targets ignore it.
+    pub in_process: bool,
 }
 
 impl QuietRun {
@@ -152,6 +156,7 @@ impl QuietRun {
             binary: firmware::build(&Target::Host)?,
             stop_early: true,
             socket: true,
+            in_process: true,
         })
     }
 }
@@ -166,6 +171,7 @@ pub fn run(sc: &Scenario, cfg: &RunConfig) -> Result<RunResult, RunError> {
         progress: cfg.progress,
         stop_early: false,
         socket: false,
+        in_process: false,
     };
     let sim = simulate(sc, &cfg.target, &binary, &how)?;
     let summary = output::write_all(&cfg.out_dir, &sim.output).map_err(RunError::Output)?;
@@ -187,17 +193,20 @@ pub fn run_quiet(sc: &Scenario, q: &QuietRun) -> Result<RunOutput, RunError> {
         progress: false,
         stop_early: q.stop_early,
         socket: q.socket,
+        in_process: q.in_process,
     };
     simulate(sc, &q.target, &q.binary, &how).map(|s| s.output)
 }
 
 /// How [`simulate`] runs: frame logs into `log_dir` if given, a progress bar if `progress`,
-/// the end at arrival or collision if `stop_early`, the host firmware on a socket if `socket`.
+/// the end at arrival or collision if `stop_early`, the host firmware on a socket if `socket`
+/// (in this process if `in_process`).
 struct How<'a> {
     log_dir: Option<&'a std::path::Path>,
     progress: bool,
     stop_early: bool,
     socket: bool,
+    in_process: bool,
 }
 
 /// What [`simulate`] recorded.
@@ -221,7 +230,9 @@ fn simulate(
     let mut sims = Vec::new();
     for (i, v) in sc.vehicles.iter().enumerate() {
         let lockstep = sc.mode == RunMode::Lockstep;
-        let mut fw = if how.socket && *target == Target::Host {
+        let mut fw = if how.in_process && lockstep && *target == Target::Host {
+            Firmware::in_process()
+        } else if how.socket && *target == Target::Host {
             Firmware::start_host_socket(binary)
         } else {
             Firmware::start(target, binary, lockstep)
