@@ -193,7 +193,12 @@ fn a_scenario_runs_on_the_emulated_cortex_m4() {
         csv("qemu_vs_host"),
         "QEMU and host trajectories differ"
     );
-    assert_eq!(r.tick_retries, [0], "a Tick was sent again on a clean link");
+    // A clean link loses nothing (a Tick answered late on a loaded machine is only slow).
+    assert_eq!(
+        r.tick_retries[0] - r.ticks_slow[0],
+        0,
+        "a Tick was lost on a clean link"
+    );
     // The same image with the link on its UART (one byte per QEMU main-loop turn: a shorter
     // run) flies the same trajectory too.
     sc.duration_s = 15.0;
