@@ -51,18 +51,24 @@ impl PeriodTimer {
         self.syst.disable_counter();
     }
 
-    /// Lockstep: starts (`true`) or stops (`false`) the count. Started, it counts from its
-    /// reload value, as at the start of a timed period, so a period's costs never straddle a
-    /// reload.
+    /// Lockstep: resumes (`true`) or pauses (`false`) the count where it stood, so the cost
+    /// counter's differences within a period are as when it runs freely. A count resumed in
+    /// the lower half of its interval starts again from the reload value instead (then a
+    /// period, far shorter than half an interval, never straddles a reload): the counter loads
+    /// it on its next clock, which is waited for, boundedly (under QEMU without `-icount` the
+    /// load can come late, and that one period's cost then reads low).
     pub fn count(&mut self, on: bool) {
         let s = &mut self.syst;
         s.disable_counter();
-        if on {
+        if !on {
+            return;
+        }
+        if SYST::get_current() < SYST::get_reload() / 2 {
             s.clear_current();
             s.enable_counter();
-            // The counter loads the reload value on its next clock: wait (boundedly) for it,
-            // or the first cost reading would count a whole interval.
             let _ = (0..1024).any(|_| SYST::get_current() != 0);
+        } else {
+            s.enable_counter();
         }
     }
 
