@@ -1,7 +1,7 @@
 //! `hil`: run a scenario against the VPF firmware.
 //!
 //! ```text
-//! hil run SCENARIO.toml [--out DIR] [--firmware qemu|host] [--port /dev/ttyXXX] [--quiet]
+//! hil run SCENARIO.toml [--out DIR] [--firmware qemu|qemu-uart|host] [--port /dev/ttyXXX] [--quiet]
 //!         [--bit-error-rate X] [--drop-rate X] [--nav-delay-ms X]
 //!         [--nav-freeze FROM:TO] [--nav-loss FROM:TO] [--sonar-dropout FROM:TO]
 //!         [--ping360-bit-error-rate X] [--ping360-drop-rate X]
@@ -36,7 +36,10 @@ const USAGE: &str = "usage:
 
 options for run:
   --out DIR                 output directory
-  --firmware qemu|host      the emulated Cortex-M4 in QEMU (default), or the firmware as a host process
+  --firmware qemu|qemu-uart|host
+                            the emulated Cortex-M4 in QEMU, linked through its ethernet controller
+                            (default), or through its UART on a pty (slower), or the firmware as a
+                            host process
   --port /dev/ttyXXX        a real board on a serial adapter (flashed beforehand)
   --quiet                   no progress bar
   --params RECIPE.toml      planner parameters from a recipe (replace the scenario's [planner])
@@ -100,8 +103,13 @@ fn parse_run(mut it: impl Iterator<Item = String>) -> Result<Args, String> {
             "--firmware" => {
                 args.target = match value()?.as_str() {
                     "qemu" => Target::Qemu,
+                    "qemu-uart" => Target::QemuUart,
                     "host" => Target::Host,
-                    other => return Err(format!("--firmware {other}: expected qemu or host")),
+                    other => {
+                        return Err(format!(
+                            "--firmware {other}: expected qemu, qemu-uart or host"
+                        ))
+                    }
                 }
             }
             "--port" => args.target = Target::Port(PathBuf::from(value()?)),
@@ -201,7 +209,7 @@ fn cmd_run(it: impl Iterator<Item = String>) -> ExitCode {
         return ExitCode::from(2);
     }
     let mut target = args.target;
-    if target == Target::Qemu && !hil::firmware::qemu_available() {
+    if matches!(target, Target::Qemu | Target::QemuUart) && !hil::firmware::qemu_available() {
         eprintln!("hil: qemu-system-arm not found; running the host-process firmware instead");
         target = Target::Host;
     }
@@ -223,11 +231,12 @@ fn cmd_run(it: impl Iterator<Item = String>) -> ExitCode {
     match run(&sc, &cfg) {
         Ok(result) => {
             println!("{}", result.summary);
-            for (((v, f), retries), p360) in sc
+            for ((((v, f), retries), slow), p360) in sc
                 .vehicles
                 .iter()
                 .zip(&result.faults)
                 .zip(&result.tick_retries)
+                .zip(&result.ticks_slow)
                 .zip(&result.ping360)
             {
                 if let Some((p, f)) = p360 {
@@ -239,8 +248,10 @@ fn cmd_run(it: impl Iterator<Item = String>) -> ExitCode {
                 }
                 if *retries > 0 {
                     println!(
-                        "{}: {retries} Tick(s) sent again (lost on the link)",
-                        v.name
+                        "{}: {retries} Tick(s) sent again: {} lost on the link, {slow} answered \
+                         late (the firmware was slow)",
+                        v.name,
+                        retries - slow
                     );
                 }
                 if f.dropped + f.corrupted > 0 {

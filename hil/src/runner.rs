@@ -113,6 +113,11 @@ struct Sim {
     setpoints: SetPoints,
     /// `Tick`s sent again because no command came back in time.
     tick_retries: u32,
+    /// Of those, the ones whose first sending was answered after all (a second command for the
+    /// same period came back): the firmware was slow, nothing was lost.
+    ticks_slow: u32,
+    /// The last period whose `Tick` was sent again, while its answers are still counted.
+    resent: Option<u64>,
     /// Navigation samples waiting out the configured delay: (due time, sample).
     delayed: std::collections::VecDeque<(f64, NavState)>,
     frozen: Option<NavState>,
@@ -135,6 +140,9 @@ pub struct RunResult {
     pub tick_retries: Vec<u32>,
     /// Per vehicle with a simulated Ping360: what it did, and the faults on its port.
     pub ping360: Vec<Option<(ping360_sim::SimCounts, FaultCounts)>>,
+    /// Of those, per vehicle, the ones the firmware had only been slow to answer (the period
+    /// was answered twice); the rest were lost on the link.
+    pub ticks_slow: Vec<u32>,
 }
 
 /// How [`run_quiet`] runs a scenario: the many short runs of a parameter sweep.
@@ -150,6 +158,10 @@ pub struct QuietRun {
     /// The host-process firmware on a Unix socket pair instead of a pty
     /// ([`Firmware::start_host_socket`]); other targets ignore it.
     pub socket: bool,
+    /// In lockstep, the host firmware's runtime in this process instead of a process
+    /// ([`Firmware::in_process`]: the same code, no wake-up or system call per period); other
+    /// targets ignore it.
+    pub in_process: bool,
 }
 
 impl QuietRun {
@@ -161,6 +173,7 @@ impl QuietRun {
             binary: firmware::build(&Target::Host)?,
             stop_early: true,
             socket: true,
+            in_process: true,
         })
     }
 }
@@ -175,6 +188,7 @@ pub fn run(sc: &Scenario, cfg: &RunConfig) -> Result<RunResult, RunError> {
         progress: cfg.progress,
         stop_early: false,
         socket: false,
+        in_process: false,
     };
     let sim = simulate(sc, &cfg.target, &binary, &how)?;
     let summary = output::write_all(&cfg.out_dir, &sim.output).map_err(RunError::Output)?;
@@ -184,6 +198,7 @@ pub fn run(sc: &Scenario, cfg: &RunConfig) -> Result<RunResult, RunError> {
         faults: sim.faults,
         tick_retries: sim.tick_retries,
         ping360: sim.ping360,
+        ticks_slow: sim.ticks_slow,
     })
 }
 
@@ -196,17 +211,20 @@ pub fn run_quiet(sc: &Scenario, q: &QuietRun) -> Result<RunOutput, RunError> {
         progress: false,
         stop_early: q.stop_early,
         socket: q.socket,
+        in_process: q.in_process,
     };
     simulate(sc, &q.target, &q.binary, &how).map(|s| s.output)
 }
 
 /// How [`simulate`] runs: frame logs into `log_dir` if given, a progress bar if `progress`,
-/// the end at arrival or collision if `stop_early`, the host firmware on a socket if `socket`.
+/// the end at arrival or collision if `stop_early`, the host firmware on a socket if `socket`
+/// (in this process if `in_process`).
 struct How<'a> {
     log_dir: Option<&'a std::path::Path>,
     progress: bool,
     stop_early: bool,
     socket: bool,
+    in_process: bool,
 }
 
 /// What [`simulate`] recorded.
@@ -215,6 +233,7 @@ struct Simulated {
     faults: Vec<FaultCounts>,
     tick_retries: Vec<u32>,
     ping360: Vec<Option<(ping360_sim::SimCounts, FaultCounts)>>,
+    ticks_slow: Vec<u32>,
 }
 
 /// The run itself.
@@ -241,7 +260,10 @@ fn simulate(
             extra = ping360_sim::firmware_args(&slave, &cfg);
             ping360_port = Some((master, cfg));
         }
-        let mut fw = if how.socket && *target == Target::Host {
+        // In process only without a Ping360 port (that one is the process's own serial port).
+        let mut fw = if how.in_process && lockstep && *target == Target::Host && extra.is_empty() {
+            Firmware::in_process()
+        } else if how.socket && *target == Target::Host {
             Firmware::start_host_socket(binary, &extra)
         } else {
             Firmware::start(target, binary, lockstep, &extra)
@@ -316,6 +338,8 @@ fn simulate(
                 ..SetPoints::default()
             },
             tick_retries: 0,
+            ticks_slow: 0,
+            resent: None,
             delayed: Default::default(),
             frozen: None,
             ping360,
@@ -450,6 +474,7 @@ fn simulate(
         .iter()
         .map(|s| s.ping360.as_ref().map(|(p, tap, _)| (p.counts, tap.counts)))
         .collect();
+    let ticks_slow = sims.iter().map(|s| s.ticks_slow).collect();
     let vehicles: Vec<VehicleRecord> = sims.into_iter().map(|s| s.record).collect();
     let output = RunOutput {
         scenario_name: sc.name.clone(),
@@ -465,6 +490,7 @@ fn simulate(
         faults,
         tick_retries,
         ping360,
+        ticks_slow,
     })
 }
 
@@ -621,6 +647,7 @@ fn collect(s: &mut Sim, mode: RunMode, t_ms: u64) -> Result<(), RunError> {
                     {
                         attempt += 1;
                         s.tick_retries += 1;
+                        s.resent = Some(t_ms);
                         s.fw.send(&Message::Tick(TickRepr { time_ms: t_ms }), &mut s.tap)
                             .map_err(fw_err)?;
                     }
@@ -633,6 +660,20 @@ fn collect(s: &mut Sim, mode: RunMode, t_ms: u64) -> Result<(), RunError> {
                 .map_err(fw_err)?
         }
     };
+    if let Some(resent) = s.resent {
+        // A period whose Tick went out twice and came back answered twice (now, or with the
+        // next period's answers) had only been slow; once, and a Tick was lost.
+        let answers = got
+            .iter()
+            .filter(|r| matches!(r, Reply::Command(c) if c.time_ms == resent))
+            .count();
+        if answers >= 2 || (answers == 1 && resent != t_ms) {
+            s.ticks_slow += 1;
+        }
+        if answers >= 2 || resent != t_ms {
+            s.resent = None;
+        }
+    }
     for r in &got {
         match r {
             // A rejected set-up request ends the run; a busy one goes again.

@@ -229,6 +229,10 @@ pub fn kick_tx() {
     rtic::pend(pac::Interrupt::USART2);
 }
 
+/// The background has taken received bytes out of the control link's queue (the USART moves
+/// one byte at a time and never waits for room: nothing to do).
+pub fn received_bytes_taken() {}
+
 /// The independent watchdog (IWDG, on the ~32 kHz LSI), owned by the periodic task: started at
 /// start-up, fed every period, given its longest timeout once lockstep begins.
 pub struct Watchdog {

@@ -179,6 +179,9 @@ impl BackgroundTask {
         let Some(mut rest) = buf.get(..n) else {
             return false;
         };
+        if n > 0 {
+            crate::board::active::received_bytes_taken();
+        }
         while !rest.is_empty() {
             let now = exchange.now_ms();
             rest = self.background.on_bytes(

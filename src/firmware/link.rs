@@ -92,6 +92,20 @@ impl<const RX: usize> Receiver<RX> {
             }
         }
     }
+
+    /// Bytes the queue has room for (a link that moves bytes in blocks takes no more).
+    #[cfg_attr(not(feature = "mps2-an386"), allow(dead_code))] // the ethernet link
+    pub fn room(&self) -> usize {
+        self.queue.capacity() - self.queue.len()
+    }
+
+    /// Queues one received byte; dropped and counted if the queue is full.
+    #[cfg_attr(not(feature = "mps2-an386"), allow(dead_code))] // the ethernet link
+    pub fn push(&mut self, byte: u8) {
+        if self.queue.enqueue(byte).is_err() {
+            self.dropped.fetch_add(1, Ordering::Relaxed);
+        }
+    }
 }
 
 /// The transmit interrupt's end.
@@ -115,6 +129,24 @@ impl<const TX: usize> Transmitter<TX> {
             }
         }
         self.queue.ready()
+    }
+
+    /// Bytes waiting to be sent.
+    #[cfg_attr(not(feature = "mps2-an386"), allow(dead_code))] // the ethernet link
+    pub fn len(&self) -> usize {
+        self.queue.len()
+    }
+
+    /// Whether no bytes wait.
+    #[cfg_attr(not(feature = "mps2-an386"), allow(dead_code))] // the ethernet link
+    pub fn is_empty(&self) -> bool {
+        !self.queue.ready()
+    }
+
+    /// Takes the next byte to send (a link that moves bytes in blocks).
+    #[cfg_attr(not(feature = "mps2-an386"), allow(dead_code))] // the ethernet link
+    pub fn pop(&mut self) -> Option<u8> {
+        self.queue.dequeue()
     }
 }
 

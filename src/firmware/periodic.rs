@@ -144,6 +144,10 @@ impl PeriodicTask {
             self.timer.enter_lockstep();
             self.watchdog.enter_lockstep();
         }
+        if lockstep {
+            // The cost counter runs while the period runs (`PeriodTimer::count`).
+            self.timer.count(true);
+        }
         *shared.now_ms = now;
         let dropped = self.rx_dropped.swap(0, Ordering::Relaxed);
         self.runtime.count_rx_dropped(dropped);
@@ -166,6 +170,9 @@ impl PeriodicTask {
         );
         let period_cost = board::cost_now().wrapping_sub(period_start);
         *shared.goal = self.runtime.goal();
+        if lockstep {
+            self.timer.count(false);
+        }
         board::kick_tx();
         self.watchdog.feed();
 

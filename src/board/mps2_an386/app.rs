@@ -33,6 +33,11 @@ mod app {
         lockstep: Lockstep,
         /// What the periodic task has done (periodic → the self-test).
         stats: Stats,
+        /// The control link's receiving end, for UART0 and the ethernet controller (both at
+        /// priority 3: the lock is free and masks nothing).
+        control_rx: Receiver<CONTROL_RX_SLOTS>,
+        /// The control link's sending end, likewise.
+        control_tx: Transmitter<CONTROL_TX_SLOTS>,
     }
 
     /// Each owned by the one task that uses it.
@@ -40,10 +45,12 @@ mod app {
     struct Local {
         periodic: PeriodicTask,
         background: BackgroundTask,
-        /// UART0's receive half and the control link's receiving end.
-        uart0_rx: (board::UartRx, Receiver<CONTROL_RX_SLOTS>),
-        /// UART0's transmit half and the control link's sending end.
-        uart0_tx: (board::UartTx, Transmitter<CONTROL_TX_SLOTS>),
+        /// UART0's receive half.
+        uart0_rx: board::UartRx,
+        /// UART0's transmit half.
+        uart0_tx: board::UartTx,
+        /// The ethernet controller, if it came up.
+        ethernet: Option<board::eth::Ethernet>,
     }
 
     /// Start-up, interrupts masked: the stack guard, UART0 and SysTick, the runtime built in
@@ -77,12 +84,15 @@ mod app {
                 goal: (0, None),
                 lockstep: Lockstep::default(),
                 stats: Stats::default(),
+                control_rx: fw.receiver,
+                control_tx: fw.transmitter,
             },
             Local {
                 periodic: fw.periodic,
                 background: fw.background,
-                uart0_rx: (uart_rx, fw.receiver),
-                uart0_tx: (uart_tx, fw.transmitter),
+                uart0_rx: uart_rx,
+                uart0_tx: uart_tx,
+                ethernet: parts.ethernet,
             },
         )
     }
@@ -129,21 +139,37 @@ mod app {
             });
     }
 
-    /// UART0 receive: every waiting byte into the control link's queue.
-    #[task(binds = UART0RX, priority = 3, local = [uart0_rx])]
-    fn uart0_receive(cx: uart0_receive::Context) {
-        let (uart, receiver) = cx.local.uart0_rx;
+    /// UART0 receive: every waiting byte into the control link's queue; the host is on UART0.
+    #[task(binds = UART0RX, priority = 3, local = [uart0_rx], shared = [control_rx])]
+    fn uart0_receive(mut cx: uart0_receive::Context) {
+        let uart = cx.local.uart0_rx;
         uart.acknowledge();
-        receiver.receive(uart);
+        board::eth::host_left();
+        cx.shared.control_rx.lock(|receiver| receiver.receive(uart));
     }
 
     /// UART0 transmit: queued bytes out while the UART takes them; the interrupt stays on only
     /// while bytes remain.
-    #[task(binds = UART0TX, priority = 3, local = [uart0_tx])]
-    fn uart0_transmit(cx: uart0_transmit::Context) {
-        let (uart, transmitter) = cx.local.uart0_tx;
+    #[task(binds = UART0TX, priority = 3, local = [uart0_tx], shared = [control_tx])]
+    fn uart0_transmit(mut cx: uart0_transmit::Context) {
+        let uart = cx.local.uart0_tx;
         uart.acknowledge();
-        let more = transmitter.transmit(uart);
+        let more = cx
+            .shared
+            .control_tx
+            .lock(|transmitter| transmitter.transmit(uart));
         uart.interrupt_when_ready(more);
+    }
+
+    /// The ethernet controller: received frames into the control link's queue, queued bytes
+    /// out in frames when the host is on this link (pended by `kick_tx`, and by the background
+    /// when a frame waited for room).
+    #[task(binds = ETHERNET, priority = 3, local = [ethernet], shared = [control_rx, control_tx])]
+    fn ethernet(cx: ethernet::Context) {
+        let Some(eth) = cx.local.ethernet.as_mut() else {
+            return;
+        };
+        (cx.shared.control_rx, cx.shared.control_tx)
+            .lock(|receiver, transmitter| eth.on_interrupt(receiver, transmitter));
     }
 }

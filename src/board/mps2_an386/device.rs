@@ -3,7 +3,8 @@
 //!
 //! Interrupt numbers are the AN386's (ARM's "Cortex-M4 FPGA image" application note, and QEMU's
 //! `mps2-an386`): each CMSDK APB UART has a receive and a transmit interrupt. UART1 is listed
-//! for a second byte link (wire its two vectors below and bind two tasks to them).
+//! for a second byte link (wire its two vectors below and bind two tasks to them). The ethernet
+//! controller's interrupt (13) carries the control link's frames on QEMU (`eth.rs`).
 
 /// Priority bits the NVIC implements: the AN386 image's 3 (CMSIS `__NVIC_PRIO_BITS`).
 pub const NVIC_PRIO_BITS: u8 = 3;
@@ -22,6 +23,8 @@ pub enum Interrupt {
     /// UART1 transmit.
     #[allow(dead_code)]
     UART1TX = 3,
+    /// The ethernet controller (LAN9220; QEMU's LAN9118).
+    ETHERNET = 13,
 }
 
 /// RTIC names bound interrupts through `device::interrupt::NAME`, as svd2rust PACs export them.
@@ -44,11 +47,30 @@ extern "C" {
     fn UART0TX();
     fn UART1RX();
     fn UART1TX();
+    fn ETHERNET();
+    /// cortex-m-rt's handler for interrupts nobody binds.
+    fn DefaultHandler();
 }
 
-/// The device part of the vector table: external interrupts 0–3 (the rest are never enabled).
+/// The device part of the vector table: external interrupts 0–13 (those not listed above are
+/// never enabled).
 #[allow(unsafe_code)] // `link_section` and `no_mangle` place the table; it only holds addresses.
 #[link_section = ".vector_table.interrupts"]
 #[no_mangle]
 #[used]
-static __INTERRUPTS: [unsafe extern "C" fn(); 4] = [UART0RX, UART0TX, UART1RX, UART1TX];
+static __INTERRUPTS: [unsafe extern "C" fn(); 14] = [
+    UART0RX,
+    UART0TX,
+    UART1RX,
+    UART1TX,
+    DefaultHandler,
+    DefaultHandler,
+    DefaultHandler,
+    DefaultHandler,
+    DefaultHandler,
+    DefaultHandler,
+    DefaultHandler,
+    DefaultHandler,
+    DefaultHandler,
+    ETHERNET,
+];

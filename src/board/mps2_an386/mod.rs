@@ -1,5 +1,6 @@
 //! The emulated ARM MPS2 AN386 board (QEMU `-machine mps2-an386 -cpu cortex-m4`): its CMSDK APB
-//! UART0, SysTick as the period timer and instruction counter, semihosting for logs and exit.
+//! UART0 and its ethernet controller (two ways into the control link: [`eth`]), SysTick as the
+//! period timer and instruction counter, semihosting for logs and exit.
 //!
 //! Under `-icount shift=0` QEMU advances the virtual clock by 1 ns per executed instruction, and
 //! SysTick counts its 25 MHz reference clock, so one SysTick count is 40 instructions. That makes
@@ -9,6 +10,7 @@
 
 mod app;
 pub mod device;
+pub mod eth;
 pub mod uart;
 
 use cortex_m::peripheral::SYST;
@@ -34,6 +36,9 @@ pub struct Parts {
     pub watchdog: Watchdog,
     /// UART0, the control link: receive half (UART0RX task) and transmit half (UART0TX task).
     pub control: (UartRx, UartTx),
+    /// The ethernet controller, the control link's other way in (ETHERNET task); `None` if it
+    /// did not come up (the link is then UART0 alone).
+    pub ethernet: Option<eth::Ethernet>,
 }
 
 /// Sets up UART0 (receive interrupt on) and the period timer (not yet running). `None` if
@@ -44,6 +49,7 @@ pub fn init(syst: SYST) -> Option<Parts> {
         timer: PeriodTimer::new(syst, SYSTICK_HZ),
         watchdog: Watchdog,
         control,
+        ethernet: eth::Ethernet::take(),
     })
 }
 
@@ -54,9 +60,22 @@ pub fn cost_now() -> u32 {
     elapsed.wrapping_mul(INSTRUCTIONS_PER_TICK)
 }
 
-/// Starts transmission of queued bytes (the transmit interrupt does the rest).
+/// Starts transmission of queued bytes on the link the host last spoke on (the transmit
+/// interrupt does the rest).
 pub fn kick_tx() {
-    rtic::pend(device::Interrupt::UART0TX);
+    rtic::pend(if eth::host_here() {
+        device::Interrupt::ETHERNET
+    } else {
+        device::Interrupt::UART0TX
+    });
+}
+
+/// The background has taken received bytes out of the control link's queue: a frame the
+/// ethernet handler left for want of room is taken now.
+pub fn received_bytes_taken() {
+    if eth::resume_receive() {
+        rtic::pend(device::Interrupt::ETHERNET);
+    }
 }
 
 /// The emulated board has no watchdog.
