@@ -74,8 +74,11 @@ impl Inputs for PeriodInputs<'_> {
     fn reply(&mut self) -> Option<ReplyRepr> {
         self.queues.replies.dequeue()
     }
-    fn link_counters(&mut self) -> LinkCounters {
-        self.link_counters
+    fn link_counters(&mut self) -> (vpf::link::RxCounters, vpf::guidance::BackgroundCounters) {
+        (self.link_counters.0, self.link_counters.1)
+    }
+    fn ping360_counters(&mut self) -> vpf::sonar::ping360::Ping360Counters {
+        self.link_counters.2
     }
     fn route(&mut self) -> Option<Route> {
         ROUTE.latest()

@@ -63,8 +63,11 @@ pub const REQUESTS_PER_PERIOD: usize = 2 + crate::world::MAX_OBSTACLES;
 /// Capacity of the ring of replies owed without a request in the queue (refused at the wire, or
 /// "busy"): with the queue, one answer for each of [`REQUESTS_PER_PERIOD`] requests.
 pub const REPLY_QUEUE: usize = REQUESTS_PER_PERIOD - CONTROL_QUEUE;
-/// Capacity of the board's transmit-byte queue (a period's command, telemetry and replies).
-pub const TX_QUEUE: usize = 2048;
+/// Capacity of the board's transmit-byte queue: a period's command, telemetry, belief chunk and
+/// replies. The most a period sends, the one answering a start-up burst of
+/// [`REQUESTS_PER_PERIOD`] requests, is 691 bytes (`tests/requests.rs` checks it stays under
+/// three quarters of this); 115 200 baud carries 1.15 KiB a 100 ms period.
+pub const TX_QUEUE: usize = 1280;
 /// Most sightings the periodic task takes per period (bounds its cost).
 pub const SIGHTINGS_PER_PERIOD: usize = SIGHTING_QUEUE;
 

@@ -86,6 +86,14 @@ impl Inputs for Queues {
 /// is outstanding at a time, so two never wait). Full: the driver sends again at its next poll.
 pub const PING360_OUTBOX: usize = 96;
 
+/// Whether a Ping360 driver may send commands yet: once navigation has come (a ping before it
+/// could not be placed) or the host runs the clock (lockstep: from its first `Tick`, whatever
+/// the firmware's own clock did before). The board images follow the same rule, so a lockstep
+/// run pings the same on both.
+pub fn ping360_started(background: &Background) -> bool {
+    background.lockstep() || background.pose().is_some()
+}
+
 /// The runtime in one context.
 pub struct SingleContext {
     background: Background,
@@ -143,7 +151,8 @@ impl SingleContext {
 
     /// Drives a Ping360 on a port of its own with `cfg` ([`Self::on_ping360_bytes`] takes its
     /// bytes, [`Self::take_ping360_output`] gives what to write to it). Its first command goes
-    /// out at the next period.
+    /// out at the first period after navigation has come, or at the first `Tick`
+    /// ([`ping360_started`]).
     pub fn set_ping360(&mut self, cfg: Ping360Config) -> Result<(), ConfigError> {
         self.ping360 = Some(Ping360::new(cfg)?);
         Ok(())
@@ -251,7 +260,8 @@ impl SingleContext {
         tx: &mut impl FnMut(&[u8]) -> bool,
     ) -> Command {
         self.now_ms = now_ms;
-        if let Some(p) = self.ping360.as_mut() {
+        let started = ping360_started(&self.background);
+        if let Some(p) = self.ping360.as_mut().filter(|_| started) {
             let out = &mut self.ping360_out;
             p.poll(now_ms, &mut |f| out.extend_from_slice(f).is_ok());
             self.queues.ping360 = p.counters();

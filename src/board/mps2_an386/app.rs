@@ -13,6 +13,7 @@ mod app {
     use crate::firmware::background::{self, BackgroundTask, IdleShared};
     use crate::firmware::link::{Receiver, Transmitter};
     use crate::firmware::periodic::{PeriodShared, PeriodicTask};
+    use crate::firmware::sonar::{SONAR_RX_SLOTS, SONAR_TX_SLOTS};
     use crate::firmware::{
         fault, GoalFlown, LinkCounters, Lockstep, Memory, Stats, CONTROL_RX_SLOTS, CONTROL_TX_SLOTS,
     };
@@ -44,6 +45,10 @@ mod app {
         uart0_rx: (board::UartRx, Receiver<CONTROL_RX_SLOTS>),
         /// UART0's transmit half and the control link's sending end.
         uart0_tx: (board::UartTx, Transmitter<CONTROL_TX_SLOTS>),
+        /// UART1's receive half and the Ping360 link's receiving end.
+        uart1_rx: (board::UartRx, Receiver<SONAR_RX_SLOTS>),
+        /// UART1's transmit half and the Ping360 link's sending end.
+        uart1_tx: (board::UartTx, Transmitter<SONAR_TX_SLOTS>),
     }
 
     /// Start-up, interrupts masked: the stack guard, UART0 and SysTick, the runtime built in
@@ -69,6 +74,7 @@ mod app {
             board::exit(false)
         };
         let (uart_rx, uart_tx) = parts.control;
+        let (sonar_rx, sonar_tx) = parts.sonar;
         (
             Shared {
                 nav: None,
@@ -83,6 +89,8 @@ mod app {
                 background: fw.background,
                 uart0_rx: (uart_rx, fw.receiver),
                 uart0_tx: (uart_tx, fw.transmitter),
+                uart1_rx: (sonar_rx, fw.sonar_receiver),
+                uart1_tx: (sonar_tx, fw.sonar_transmitter),
             },
         )
     }
@@ -142,6 +150,26 @@ mod app {
     #[task(binds = UART0TX, priority = 3, local = [uart0_tx])]
     fn uart0_transmit(cx: uart0_transmit::Context) {
         let (uart, transmitter) = cx.local.uart0_tx;
+        uart.acknowledge();
+        let more = transmitter.transmit(uart);
+        uart.interrupt_when_ready(more);
+    }
+
+    /// UART1 receive (the Ping360): bytes into its queue while there is room; on a full queue
+    /// the byte stays in the UART and the interrupt goes off until the background has taken
+    /// bytes (it pends this task again).
+    #[task(binds = UART1RX, priority = 3, local = [uart1_rx])]
+    fn uart1_receive(cx: uart1_receive::Context) {
+        let (uart, receiver) = cx.local.uart1_rx;
+        uart.acknowledge();
+        let held = receiver.receive_or_hold(uart);
+        uart.listen(!held);
+    }
+
+    /// UART1 transmit: the Ping360's commands out.
+    #[task(binds = UART1TX, priority = 3, local = [uart1_tx])]
+    fn uart1_transmit(cx: uart1_transmit::Context) {
+        let (uart, transmitter) = cx.local.uart1_tx;
         uart.acknowledge();
         let more = transmitter.transmit(uart);
         uart.interrupt_when_ready(more);

@@ -2,8 +2,8 @@
 //! interrupt vector (what an svd2rust PAC would supply; there is none for the AN386).
 //!
 //! Interrupt numbers are the AN386's (ARM's "Cortex-M4 FPGA image" application note, and QEMU's
-//! `mps2-an386`): each CMSDK APB UART has a receive and a transmit interrupt. UART1 is listed
-//! for a second byte link (wire its two vectors below and bind two tasks to them).
+//! `mps2-an386`): each CMSDK APB UART has a receive and a transmit interrupt. UART0 carries the
+//! control link, UART1 the Ping360.
 
 /// Priority bits the NVIC implements: the AN386 image's 3 (CMSIS `__NVIC_PRIO_BITS`).
 pub const NVIC_PRIO_BITS: u8 = 3;
@@ -16,11 +16,9 @@ pub enum Interrupt {
     UART0RX = 0,
     /// UART0 transmit.
     UART0TX = 1,
-    /// UART1 receive (free: a second byte link).
-    #[allow(dead_code)]
+    /// UART1 receive (the Ping360).
     UART1RX = 2,
     /// UART1 transmit.
-    #[allow(dead_code)]
     UART1TX = 3,
 }
 

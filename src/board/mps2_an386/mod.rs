@@ -1,5 +1,5 @@
 //! The emulated ARM MPS2 AN386 board (QEMU `-machine mps2-an386 -cpu cortex-m4`): its CMSDK APB
-//! UART0, SysTick as the period timer and instruction counter, semihosting for logs and exit.
+//! UART0 (the control link) and UART1 (the Ping360: QEMU's second `-serial`), SysTick as the period timer and instruction counter, semihosting for logs and exit.
 //!
 //! Under `-icount shift=0` QEMU advances the virtual clock by 1 ns per executed instruction, and
 //! SysTick counts its 25 MHz reference clock, so one SysTick count is 40 instructions. That makes
@@ -34,16 +34,20 @@ pub struct Parts {
     pub watchdog: Watchdog,
     /// UART0, the control link: receive half (UART0RX task) and transmit half (UART0TX task).
     pub control: (UartRx, UartTx),
+    /// UART1, the Ping360: receive half (UART1RX task) and transmit half (UART1TX task).
+    pub sonar: (UartRx, UartTx),
 }
 
-/// Sets up UART0 (receive interrupt on) and the period timer (not yet running). `None` if
-/// UART0 was already taken (start-up runs once).
+/// Sets up UART0 and UART1 (receive interrupts on) and the period timer (not yet running).
+/// `None` if a UART was already taken (start-up runs once).
 pub fn init(syst: SYST) -> Option<Parts> {
     let control = uart::Uart::take(0, SYSTICK_HZ / BAUD)?.split();
+    let sonar = uart::Uart::take(1, SYSTICK_HZ / BAUD)?.split();
     Some(Parts {
         timer: PeriodTimer::new(syst, SYSTICK_HZ),
         watchdog: Watchdog,
         control,
+        sonar,
     })
 }
 
@@ -57,6 +61,16 @@ pub fn cost_now() -> u32 {
 /// Starts transmission of queued bytes (the transmit interrupt does the rest).
 pub fn kick_tx() {
     rtic::pend(device::Interrupt::UART0TX);
+}
+
+/// Starts transmission of bytes queued for the Ping360.
+pub fn kick_sonar_tx() {
+    rtic::pend(device::Interrupt::UART1TX);
+}
+
+/// Runs the Ping360's receive task again (it held a byte back on a full queue).
+pub fn resume_sonar_rx() {
+    rtic::pend(device::Interrupt::UART1RX);
 }
 
 /// The emulated board has no watchdog.

@@ -10,7 +10,7 @@ use core::sync::atomic::{AtomicBool, Ordering};
 use embedded_io::{ErrorType, Read, ReadReady, Write, WriteReady};
 use vcell::VolatileCell;
 
-/// Base addresses: UART0 (the control link) and UART1 (free for a second byte link).
+/// Base addresses: UART0 (the control link) and UART1 (the Ping360).
 const BASES: [usize; 2] = [0x4000_4000, 0x4000_5000];
 
 const STATE_TX_FULL: u32 = 1 << 0;
@@ -41,8 +41,10 @@ fn registers(base: usize) -> &'static Registers {
     // `base` is one of `BASES`: a CMSDK UART's register block, always mapped on this board,
     // 4-byte aligned, and touched only through `VolatileCell`s (volatile loads and stores, no
     // references into the registers escape). Each UART is handed out once (`TAKEN`), split
-    // into halves that write disjoint bits: the receive half clears only the RX interrupt and
-    // reads DATA; the transmit half alone writes DATA and CTRL after start-up.
+    // into halves that write disjoint bits: the receive half clears only the RX interrupt,
+    // reads DATA and flips CTRL's RX-interrupt bit; the transmit half writes DATA and flips
+    // CTRL's TX-interrupt bit. Both halves' tasks run at one priority (they never preempt each
+    // other), so their read-modify-writes of CTRL do not interleave.
     #[allow(unsafe_code)]
     unsafe {
         &*(base as *const Registers)
@@ -83,6 +85,20 @@ impl UartRx {
     /// Clears the receive interrupt (the handler then drains the buffer).
     pub fn acknowledge(&mut self) {
         registers(self.base).int.set(INT_RX);
+    }
+}
+
+impl UartRx {
+    /// Turns the receive interrupt on or off (off while the link's queue is full: the byte
+    /// waits in the UART, and QEMU holds the rest back).
+    pub fn listen(&mut self, on: bool) {
+        let ctrl = &registers(self.base).ctrl;
+        let v = ctrl.get();
+        ctrl.set(if on {
+            v | CTRL_RX_INT
+        } else {
+            v & !CTRL_RX_INT
+        });
     }
 }
 

@@ -1,7 +1,7 @@
 //! The firmware's contexts on the NUCLEO-F446RE, declared as an RTIC application with the
 //! STM32F446's PAC as the device. The same contexts as on the emulated board
-//! (`board::mps2_an386::app`, which says more); here one interrupt, USART2, moves the control
-//! link's bytes both ways.
+//! (`board::mps2_an386::app`, which says more); here one interrupt per USART moves its link's
+//! bytes both ways: USART2 the control link's, USART1 the Ping360's.
 
 #[rtic::app(device = stm32f4xx_hal::pac, peripherals = false)]
 mod app {
@@ -13,6 +13,7 @@ mod app {
     use crate::firmware::background::{self, BackgroundTask, IdleShared};
     use crate::firmware::link::{Receiver, Transmitter};
     use crate::firmware::periodic::{PeriodShared, PeriodicTask};
+    use crate::firmware::sonar::{SONAR_RX_SLOTS, SONAR_TX_SLOTS};
     use crate::firmware::{
         fault, GoalFlown, LinkCounters, Lockstep, Memory, Stats, CONTROL_RX_SLOTS, CONTROL_TX_SLOTS,
     };
@@ -45,6 +46,12 @@ mod app {
             board::Usart2,
             Receiver<CONTROL_RX_SLOTS>,
             Transmitter<CONTROL_TX_SLOTS>,
+        ),
+        /// USART1 and the Ping360 link's interrupt ends.
+        usart1: (
+            board::Usart1,
+            Receiver<SONAR_RX_SLOTS>,
+            Transmitter<SONAR_TX_SLOTS>,
         ),
     }
 
@@ -84,6 +91,7 @@ mod app {
                 periodic: fw.periodic,
                 background: fw.background,
                 usart2: (parts.control, fw.receiver, fw.transmitter),
+                usart1: (parts.sonar, fw.sonar_receiver, fw.sonar_transmitter),
             },
         )
     }
@@ -136,6 +144,18 @@ mod app {
     fn usart2_both_ways(cx: usart2_both_ways::Context) {
         let (uart, receiver, transmitter) = cx.local.usart2;
         receiver.receive(uart);
+        let more = transmitter.transmit(uart);
+        uart.interrupt_when_ready(more);
+    }
+
+    /// USART1 (the Ping360), both directions: received bytes into its queue while there is
+    /// room (on a full queue RX-not-empty goes off until the background has taken bytes), then
+    /// its commands out.
+    #[task(binds = USART1, priority = 3, local = [usart1])]
+    fn usart1_both_ways(cx: usart1_both_ways::Context) {
+        let (uart, receiver, transmitter) = cx.local.usart1;
+        let held = receiver.receive_or_hold(uart);
+        uart.listen(!held);
         let more = transmitter.transmit(uart);
         uart.interrupt_when_ready(more);
     }
