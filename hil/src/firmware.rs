@@ -79,6 +79,8 @@ pub struct Firmware {
     inbox: Vec<Reply>,
     /// Outgoing bytes held back until the next receive (see [`Firmware::set_batching`]).
     batch: Option<Vec<u8>>,
+    /// QEMU's second serial port (the board's Ping360 UART), opened raw, until taken.
+    sonar_port: Option<File>,
     /// What runs.
     pub target: Target,
 }
@@ -211,11 +213,11 @@ impl Firmware {
     ) -> std::io::Result<Self> {
         if !extra.is_empty() && *target != Target::Host {
             return Err(std::io::Error::other(format!(
-                "the {target} firmware drives no Ping360 (the board images do not yet): use --firmware host"
+                "the {target} firmware takes no arguments (QEMU's Ping360 port is its second serial port: `Firmware::start_qemu`)"
             )));
         }
         match target {
-            Target::Qemu => Self::start_qemu(binary, lockstep),
+            Target::Qemu => Self::start_qemu(binary, lockstep, false),
             Target::Host => Self::start_host(binary, extra),
             Target::Port(path) => {
                 let port = std::fs::OpenOptions::new()
@@ -236,25 +238,37 @@ impl Firmware {
             seq: 0,
             inbox: Vec::new(),
             batch: None,
+            sonar_port: None,
             target,
         }
+    }
+
+    /// The board's Ping360 port (QEMU's second serial port, when started with one), once.
+    pub fn take_sonar_port(&mut self) -> Option<File> {
+        self.sonar_port.take()
     }
 
     /// QEMU, paused with `-S` until the pty is open (bytes sent before would be lost), with
     /// `-icount shift=0` so the firmware's step costs are instruction counts. In lockstep,
     /// `sleep=off` lets the virtual clock jump over the firmware's idle waits instead of
     /// sleeping them out in real time (a period's round trip drops from ~19 ms to ~5 ms).
-    fn start_qemu(elf: &Path, lockstep: bool) -> std::io::Result<Self> {
+    /// With `sonar`, the board's UART1 (its Ping360 port) is a second pty
+    /// ([`Firmware::take_sonar_port`]).
+    pub fn start_qemu(elf: &Path, lockstep: bool, sonar: bool) -> std::io::Result<Self> {
         let icount = if lockstep {
             "shift=0,sleep=off"
         } else {
             "shift=0"
         };
+        let serials: &[&str] = if sonar {
+            &["-serial", "pty", "-serial", "pty"]
+        } else {
+            &["-serial", "pty"]
+        };
         let mut child = Command::new("qemu-system-arm")
             .args(["-machine", "mps2-an386", "-cpu", "cortex-m4", "-nographic"])
-            .args([
-                "-serial", "pty", "-monitor", "stdio", "-S", "-icount", icount,
-            ])
+            .args(serials)
+            .args(["-monitor", "stdio", "-S", "-icount", icount])
             .args(["-semihosting-config", "enable=on,target=native", "-kernel"])
             .arg(elf)
             .stdin(Stdio::piped())
@@ -266,26 +280,39 @@ impl Firmware {
             .take()
             .ok_or_else(|| std::io::Error::other("no qemu stdout"))?;
         let mut lines = BufReader::new(stdout).lines();
-        // QEMU 7.2 names the pty on its monitor: "char device redirected to /dev/pts/N".
-        let path = loop {
+        // QEMU names each pty on its monitor, in the order of the `-serial`s:
+        // "char device redirected to /dev/pts/N (label serial0)", then serial1.
+        let mut paths = Vec::new();
+        while paths.len() < serials.len() / 2 {
             let Some(line) = lines.next() else {
-                return Err(std::io::Error::other("qemu exited before naming its pty"));
+                return Err(std::io::Error::other("qemu exited before naming its ptys"));
             };
             let line = line?;
             if let Some(i) = line.find("/dev/pts/") {
-                break line[i..]
-                    .split_whitespace()
-                    .next()
-                    .unwrap_or_default()
-                    .to_string();
+                // At most two lines are kept: a bounded read of QEMU's output.
+                paths.push(
+                    line[i..]
+                        .split_whitespace()
+                        .next()
+                        .unwrap_or_default()
+                        .to_string(),
+                );
             }
-        };
+        }
         std::thread::spawn(move || for _ in lines.map_while(Result::ok) {});
-        let port = std::fs::OpenOptions::new()
-            .read(true)
-            .write(true)
-            .open(&path)?;
-        make_raw(&port)?;
+        let open_raw = |path: &str| -> std::io::Result<File> {
+            let port = std::fs::OpenOptions::new()
+                .read(true)
+                .write(true)
+                .open(path)?;
+            make_raw(&port)?;
+            Ok(port)
+        };
+        let port = open_raw(&paths[0])?;
+        let sonar_port = match paths.get(1) {
+            Some(p) => Some(open_raw(p)?),
+            None => None,
+        };
         let mut stdin = child
             .stdin
             .take()
@@ -293,7 +320,9 @@ impl Firmware {
         stdin.write_all(b"cont\n")?;
         stdin.flush()?;
         std::mem::forget(stdin); // the monitor stays open while QEMU runs
-        Ok(Self::new(Some(child), port, Target::Qemu))
+        let mut fw = Self::new(Some(child), port, Target::Qemu);
+        fw.sonar_port = sonar_port;
+        Ok(fw)
     }
 
     /// The host-process firmware speaking on its stdin/stdout, both one end of a Unix socket
