@@ -4,7 +4,7 @@
 //!
 //! ```text
 //! vpf-firmware                      # protocol on stdin/stdout, log on stderr
-//! vpf-firmware --device /dev/pts/7  # protocol on a serial device or pty (set raw by its opener)
+//! vpf-firmware --device /dev/ttyUSB0 [--baud 115200]   # protocol on a serial device or pty
 //! vpf-firmware --ping360 /dev/ttyUSB0 [--ping360-range 30 ...]   # and a Ping360 on its own port
 //! ```
 //!
@@ -33,10 +33,14 @@ use vpf::link::CostUnit;
 use vpf::sonar::ping360::Ping360Config;
 use vpf::Params;
 
-const USAGE: &str = "usage: vpf-firmware [--device PATH] [--ping360 DEVICE [Ping360 options]]
+const USAGE: &str =
+    "usage: vpf-firmware [--device PATH [--baud N]] [--ping360 DEVICE [Ping360 options]]
 
 The VPF guidance firmware as a host process. Speaks the serial protocol of docs/protocol.md
 on stdin/stdout, or on the serial device or pty at PATH. Logs go to stderr.
+
+  --device PATH                the protocol on this serial device or pty (raw, 8N1)
+  --baud N                     its baud rate (default 115200)
 
   --ping360 DEVICE             drive a Blue Robotics Ping360 on this serial device or pty
   --ping360-baud N             its baud rate (default 115200)
@@ -57,7 +61,8 @@ on stdin/stdout, or on the serial device or pty at PATH. Logs go to stderr.
 /// Where the protocol flows.
 enum Port {
     Stdio,
-    Device(String),
+    /// A serial device (or pty) and its baud rate.
+    Device(String, u32),
 }
 
 /// The command line.
@@ -75,6 +80,7 @@ fn number<T: std::str::FromStr>(flag: &str, v: Option<String>) -> Result<T, Stri
 fn parse_args() -> Result<Args, String> {
     let mut args = std::env::args().skip(1);
     let mut port = Port::Stdio;
+    let mut main_baud = 115_200u32;
     let mut device = None;
     let mut baud = 115_200u32;
     let mut cfg = Ping360Config::default();
@@ -82,8 +88,9 @@ fn parse_args() -> Result<Args, String> {
     while let Some(a) = args.next() {
         match a.as_str() {
             "--device" => {
-                port = Port::Device(args.next().ok_or("--device needs a path")?);
+                port = Port::Device(args.next().ok_or("--device needs a path")?, 0);
             }
+            "--baud" => main_baud = number(&a, args.next())?,
             "--ping360" => device = Some(args.next().ok_or("--ping360 needs a device")?),
             "--ping360-baud" => baud = number(&a, args.next())?,
             "--ping360-sector" => {
@@ -117,6 +124,9 @@ fn parse_args() -> Result<Args, String> {
             other => return Err(format!("unknown argument `{other}`")),
         }
     }
+    if let Port::Device(_, b) = &mut port {
+        *b = main_baud;
+    }
     let range_m = range_m.unwrap_or(cfg.range_m());
     cfg.sample_period = Ping360Config::sample_period_for(range_m, cfg.samples, cfg.sound_speed)
         .ok_or(format!(
@@ -148,7 +158,7 @@ pub fn main() -> ExitCode {
             };
         }
     };
-    let is_device = matches!(port, Port::Device(_));
+    let is_device = matches!(port, Port::Device(..));
     let sonar = match &ping360 {
         Some((path, baud, cfg)) => match open_ping360(path, *baud) {
             Ok((r, w)) => {
@@ -171,28 +181,20 @@ pub fn main() -> ExitCode {
     };
     let (reader, writer): (Box<dyn Read + Send>, Box<dyn Write>) = match &port {
         Port::Stdio => (Box::new(std::io::stdin()), Box::new(std::io::stdout())),
-        Port::Device(path) => {
-            let open = || {
-                std::fs::OpenOptions::new()
-                    .read(true)
-                    .write(true)
-                    .open(path)
-            };
-            match (open(), open()) {
-                (Ok(r), Ok(w)) => (Box::new(r), Box::new(w)),
-                (Err(e), _) | (_, Err(e)) => {
-                    eprintln!("vpf-firmware: cannot open {path}: {e}");
-                    return ExitCode::FAILURE;
-                }
+        Port::Device(path, baud) => match open_serial(path, *baud) {
+            Ok(rw) => rw,
+            Err(e) => {
+                eprintln!("vpf-firmware: cannot open {path}: {e}");
+                return ExitCode::FAILURE;
             }
-        }
+        },
     };
     eprintln!(
         "vpf-firmware {} (host process, {})",
         env!("CARGO_PKG_VERSION"),
         match &port {
             Port::Stdio => "stdio".to_string(),
-            Port::Device(p) => p.clone(),
+            Port::Device(p, baud) => format!("{p} at {baud} baud"),
         }
     );
     match run(reader, writer, is_device, sonar) {
@@ -229,13 +231,19 @@ struct RxStats {
 /// The Ping360's serial port, raw, opened twice over (reads in a thread, writes in the loop).
 type SonarPort = (Box<dyn Read + Send>, Box<dyn Write>);
 
-/// Opens the Ping360's port at `baud`, 8N1, raw, with reads that time out when it is quiet.
-fn open_ping360(path: &str, baud: u32) -> Result<SonarPort, serialport::Error> {
+/// Opens a serial port (or pty) at `baud`, 8N1, raw, with reads that time out when it is
+/// quiet: a reader and a writer.
+fn open_serial(path: &str, baud: u32) -> Result<SonarPort, serialport::Error> {
     let port = serialport::new(path, baud)
         .timeout(Duration::from_millis(20))
         .open()?;
     let writer = port.try_clone()?;
     Ok((Box::new(port), Box::new(writer)))
+}
+
+/// Opens the Ping360's port.
+fn open_ping360(path: &str, baud: u32) -> Result<SonarPort, serialport::Error> {
+    open_serial(path, baud)
 }
 
 /// Where a chunk of input came from.

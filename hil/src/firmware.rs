@@ -23,16 +23,19 @@ pub enum Target {
     Qemu,
     /// The same runtime built for the host, as a process.
     Host,
-    /// A real board on a serial device.
-    Port(PathBuf),
+    /// A real board on a serial device, at a baud rate.
+    Port(PathBuf, u32),
 }
+
+/// The boards' control link's baud rate (`--port`'s default).
+pub const PORT_BAUD: u32 = 115_200;
 
 impl std::fmt::Display for Target {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             Target::Qemu => f.write_str("qemu"),
             Target::Host => f.write_str("host"),
-            Target::Port(p) => write!(f, "port:{}", p.display()),
+            Target::Port(p, baud) => write!(f, "port:{} ({baud} baud)", p.display()),
         }
     }
 }
@@ -133,9 +136,9 @@ pub fn build(target: &Target) -> std::io::Result<PathBuf> {
             cmd.args(["--target", "thumbv7em-none-eabihf"]);
             target_dir.join("thumbv7em-none-eabihf/release/vpf-firmware")
         }
-        Target::Host | Target::Port(_) => target_dir.join("release/vpf-firmware"),
+        Target::Host | Target::Port(..) => target_dir.join("release/vpf-firmware"),
     };
-    if matches!(target, Target::Port(_)) {
+    if matches!(target, Target::Port(..)) {
         // A real board is flashed by the user; nothing to build here.
         return Ok(path);
     }
@@ -166,6 +169,18 @@ fn make_raw(f: &File) -> std::io::Result<()> {
         }
     }
     Ok(())
+}
+
+/// A real serial port at `baud`, 8N1, raw, through `serialport` (exclusive, as a real port
+/// should be), as a plain file: reads are bounded by `poll` like a pty's.
+pub fn open_serial(path: &Path, baud: u32) -> std::io::Result<File> {
+    use std::os::fd::IntoRawFd;
+    let port = serialport::new(path.to_string_lossy(), baud)
+        .timeout(Duration::from_millis(10))
+        .open_native()
+        .map_err(|e| std::io::Error::other(format!("{}: {e}", path.display())))?;
+    // SAFETY: the descriptor was just released by its owner, the serial port, and is ours.
+    Ok(unsafe { File::from_raw_fd(port.into_raw_fd()) })
 }
 
 /// A new pseudo-terminal pair: (master, slave path). The slave stays open (leaked) so that no
@@ -219,12 +234,8 @@ impl Firmware {
         match target {
             Target::Qemu => Self::start_qemu(binary, lockstep, false),
             Target::Host => Self::start_host(binary, extra),
-            Target::Port(path) => {
-                let port = std::fs::OpenOptions::new()
-                    .read(true)
-                    .write(true)
-                    .open(path)?;
-                make_raw(&port)?;
+            Target::Port(path, baud) => {
+                let port = open_serial(path, *baud)?;
                 Ok(Self::new(None, port, target.clone()))
             }
         }
@@ -472,5 +483,36 @@ impl Firmware {
             self.pump(tap)?;
         }
         Ok(std::mem::take(&mut self.inbox))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_serial_port_opens_raw_at_a_baud_rate_and_carries_bytes_both_ways() {
+        // A pty's slave stands in for a board's serial adapter (`--port`).
+        let (mut master, slave) = open_pty().unwrap();
+        let mut port = open_serial(&slave, 57_600).unwrap();
+        // Raw: a 0x00 frame delimiter and a line feed pass unchanged.
+        master.write_all(b"\x00ab\ncd\x00").unwrap();
+        let mut got = Vec::new();
+        let start = Instant::now();
+        while got.len() < 7 && start.elapsed() < Duration::from_secs(5) {
+            let mut buf = [0u8; 16];
+            match port.read(&mut buf) {
+                Ok(n) => got.extend_from_slice(&buf[..n]),
+                Err(e) if e.kind() == std::io::ErrorKind::TimedOut => {}
+                Err(e) if e.kind() == std::io::ErrorKind::WouldBlock => {}
+                Err(e) => panic!("{e}"),
+            }
+        }
+        assert_eq!(got, b"\x00ab\ncd\x00");
+        port.write_all(b"\x01\x02").unwrap();
+        let mut back = [0u8; 2];
+        master.read_exact(&mut back).unwrap();
+        assert_eq!(back, [1, 2]);
+        assert!(open_serial(Path::new("/dev/no-such-port"), 115_200).is_err());
     }
 }

@@ -239,7 +239,7 @@ fn simulate(
                 }
                 Target::Qemu => ping360_sim::board_config_matches(&cfg)
                     .map_err(|(k, m)| RunError::Firmware(format!("[sonar] {k}: {m}")))?,
-                Target::Port(_) => {
+                Target::Port(..) => {
                     return Err(RunError::Firmware(
                         "a simulated Ping360 needs --firmware host or qemu (a board's sonar UART is wired to a real one)".into(),
                     ))
