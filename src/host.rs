@@ -28,6 +28,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{mpsc, Arc};
 use std::time::{Duration, Instant};
 
+use vpf::guidance::mavlink::MavConfig;
 use vpf::guidance::{RuntimeConfig, SingleContext};
 use vpf::link::CostUnit;
 use vpf::sonar::ping360::Ping360Config;
@@ -41,6 +42,12 @@ on stdin/stdout, or on the serial device or pty at PATH. Logs go to stderr.
 
   --device PATH                the protocol on this serial device or pty (raw, 8N1)
   --baud N                     its baud rate (default 115200)
+  --mavlink DEVICE             MAVLink 2 to an ArduSub autopilot and QGroundControl on this
+                               serial device or pty: navigation in, velocity set-points,
+                               status, obstacle distances out, missions uploaded
+  --mavlink-baud N             its baud rate (default 115200)
+  --mavlink-ids SYS:COMP:ASYS:ACOMP  this firmware's and the autopilot's MAVLink ids
+                               (default 1:191:1:1)
 
   --ping360 DEVICE             drive a Blue Robotics Ping360 on this serial device or pty
   --ping360-baud N             its baud rate (default 115200)
@@ -70,6 +77,8 @@ struct Args {
     port: Port,
     /// The Ping360's device, baud rate and settings.
     ping360: Option<(String, u32, Ping360Config)>,
+    /// The MAVLink line's device, baud rate and ids.
+    mavlink: Option<(String, u32, MavConfig)>,
 }
 
 fn number<T: std::str::FromStr>(flag: &str, v: Option<String>) -> Result<T, String> {
@@ -85,12 +94,31 @@ fn parse_args() -> Result<Args, String> {
     let mut baud = 115_200u32;
     let mut cfg = Ping360Config::default();
     let mut range_m: Option<f32> = None;
+    let mut mavlink: Option<String> = None;
+    let mut mav_baud = 115_200u32;
+    let mut mav_cfg = MavConfig::default();
     while let Some(a) = args.next() {
         match a.as_str() {
             "--device" => {
                 port = Port::Device(args.next().ok_or("--device needs a path")?, 0);
             }
             "--baud" => main_baud = number(&a, args.next())?,
+            "--mavlink" => mavlink = Some(args.next().ok_or("--mavlink needs a device")?),
+            "--mavlink-baud" => mav_baud = number(&a, args.next())?,
+            "--mavlink-ids" => {
+                let v = args
+                    .next()
+                    .ok_or("--mavlink-ids needs SYS:COMP:ASYS:ACOMP")?;
+                let ids: Vec<u8> = v.split(':').filter_map(|x| x.parse().ok()).collect();
+                let [sys, comp, asys, acomp] = ids[..] else {
+                    return Err(format!(
+                        "--mavlink-ids {v}: expected four ids 0..=255, SYS:COMP:ASYS:ACOMP"
+                    ));
+                };
+                mav_cfg.sysid = sys;
+                mav_cfg.compid = comp;
+                mav_cfg.autopilot = (asys, acomp);
+            }
             "--ping360" => device = Some(args.next().ok_or("--ping360 needs a device")?),
             "--ping360-baud" => baud = number(&a, args.next())?,
             "--ping360-sector" => {
@@ -140,11 +168,20 @@ fn parse_args() -> Result<Args, String> {
         }
         None => None,
     };
-    Ok(Args { port, ping360 })
+    let mavlink = mavlink.map(|d| (d, mav_baud, mav_cfg));
+    Ok(Args {
+        port,
+        ping360,
+        mavlink,
+    })
 }
 
 pub fn main() -> ExitCode {
-    let Args { port, ping360 } = match parse_args() {
+    let Args {
+        port,
+        ping360,
+        mavlink,
+    } = match parse_args() {
         Ok(p) => p,
         Err(e) => {
             if !e.is_empty() {
@@ -179,6 +216,22 @@ pub fn main() -> ExitCode {
         },
         None => None,
     };
+    let mav = match &mavlink {
+        Some((path, baud, cfg)) => match open_serial(path, *baud) {
+            Ok(rw) => {
+                eprintln!(
+                    "vpf-firmware: MAVLink 2 on {path} at {baud} baud, as {}:{} beside the autopilot {}:{}",
+                    cfg.sysid, cfg.compid, cfg.autopilot.0, cfg.autopilot.1
+                );
+                Some((rw, *cfg))
+            }
+            Err(e) => {
+                eprintln!("vpf-firmware: cannot open the MAVLink port {path}: {e}");
+                return ExitCode::FAILURE;
+            }
+        },
+        None => None,
+    };
     let (reader, writer): (Box<dyn Read + Send>, Box<dyn Write>) = match &port {
         Port::Stdio => (Box::new(std::io::stdin()), Box::new(std::io::stdout())),
         Port::Device(path, baud) => match open_serial(path, *baud) {
@@ -197,7 +250,7 @@ pub fn main() -> ExitCode {
             Port::Device(p, baud) => format!("{p} at {baud} baud"),
         }
     );
-    match run(reader, writer, is_device, sonar) {
+    match run(reader, writer, is_device, sonar, mav) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("vpf-firmware: {e}");
@@ -252,6 +305,8 @@ enum Input {
     Main(Vec<u8>),
     /// The Ping360's port.
     Sonar(Vec<u8>),
+    /// The MAVLink line.
+    Mavlink(Vec<u8>),
 }
 
 /// The reader thread: reads `reader` until its end and queues what it reads without ever
@@ -294,6 +349,7 @@ fn run(
     mut writer: Box<dyn Write>,
     is_device: bool,
     sonar: Option<(SonarPort, Ping360Config)>,
+    mav: Option<(SonarPort, MavConfig)>,
 ) -> std::io::Result<()> {
     let mut fw = SingleContext::new(
         Params::default(),
@@ -312,6 +368,14 @@ fn run(
         sonar_writer = Some(w);
         let (tx, st) = (tx.clone(), Arc::clone(&sonar_stats));
         std::thread::spawn(move || pump(sonar_reader, &tx, &st, true, Input::Sonar));
+    }
+    let mav_stats = Arc::new(RxStats::default());
+    let mut mav_writer = None;
+    if let Some(((mav_reader, w), cfg)) = mav {
+        fw.set_mavlink(cfg);
+        mav_writer = Some(w);
+        let (tx, st) = (tx.clone(), Arc::clone(&mav_stats));
+        std::thread::spawn(move || pump(mav_reader, &tx, &st, true, Input::Mavlink));
     }
     let pump_stats = Arc::clone(&stats);
     std::thread::spawn(move || pump(reader, &tx, &pump_stats, is_device, Input::Main));
@@ -345,8 +409,14 @@ fn run(
                     });
                 }
                 Ok(Input::Sonar(bytes)) => fw.on_ping360_bytes(&bytes),
+                Ok(Input::Mavlink(bytes)) => fw.on_mavlink_bytes(&bytes),
                 Err(mpsc::RecvTimeoutError::Timeout) => {}
                 Err(mpsc::RecvTimeoutError::Disconnected) => {
+                    if let Some((c, dropped, missions)) = fw.mavlink_counters() {
+                        eprintln!(
+                            "vpf-firmware: MAVLink: {c:?}, {dropped} frames dropped on a full outbox, {missions} upload steps on a full queue"
+                        );
+                    }
                     eprintln!(
                         "vpf-firmware: input closed after {} bytes ({} dropped, queue full), exiting",
                         stats.read.load(Ordering::Relaxed),
@@ -382,6 +452,13 @@ fn run(
                 w.flush()?;
             }
         }
+        if let Some(w) = mav_writer.as_mut() {
+            let bytes = fw.take_mavlink_output();
+            if !bytes.is_empty() {
+                w.write_all(&bytes)?;
+                w.flush()?;
+            }
+        }
         if !out.is_empty() {
             writer.write_all(&out)?;
             writer.flush()?;
@@ -396,7 +473,7 @@ mod tests {
 
     fn chunk(i: Input) -> Vec<u8> {
         match i {
-            Input::Main(b) | Input::Sonar(b) => b,
+            Input::Main(b) | Input::Sonar(b) | Input::Mavlink(b) => b,
         }
     }
 

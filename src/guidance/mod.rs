@@ -33,6 +33,7 @@
 pub mod background;
 pub mod failsafe;
 pub mod guard;
+pub mod mavlink;
 pub mod periodic;
 pub mod single;
 pub mod tracks;
