@@ -48,7 +48,8 @@ fn main() {
         fs::write(
             out.join("device.x"),
             "PROVIDE(UART0RX = DefaultHandler);\nPROVIDE(UART0TX = DefaultHandler);\n\
-             PROVIDE(UART1RX = DefaultHandler);\nPROVIDE(UART1TX = DefaultHandler);\n",
+             PROVIDE(UART1RX = DefaultHandler);\nPROVIDE(UART1TX = DefaultHandler);\n\
+             PROVIDE(UART2RX = DefaultHandler);\nPROVIDE(UART2TX = DefaultHandler);\n",
         )
         .expect("OUT_DIR is writable");
     }

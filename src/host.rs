@@ -264,8 +264,8 @@ const READ_CHUNK: usize = 4096;
 
 /// Chunks the reader may queue for the event loop: at most `RX_CHUNKS × READ_CHUNK` = 1 MiB
 /// waits (90 s of 115 200 baud; the harness's heaviest period is a few KiB). Past it the reader
-/// drops what it read and counts it, as the board's UART interrupt drops bytes when its receive
-/// queue is full (`rx_bytes_dropped`, `vpf::guidance::RX_QUEUE`): memory stays bounded however
+/// drops what it read and counts it, as a board's UART loses bytes when its receive queue stays
+/// full (`rx_bytes_dropped`, `vpf::guidance::RX_QUEUE`): memory stays bounded however
 /// fast the input comes, and the decoder resyncs on the next frame delimiter.
 const RX_CHUNKS: usize = 256;
 

@@ -16,6 +16,8 @@
 //!   (RX): Arduino D8 / D2, morpho CN10 pins 21 / 33. Its interrupt (USART1) moves the sonar
 //!   link's bytes the same way; on a full receive queue it turns RX-not-empty off until the
 //!   background has taken bytes (the next byte then overruns: lost, as a drop would lose it).
+//! - **MAVLink UART**: USART6 at 115 200 baud, 8N1, on PC6 (TX) / PC7 (RX): morpho CN10 pins 4 /
+//!   19 (PC7 is also Arduino D9). Its interrupt (USART6) moves the MAVLink line's bytes.
 //! - **Period timer**: SysTick on the 180 MHz core clock, as on the emulated board: the
 //!   firmware owns the SysTick exception, reads its pending bit for overruns and pends it for
 //!   lockstep ticks. A period longer than SysTick's 24 bits reach (93 ms) is split into `k`
@@ -38,7 +40,7 @@
 )]
 
 use cortex_m::peripheral::{DCB, DWT, SCB, SYST};
-use stm32f4xx_hal::pac::{self, USART1, USART2};
+use stm32f4xx_hal::pac::{self, USART1, USART2, USART6};
 use stm32f4xx_hal::prelude::*;
 use stm32f4xx_hal::rcc::Config as ClockConfig;
 use stm32f4xx_hal::serial::{Event, Flag, Instance, Serial};
@@ -81,6 +83,8 @@ pub struct Parts {
     pub control: Usart2,
     /// USART1, the Ping360 (both directions in one interrupt).
     pub sonar: Usart1,
+    /// USART6, MAVLink (both directions in one interrupt).
+    pub mavlink: Usart6,
 }
 
 /// Sets up the clocks, USART2 (receive interrupt on), the cycle counter and the watchdog.
@@ -118,6 +122,12 @@ pub fn init(syst: SYST, mut dcb: DCB, mut dwt: DWT) -> Option<Parts> {
         .serial::<u8>((gpioa.pa9, gpioa.pa10), BAUD.bps(), &mut rcc)
         .ok()?;
     sonar.listen(Event::RxNotEmpty);
+    let gpioc = dp.GPIOC.split(&mut rcc);
+    let mut mavlink = dp
+        .USART6
+        .serial::<u8>((gpioc.pc6, gpioc.pc7), BAUD.bps(), &mut rcc)
+        .ok()?;
+    mavlink.listen(Event::RxNotEmpty);
 
     dcb.enable_trace();
     dwt.enable_cycle_counter();
@@ -132,6 +142,7 @@ pub fn init(syst: SYST, mut dcb: DCB, mut dwt: DWT) -> Option<Parts> {
         watchdog,
         control: Usart { serial },
         sonar: Usart { serial: sonar },
+        mavlink: Usart { serial: mavlink },
     })
 }
 
@@ -241,6 +252,11 @@ pub fn kick_tx() {
     rtic::pend(pac::Interrupt::USART2);
 }
 
+/// Runs the control link's interrupt again (it held a byte back on a full queue).
+pub fn resume_control_rx() {
+    rtic::pend(pac::Interrupt::USART2);
+}
+
 /// Starts transmission of bytes queued for the Ping360 (the USART1 interrupt does the rest).
 pub fn kick_sonar_tx() {
     rtic::pend(pac::Interrupt::USART1);
@@ -249,6 +265,12 @@ pub fn kick_sonar_tx() {
 /// Runs the Ping360's interrupt again (it held a byte back on a full queue).
 pub fn resume_sonar_rx() {
     rtic::pend(pac::Interrupt::USART1);
+}
+
+/// Starts transmission of bytes queued for the MAVLink line (the USART6 interrupt does the
+/// rest).
+pub fn kick_mavlink_tx() {
+    rtic::pend(pac::Interrupt::USART6);
 }
 
 /// The independent watchdog (IWDG, on the ~32 kHz LSI), owned by the periodic task: started at
@@ -350,6 +372,8 @@ pub struct Usart<U: Instance> {
 pub type Usart2 = Usart<USART2>;
 /// USART1, the Ping360.
 pub type Usart1 = Usart<USART1>;
+/// USART6, MAVLink.
+pub type Usart6 = Usart<USART6>;
 
 /// A byte lost on the line (framing, noise, parity or overrun); the link's CRC catches the
 /// damaged frame.

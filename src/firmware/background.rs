@@ -8,6 +8,7 @@ use vpf::guidance::{Background, Control, NavSample, Sighting, Sink};
 use vpf::link::ReplyRepr;
 use vpf::route::{Route, Router};
 
+use super::mavlink::MavPort;
 use super::queues::Producers;
 use super::sonar::SonarPort;
 use super::{GoalFlown, LinkCounters, Lockstep, Stats, CONTROL_RX_SLOTS, EVIDENCE, ROUTE};
@@ -106,7 +107,8 @@ pub fn run(task: &mut BackgroundTask, shared: &mut impl Exchange) -> ! {
     loop {
         let control = task.poll(shared);
         let sonar = task.poll_sonar(shared);
-        if !control && !sonar {
+        let mavlink = task.poll_mavlink(shared);
+        if !control && !sonar && !mavlink {
             cortex_m::asm::wfi();
         }
     }
@@ -117,8 +119,11 @@ pub struct BackgroundTask {
     background: Background,
     router: &'static mut Router,
     inbox: Consumer<'static, u8, CONTROL_RX_SLOTS>,
+    /// The control link's receive task held a byte back (its queue was full).
+    held: &'static core::sync::atomic::AtomicBool,
     queues: Producers,
     sonar: SonarPort,
+    mav: MavPort,
 }
 
 /// The background's [`Sink`]: its queue ends and the shared resources.
@@ -156,16 +161,22 @@ impl BackgroundTask {
     pub fn new(
         background: Background,
         router: &'static mut Router,
-        inbox: Consumer<'static, u8, CONTROL_RX_SLOTS>,
+        (inbox, held): (
+            Consumer<'static, u8, CONTROL_RX_SLOTS>,
+            &'static core::sync::atomic::AtomicBool,
+        ),
         queues: Producers,
         sonar: SonarPort,
+        mav: MavPort,
     ) -> Self {
         BackgroundTask {
             background,
             router,
             inbox,
+            held,
             queues,
             sonar,
+            mav,
         }
     }
 
@@ -181,6 +192,9 @@ impl BackgroundTask {
                 }
                 None => break,
             }
+        }
+        if n > 0 && super::link::take_held(self.held) {
+            crate::board::active::resume_control_rx();
         }
         let Some(mut rest) = buf.get(..n) else {
             return false;
@@ -237,6 +251,31 @@ impl BackgroundTask {
         busy
     }
 
+    /// The MAVLink line: up to 64 received bytes (navigation, mission uploads); `true` if
+    /// there were any.
+    #[cfg_attr(feature = "selftest", allow(dead_code))]
+    pub fn poll_mavlink(&mut self, exchange: &mut impl Exchange) -> bool {
+        let now = exchange.now_ms();
+        let BackgroundTask {
+            background,
+            router,
+            queues,
+            mav,
+            ..
+        } = self;
+        let mut outlet = Outlet {
+            queues,
+            exchange: &mut *exchange,
+        };
+        mav.poll(
+            now,
+            background,
+            &mut outlet,
+            Some(&EVIDENCE),
+            Some(&mut **router),
+        )
+    }
+
     /// Feeds up to 64 bytes from the sonar to its driver; `true` if there were any.
     fn sonar_bytes(&mut self, exchange: &mut impl Exchange) -> bool {
         let mut buf = [0u8; 64];
@@ -278,6 +317,37 @@ impl BackgroundTask {
             &mut |scan, pose| background.on_scanline(scan, pose, &mut outlet, Some(&EVIDENCE)),
         );
         crate::board::active::kick_sonar_tx();
+    }
+
+    /// The MAVLink line's decoder counters (for the self-test).
+    #[cfg(feature = "selftest")]
+    pub fn mavlink_counters(&self) -> vpf::link::mavlink::MavCounters {
+        self.mav.counters().0
+    }
+
+    /// Feeds MAVLink bytes as if received on its UART (for the self-test).
+    #[cfg(feature = "selftest")]
+    pub fn feed_mavlink(&mut self, bytes: &[u8], exchange: &mut impl Exchange) {
+        let now = exchange.now_ms();
+        let BackgroundTask {
+            background,
+            router,
+            queues,
+            mav,
+            ..
+        } = self;
+        let mut outlet = Outlet {
+            queues,
+            exchange: &mut *exchange,
+        };
+        mav.feed(
+            bytes,
+            now,
+            background,
+            &mut outlet,
+            Some(&EVIDENCE),
+            Some(&mut **router),
+        );
     }
 
     /// Queues a sighting as the background would (for the self-test).

@@ -122,7 +122,10 @@ impl<const RX: usize> Receiver<RX> {
                     let _ = self.queue.enqueue(byte[0]);
                 }
                 Ok(_) => break,
-                Err(_) => {}
+                // A byte lost on the line (an overrun after a hold, noise, framing): counted.
+                Err(_) => {
+                    self.dropped.fetch_add(1, Ordering::Relaxed);
+                }
             }
         }
         false

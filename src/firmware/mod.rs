@@ -30,6 +30,7 @@
 pub mod background;
 pub mod fault;
 pub mod link;
+pub mod mavlink;
 pub mod periodic;
 pub mod queues;
 #[cfg(feature = "selftest")]
@@ -49,6 +50,7 @@ use crate::board::active as board;
 use crate::board::systick::PeriodTimer;
 use background::BackgroundTask;
 use link::{Receiver, Transmitter};
+use mavlink::{MavLink, MavOut, MavPort, MissionQueue, MAV_RX_SLOTS, MAV_TX_SLOTS};
 use periodic::PeriodicTask;
 use queues::Queues;
 use sonar::{SonarLink, SonarPort, SONAR_RX_SLOTS, SONAR_TX_SLOTS};
@@ -109,6 +111,8 @@ static ROUTE: RouteSlot = RouteSlot::new();
 pub struct Memory {
     control: ControlLink,
     sonar: SonarLink,
+    mavlink: MavLink,
+    missions: MissionQueue,
     queues: Queues,
     runtime: MaybeUninit<Periodic>,
 }
@@ -119,6 +123,8 @@ impl Memory {
         Memory {
             control: ControlLink::new(),
             sonar: SonarLink::new(),
+            mavlink: MavLink::new(),
+            missions: MissionQueue::new(),
             queues: Queues::new(),
             runtime: MaybeUninit::uninit(),
         }
@@ -145,6 +151,10 @@ pub struct Started {
     pub sonar_receiver: Receiver<SONAR_RX_SLOTS>,
     /// The sonar link's transmit-interrupt end.
     pub sonar_transmitter: Transmitter<SONAR_TX_SLOTS>,
+    /// The MAVLink link's receive-interrupt end.
+    pub mav_receiver: Receiver<MAV_RX_SLOTS>,
+    /// The MAVLink link's transmit-interrupt end.
+    pub mav_transmitter: Transmitter<MAV_TX_SLOTS>,
 }
 
 /// Builds the runtime with `params` in `memory` and `router`, splits the queues into their
@@ -164,6 +174,9 @@ pub fn start(
     router.set_cell(params.route_cell_m);
     let ping360 = Ping360::new(Ping360Config::BOARD).ok()?;
     let sonar = memory.sonar.split();
+    let mav = memory.mavlink.split();
+    let (missions_in, missions_out) = memory.missions.split();
+    let mav_cfg = vpf::guidance::mavlink::MavConfig::default();
     let link = memory.control.split();
     let (producers, consumers) = memory.queues.split();
     let mut periodic = PeriodicTask::new(
@@ -173,6 +186,7 @@ pub fn start(
         consumers,
         timer,
         watchdog,
+        MavOut::new(mav_cfg, mav.outbox, missions_out),
     );
     periodic.start();
     Some(Started {
@@ -180,13 +194,16 @@ pub fn start(
         background: BackgroundTask::new(
             background,
             router,
-            link.inbox,
+            (link.inbox, link.held),
             producers,
             SonarPort::new(ping360, sonar.inbox, sonar.outbox, sonar.held),
+            MavPort::new(mav_cfg, mav.inbox, missions_in, mav.dropped),
         ),
         receiver: link.receiver,
         transmitter: link.transmitter,
         sonar_receiver: sonar.receiver,
         sonar_transmitter: sonar.transmitter,
+        mav_receiver: mav.receiver,
+        mav_transmitter: mav.transmitter,
     })
 }

@@ -11,7 +11,9 @@
 //!    included), deadline overruns, scanlines processed and the background's cost per scanline
 //!    and per navigation frame (the route layer replans on those); then the
 //!    stack high-water mark. A fourth flood (VPF) brings its pings as Ping360 `device_data`
-//!    through the Ping360 driver, so its path is measured and in the stack's high-water mark. It exits successfully only if no strategy overran and every worst
+//!    through the Ping360 driver and its navigation as MAVLink (ATTITUDE, LOCAL_POSITION_NED)
+//!    through the MAVLink line's decoder, so their paths are measured and in the stack's
+//!    high-water mark; every period also sends the MAVLink set-point and what else is due. It exits successfully only if no strategy overran and every worst
 //!    step was within [`STEP_BUDGET`]. Half the obstacles move, so the prediction of moving
 //!    obstacles is in the measured path.
 
@@ -62,7 +64,9 @@ pub fn run(idle: &mut BackgroundTask, x: &mut impl Exchange, params: Params) -> 
     line.num(u64::from(sonar.max_cost));
     line.push(b" mean ");
     line.num(sonar.sum_cost / u64::from(sonar.measured.max(1)));
-    line.push(b")\n");
+    line.push(b"), MAVLink frames ");
+    line.num(u64::from(idle.mavlink_counters().frames));
+    line.push(b"\n");
     board::log(line.bytes());
     ok &= s.overruns == 0 && s.periods >= PERIODS && s.max_cost <= STEP_BUDGET;
     let mut line = Line::new();
@@ -171,7 +175,11 @@ fn flood(
         if ping.is_multiple_of(8) {
             let periods = x.stats().periods;
             let start = board::cost_now();
-            send_nav(idle, x);
+            if sonar.is_some() {
+                send_nav_mavlink(idle, x);
+            } else {
+                send_nav(idle, x);
+            }
             let cost = board::cost_now().wrapping_sub(start);
             if x.stats().periods == periods {
                 f.max_nav_cost = f.max_nav_cost.max(cost);
@@ -238,6 +246,61 @@ fn send_nav(idle: &mut BackgroundTask, x: &mut impl Exchange) {
     if let Ok(n) = Message::Nav(nav).emit_frame(0, &mut frame) {
         if let Some(f) = frame.get(..n) {
             idle.feed(f, x);
+        }
+    }
+}
+
+/// The same navigation as [`send_nav`], as an autopilot's ATTITUDE and LOCAL_POSITION_NED on
+/// the MAVLink line (NED: north is the firmware's y, yaw = π/2 − heading).
+#[inline(never)]
+fn send_nav_mavlink(idle: &mut BackgroundTask, x: &mut impl Exchange) {
+    use mavlink::dialects::common::{ATTITUDE_DATA, LOCAL_POSITION_NED_DATA};
+    use mavlink::{MavlinkVersion, MessageData};
+    let now = x.now_ms();
+    let att = ATTITUDE_DATA {
+        time_boot_ms: now as u32,
+        yaw: core::f32::consts::FRAC_PI_2,
+        ..ATTITUDE_DATA::default()
+    };
+    let pos = LOCAL_POSITION_NED_DATA {
+        time_boot_ms: now as u32,
+        x: 0.0,
+        y: (now % 1000) as f32 * 1e-5,
+        vx: 0.1,
+        vy: 0.8,
+        ..LOCAL_POSITION_NED_DATA::default()
+    };
+    let mut payload = [0u8; 255];
+    let mut frame = [0u8; 64];
+    let n = att.ser(MavlinkVersion::V2, &mut payload);
+    if let Some(f) = payload.get(..n).and_then(|p| {
+        vpf::link::mavlink::emit_frame(
+            0,
+            (1, 1),
+            (ATTITUDE_DATA::ID, ATTITUDE_DATA::EXTRA_CRC),
+            p,
+            &mut frame,
+        )
+    }) {
+        if let Some(bytes) = frame.get(..f) {
+            idle.feed_mavlink(bytes, x);
+        }
+    }
+    let n = pos.ser(MavlinkVersion::V2, &mut payload);
+    if let Some(f) = payload.get(..n).and_then(|p| {
+        vpf::link::mavlink::emit_frame(
+            1,
+            (1, 1),
+            (
+                LOCAL_POSITION_NED_DATA::ID,
+                LOCAL_POSITION_NED_DATA::EXTRA_CRC,
+            ),
+            p,
+            &mut frame,
+        )
+    }) {
+        if let Some(bytes) = frame.get(..f) {
+            idle.feed_mavlink(bytes, x);
         }
     }
 }

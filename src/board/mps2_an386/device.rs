@@ -3,7 +3,7 @@
 //!
 //! Interrupt numbers are the AN386's (ARM's "Cortex-M4 FPGA image" application note, and QEMU's
 //! `mps2-an386`): each CMSDK APB UART has a receive and a transmit interrupt. UART0 carries the
-//! control link, UART1 the Ping360.
+//! control link, UART1 the Ping360, UART2 MAVLink.
 
 /// Priority bits the NVIC implements: the AN386 image's 3 (CMSIS `__NVIC_PRIO_BITS`).
 pub const NVIC_PRIO_BITS: u8 = 3;
@@ -20,6 +20,10 @@ pub enum Interrupt {
     UART1RX = 2,
     /// UART1 transmit.
     UART1TX = 3,
+    /// UART2 receive (MAVLink).
+    UART2RX = 4,
+    /// UART2 transmit.
+    UART2TX = 5,
 }
 
 /// RTIC names bound interrupts through `device::interrupt::NAME`, as svd2rust PACs export them.
@@ -42,11 +46,14 @@ extern "C" {
     fn UART0TX();
     fn UART1RX();
     fn UART1TX();
+    fn UART2RX();
+    fn UART2TX();
 }
 
-/// The device part of the vector table: external interrupts 0–3 (the rest are never enabled).
+/// The device part of the vector table: external interrupts 0–5 (the rest are never enabled).
 #[allow(unsafe_code)] // `link_section` and `no_mangle` place the table; it only holds addresses.
 #[link_section = ".vector_table.interrupts"]
 #[no_mangle]
 #[used]
-static __INTERRUPTS: [unsafe extern "C" fn(); 4] = [UART0RX, UART0TX, UART1RX, UART1TX];
+static __INTERRUPTS: [unsafe extern "C" fn(); 6] =
+    [UART0RX, UART0TX, UART1RX, UART1TX, UART2RX, UART2TX];

@@ -1,5 +1,6 @@
 //! The emulated ARM MPS2 AN386 board (QEMU `-machine mps2-an386 -cpu cortex-m4`): its CMSDK APB
-//! UART0 (the control link) and UART1 (the Ping360: QEMU's second `-serial`), SysTick as the period timer and instruction counter, semihosting for logs and exit.
+//! UART0 (the control link), UART1 (the Ping360: QEMU's second `-serial`) and UART2 (MAVLink: the
+//! third), SysTick as the period timer and instruction counter, semihosting for logs and exit.
 //!
 //! Under `-icount shift=0` QEMU advances the virtual clock by 1 ns per executed instruction, and
 //! SysTick counts its 25 MHz reference clock, so one SysTick count is 40 instructions. That makes
@@ -36,18 +37,22 @@ pub struct Parts {
     pub control: (UartRx, UartTx),
     /// UART1, the Ping360: receive half (UART1RX task) and transmit half (UART1TX task).
     pub sonar: (UartRx, UartTx),
+    /// UART2, MAVLink: receive half (UART2RX task) and transmit half (UART2TX task).
+    pub mavlink: (UartRx, UartTx),
 }
 
-/// Sets up UART0 and UART1 (receive interrupts on) and the period timer (not yet running).
+/// Sets up UART0, UART1 and UART2 (receive interrupts on) and the period timer (not yet running).
 /// `None` if a UART was already taken (start-up runs once).
 pub fn init(syst: SYST) -> Option<Parts> {
     let control = uart::Uart::take(0, SYSTICK_HZ / BAUD)?.split();
     let sonar = uart::Uart::take(1, SYSTICK_HZ / BAUD)?.split();
+    let mavlink = uart::Uart::take(2, SYSTICK_HZ / BAUD)?.split();
     Some(Parts {
         timer: PeriodTimer::new(syst, SYSTICK_HZ),
         watchdog: Watchdog,
         control,
         sonar,
+        mavlink,
     })
 }
 
@@ -63,6 +68,11 @@ pub fn kick_tx() {
     rtic::pend(device::Interrupt::UART0TX);
 }
 
+/// Runs the control link's receive task again (it held a byte back on a full queue).
+pub fn resume_control_rx() {
+    rtic::pend(device::Interrupt::UART0RX);
+}
+
 /// Starts transmission of bytes queued for the Ping360.
 pub fn kick_sonar_tx() {
     rtic::pend(device::Interrupt::UART1TX);
@@ -71,6 +81,11 @@ pub fn kick_sonar_tx() {
 /// Runs the Ping360's receive task again (it held a byte back on a full queue).
 pub fn resume_sonar_rx() {
     rtic::pend(device::Interrupt::UART1RX);
+}
+
+/// Starts transmission of bytes queued for the MAVLink line.
+pub fn kick_mavlink_tx() {
+    rtic::pend(device::Interrupt::UART2TX);
 }
 
 /// The emulated board has no watchdog.

@@ -10,8 +10,8 @@ use core::sync::atomic::{AtomicBool, Ordering};
 use embedded_io::{ErrorType, Read, ReadReady, Write, WriteReady};
 use vcell::VolatileCell;
 
-/// Base addresses: UART0 (the control link) and UART1 (the Ping360).
-const BASES: [usize; 2] = [0x4000_4000, 0x4000_5000];
+/// Base addresses: UART0 (the control link), UART1 (the Ping360), UART2 (MAVLink).
+const BASES: [usize; 3] = [0x4000_4000, 0x4000_5000, 0x4000_6000];
 
 const STATE_TX_FULL: u32 = 1 << 0;
 const STATE_RX_FULL: u32 = 1 << 1;
@@ -34,7 +34,11 @@ struct Registers {
 
 /// Which UARTs have been handed out (each at most once, so each register is driven by one
 /// owner: see [`registers`]).
-static TAKEN: [AtomicBool; 2] = [AtomicBool::new(false), AtomicBool::new(false)];
+static TAKEN: [AtomicBool; 3] = [
+    AtomicBool::new(false),
+    AtomicBool::new(false),
+    AtomicBool::new(false),
+];
 
 fn registers(base: usize) -> &'static Registers {
     // # Safety
@@ -57,7 +61,7 @@ pub struct Uart {
 }
 
 impl Uart {
-    /// UART `n` (0 or 1), enabled at `bauddiv` with its receive interrupt on; `None` if it was
+    /// UART `n` (0, 1 or 2), enabled at `bauddiv` with its receive interrupt on; `None` if it was
     /// already taken or does not exist.
     pub fn take(n: usize, bauddiv: u32) -> Option<Uart> {
         let base = *BASES.get(n)?;
