@@ -643,7 +643,8 @@ pub fn sectors(world: &World, nav: &NavState) -> [u16; SECTORS] {
         }
         // Clockwise from the bow.
         let cw = -wrap_angle(bearing - nav.heading);
-        let span = libm::ceilf(half / sector_rad).min(36.0) as i32;
+        // Every sector whose 5° touches the span.
+        let span = libm::floorf((half + 0.5 * sector_rad) / sector_rad).min(36.0) as i32;
         let centre = libm::roundf(cw / sector_rad) as i32;
         for k in -span..=span {
             let i = (centre + k).rem_euclid(SECTORS as i32) as usize;
@@ -685,5 +686,126 @@ fn describe(mode: Mode) -> (MavSeverity, &'static str) {
         Mode::Arrived => (INFO, "vpf: arrived"),
         Mode::Loiter => (INFO, "vpf: loiter"),
         Mode::Guarded => (INFO, "vpf: guarded"),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::field::Shape;
+    use crate::world::{Obstacle, Origin};
+    use ::mavlink::dialects::common::{MavCmd, MISSION_ITEM_INT_DATA};
+
+    fn item(frame: u32, x: i32, y: i32) -> MISSION_ITEM_INT_DATA {
+        let mut i = MISSION_ITEM_INT_DATA {
+            command: MavCmd::MAV_CMD_NAV_WAYPOINT,
+            x,
+            y,
+            param2: 2.0,
+            ..MISSION_ITEM_INT_DATA::default()
+        };
+        i.frame = match frame {
+            1 => MavFrame::MAV_FRAME_LOCAL_NED,
+            6 => MavFrame::MAV_FRAME_GLOBAL_RELATIVE_ALT,
+            _ => MavFrame::MAV_FRAME_BODY_FRD,
+        };
+        i
+    }
+
+    #[test]
+    fn mission_items_become_waypoints_in_the_firmwares_frame() {
+        // (MAV_FRAME_GLOBAL_RELATIVE_ALT, 3, stands for the global frames: QGroundControl and
+        // the test script send its deprecated `_INT` twin, 6, which `waypoint` takes the same.)
+        // Local NED: 10 m north, 3 m east → (3, 10).
+        let w = waypoint(&item(1, 100_000, 30_000), None).unwrap();
+        assert!((w.position() - Vec2::new(3.0, 10.0)).norm() < 1e-4, "{w:?}");
+        assert_eq!(w.radius_m(), 2.0);
+        // Global: 1e-4° of latitude north of the origin is 11.13 m; 1e-4° of longitude east at
+        // 45° is 7.87 m.
+        let origin = Some((450_000_000, 140_000_000));
+        let w = waypoint(&item(6, 450_001_000, 140_001_000), origin).unwrap();
+        assert_eq!(item(6, 0, 0).frame as u32, 3);
+        assert!((w.position().y - 11.132).abs() < 0.01, "{w:?}");
+        assert!((w.position().x - 7.871).abs() < 0.01, "{w:?}");
+        // Refused, by name: no origin yet, a frame or a command it does not fly, bad values.
+        let refused = |i, o| waypoint(&i, o).unwrap_err();
+        assert_eq!(
+            refused(item(6, 0, 0), None),
+            MavMissionResult::MAV_MISSION_ERROR
+        );
+        assert_eq!(
+            refused(item(12, 0, 0), None),
+            MavMissionResult::MAV_MISSION_UNSUPPORTED_FRAME
+        );
+        let mut loiter = item(1, 0, 0);
+        loiter.command = MavCmd::MAV_CMD_NAV_LOITER_UNLIM;
+        assert_eq!(
+            refused(loiter, None),
+            MavMissionResult::MAV_MISSION_UNSUPPORTED
+        );
+        assert_eq!(
+            refused(item(6, 950_000_000, 0), origin),
+            MavMissionResult::MAV_MISSION_INVALID_PARAM5_X
+        );
+        let mut bad_radius = item(1, 0, 0);
+        bad_radius.param2 = -1.0;
+        assert_eq!(
+            refused(bad_radius, None),
+            MavMissionResult::MAV_MISSION_INVALID_PARAM2
+        );
+        // Beyond the planner's ±100 km.
+        assert_eq!(
+            refused(item(1, i32::MAX, 0), None),
+            MavMissionResult::MAV_MISSION_INVALID_PARAM5_X
+        );
+    }
+
+    #[test]
+    fn navigation_needs_numbers_within_bounds() {
+        let ok = LOCAL_POSITION_NED_DATA {
+            x: 10.0,
+            y: -4.0,
+            vx: 0.5,
+            vy: 0.0,
+            ..LOCAL_POSITION_NED_DATA::default()
+        };
+        let n = nav_state(&ok).unwrap();
+        assert_eq!(
+            (n.position, n.velocity),
+            (Vec2::new(-4.0, 10.0), Vec2::new(0.0, 0.5))
+        );
+        for bad in [
+            LOCAL_POSITION_NED_DATA { x: f32::NAN, ..ok },
+            LOCAL_POSITION_NED_DATA { y: 2e5, ..ok },
+            LOCAL_POSITION_NED_DATA { vx: 80.0, ..ok },
+        ] {
+            assert_eq!(nav_state(&bad), None, "{bad:?}");
+        }
+    }
+
+    #[test]
+    fn obstacle_sectors_are_clockwise_from_the_bow() {
+        let mut world = World::new();
+        // A rock 5 m east of a vehicle heading north (ψ = π/2): 90° clockwise, sector 18.
+        let rock = Shape::circle(Vec2::new(5.0, 0.0), 1.0).unwrap();
+        world
+            .upsert_obstacle(Obstacle::new(1, rock, 2.5, Origin::Charted, 0).unwrap())
+            .unwrap();
+        let nav = NavState {
+            position: Vec2::ZERO,
+            heading: PI / 2.0,
+            velocity: Vec2::ZERO,
+        };
+        let d = sectors(&world, &nav);
+        assert_eq!(d[18], 400);
+        // Its circle spans ±11.5°: sectors 16 ..= 20; nothing elsewhere.
+        for (i, &v) in d.iter().enumerate() {
+            let expect = if (16..=20).contains(&i) {
+                400
+            } else {
+                OBSTACLE_MAX_CM + 1
+            };
+            assert_eq!(v, expect, "sector {i}: {d:?}");
+        }
     }
 }
