@@ -14,7 +14,7 @@
 
 use super::codec::{Reader, Writer};
 use super::frame::MessageType;
-use super::message::Payload;
+use super::payload::Payload;
 use super::{Error, Problem};
 
 /// Most rows in one `Belief` chunk.

@@ -22,6 +22,7 @@ use super::control::{
     ChartClearRepr, ChartObstacleRepr, TickRepr, MISSION_LEN_WITH_FORMATION, PARAMS_LEN,
 };
 use super::frame::{encode_frame, split_frame, Header, MessageType};
+use super::payload::Payload;
 use super::mission::{MissionCountRepr, MissionItemRepr, SurveyRepr};
 use super::report::{CommandRepr, LogRepr, ReplyRepr, TelemetryRepr, COMMAND_LEN, TELEMETRY_LEN};
 use super::sensors::{
@@ -32,32 +33,6 @@ use super::{Error, DELIMITER, MAX_BINS, MAX_CONTACTS, MAX_FRAME, MAX_LOG_LEN, MA
 use crate::params::Params;
 use crate::planner::Mission;
 use crate::sonar::Scanline;
-
-/// A message's payload: its wire type, and parse/emit in smoltcp's `Repr` style.
-///
-/// `parse` checks the length exactly and every field (see each type's layout); `emit` refuses
-/// exactly what `parse` would refuse, writes [`Payload::payload_len`] bytes and returns that
-/// number.
-pub trait Payload<'a>: Sized {
-    /// The message type this payload travels as.
-    const TYPE: MessageType;
-
-    /// Parses and validates a payload (the bytes between header and CRC). Borrowed fields
-    /// (scanline bins, contacts, log text) point into `payload`.
-    fn parse(payload: &'a [u8]) -> Result<Self, Error>;
-
-    /// The number of bytes [`Payload::emit`] writes.
-    fn payload_len(&self) -> usize;
-
-    /// Validates and writes the payload into `out`; returns the bytes written.
-    fn emit(&self, out: &mut [u8]) -> Result<usize, Error>;
-
-    /// Writes a complete frame (COBS, CRC, delimiter) with sequence number `seq` into `out`;
-    /// returns its length. [`MAX_FRAME`] bytes always suffice.
-    fn emit_frame(&self, seq: u16, out: &mut [u8]) -> Result<usize, Error> {
-        encode_frame(Self::TYPE, seq, |buf| self.emit(buf), out)
-    }
-}
 
 /// Any message, parsed. Variants borrow from the frame they were parsed from.
 #[derive(Clone, Copy, Debug, PartialEq)]

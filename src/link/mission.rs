@@ -14,7 +14,7 @@
 
 use super::codec::{angle, finite, magnitude, refuse, within, Reader, Writer};
 use super::frame::MessageType;
-use super::message::Payload;
+use super::payload::Payload;
 use super::{Error, Problem};
 use crate::math::Vec2;
 use crate::planner::mission::{

@@ -15,6 +15,7 @@
 //! - [`shape`]: the wire form of an obstacle [`Shape`](crate::field::Shape);
 //! - [`sensors`], [`control`], [`mission`] (host → firmware) and [`report`] (firmware → host):
 //!   the messages;
+//! - [`payload`]: the [`Payload`] trait every message implements (parse, emit, length);
 //! - [`message`]: [`Message`], every message in one enum, and whole-frame parse/emit.
 //!
 //! **Frame** on the wire: `COBS(header ‖ payload ‖ CRC) ‖ 0x00`, where the header is
@@ -40,6 +41,7 @@ pub mod decoder;
 pub mod frame;
 pub mod message;
 pub mod mission;
+pub mod payload;
 pub mod ping;
 pub mod report;
 pub mod sensors;
@@ -51,7 +53,8 @@ pub use control::{
 };
 pub use decoder::{Decoder, Outcome, RxCounters};
 pub use frame::{encode_frame, frame_buffer_len, split_frame, Direction, Header, MessageType};
-pub use message::{Message, Payload};
+pub use message::Message;
+pub use payload::Payload;
 pub use mission::{MissionCountRepr, MissionItemRepr, SurveyRepr};
 pub use report::{
     CommandRepr, CostUnit, LogLevel, LogRepr, ReplyRepr, ReplyStatus, TelemetryCounters,

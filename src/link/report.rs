@@ -4,7 +4,7 @@ use super::codec::{angle, finite, refuse, within, Reader, Writer};
 use super::control::param_index;
 use super::decoder::RxCounters;
 use super::frame::{Direction, Header, MessageType};
-use super::message::Payload;
+use super::payload::Payload;
 use super::{Error, Problem, MAX_LOG_LEN};
 use crate::params::ParamProblem;
 use crate::planner::{

@@ -5,7 +5,7 @@
 
 use super::codec::{angle, finite, magnitude, refuse, within, Reader, Writer};
 use super::frame::MessageType;
-use super::message::Payload;
+use super::payload::Payload;
 use super::shape::{read_shape, shape_len, write_shape, MAX_SHAPE_LEN};
 use super::{Error, Problem, MAX_BINS, MAX_CONTACTS};
 use crate::field::Shape;
