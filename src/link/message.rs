@@ -22,8 +22,8 @@ use super::control::{
     ChartClearRepr, ChartObstacleRepr, TickRepr, MISSION_LEN_WITH_FORMATION, PARAMS_LEN,
 };
 use super::frame::{encode_frame, split_frame, Header, MessageType};
-use super::payload::Payload;
 use super::mission::{MissionCountRepr, MissionItemRepr, SurveyRepr};
+use super::payload::Payload;
 use super::report::{CommandRepr, LogRepr, ReplyRepr, TelemetryRepr, COMMAND_LEN, TELEMETRY_LEN};
 use super::sensors::{
     ContactsRepr, NavRepr, CONTACTS_HEAD_LEN, MAX_CONTACT_LEN, NAV_LEN_WITH_BODY, SCANLINE_HEAD_LEN,
@@ -31,8 +31,7 @@ use super::sensors::{
 use super::shape::MAX_SHAPE_LEN;
 use super::{Error, DELIMITER, MAX_BINS, MAX_CONTACTS, MAX_FRAME, MAX_LOG_LEN, MAX_RAW};
 use crate::params::Params;
-use crate::planner::Mission;
-use crate::sonar::Scanline;
+use crate::types::{Mission, Scanline};
 
 /// Any message, parsed. Variants borrow from the frame they were parsed from.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -17,11 +17,11 @@ use super::frame::MessageType;
 use super::payload::Payload;
 use super::{Error, Problem};
 use crate::math::Vec2;
-use crate::planner::mission::{
+use crate::types::mission::{
     LOITER_RADIUS_M, MAX_SURVEY_SIDE_M, MAX_WAYPOINT_RADIUS_M, MAX_WAYPOINT_SPEED,
     MIN_WAYPOINT_SPEED,
 };
-use crate::planner::{
+use crate::types::{
     Formation, MissionEnd, MissionError, Survey, Waypoint, MAX_COORD_M, MAX_WAYPOINTS,
 };
 

@@ -54,8 +54,8 @@ pub use control::{
 pub use decoder::{Decoder, Outcome, RxCounters};
 pub use frame::{encode_frame, frame_buffer_len, split_frame, Direction, Header, MessageType};
 pub use message::Message;
-pub use payload::Payload;
 pub use mission::{MissionCountRepr, MissionItemRepr, SurveyRepr};
+pub use payload::Payload;
 pub use report::{
     CommandRepr, CostUnit, LogLevel, LogRepr, ReplyRepr, ReplyStatus, TelemetryCounters,
     TelemetryRepr, FIELD_WHOLE_MESSAGE,
@@ -76,7 +76,7 @@ pub const HEADER_LEN: usize = 4;
 pub const CRC_LEN: usize = 2;
 /// Most intensity bins in one [`Scanline`](crate::sonar::Scanline) message (the Micron's
 /// maximum resolution; the same number as the sonar module's).
-pub const MAX_BINS: usize = crate::sonar::MAX_BINS;
+pub const MAX_BINS: usize = crate::types::MAX_BINS;
 /// Most contacts in one `Contacts` message (a sonar that extracts features itself rarely
 /// reports more per ping; send several messages for more).
 pub const MAX_CONTACTS: usize = 8;

@@ -7,11 +7,12 @@ use super::frame::{Direction, Header, MessageType};
 use super::payload::Payload;
 use super::{Error, Problem, MAX_LOG_LEN};
 use crate::params::ParamProblem;
-use crate::planner::{
-    Command, FormationError, HoldReason, MissionProgress, Mode, PidSetpoints, StepError,
-    MAX_GHOSTS, MAX_NAV_SPEED, MAX_WAYPOINTS,
-};
+use crate::params::MAX_GHOSTS;
 use crate::sonar::ping360::Ping360Counters;
+use crate::types::{
+    Command, FormationError, HoldReason, MissionProgress, Mode, PidSetpoints, StepError,
+    MAX_NAV_SPEED, MAX_WAYPOINTS,
+};
 use crate::world::{ObjectError, MAX_AGENTS, MAX_OBSTACLES};
 
 /// The wire codes of a [`Mode`]: (mode, hold reason). Mode 0 hold, 1 transit, 2 escape,

@@ -10,8 +10,10 @@ use super::shape::{read_shape, shape_len, write_shape, MAX_SHAPE_LEN};
 use super::{Error, Problem, MAX_BINS, MAX_CONTACTS};
 use crate::field::Shape;
 use crate::math::{Vec2, TAU};
-use crate::planner::{NavState, MAX_COORD_M, MAX_NAV_SPEED};
-use crate::sonar::{Scanline, MAX_RANGE_M, MAX_STEP_RAD, MIN_RANGE_M, MIN_STEP_RAD};
+use crate::types::{
+    NavState, Scanline, MAX_COORD_M, MAX_NAV_SPEED, MAX_RANGE_M, MAX_STEP_RAD, MIN_RANGE_M,
+    MIN_STEP_RAD,
+};
 use crate::world::{Agent, ObjectError, Obstacle, Origin, MAX_OBJECT_SPEED};
 
 /// Largest yaw rate accepted in a `Nav` message, rad/s (one turn per second: beyond any AUV).

@@ -19,7 +19,7 @@ use super::{Error, Problem};
 use crate::field::shape::MAX_POLYGON_VERTICES;
 use crate::field::{Shape, ShapeError};
 use crate::math::Vec2;
-use crate::planner::MAX_COORD_M;
+use crate::types::MAX_COORD_M;
 
 /// Kind code of a circle.
 pub const KIND_CIRCLE: u8 = 0;
