@@ -18,8 +18,9 @@ use toml::de::{DeTable, DeValue};
 use toml::Spanned;
 use vpf::field::shape::{MAX_EXTENT_M, MIN_EXTENT_M};
 use vpf::field::{Shape, MAX_POLYGON_VERTICES};
+use vpf::params::{Kind, ParamId, Value, PARAM_NAMES};
 use vpf::planner::Formation;
-use vpf::{Bounding, Params};
+use vpf::Params;
 
 pub use vpf::params::Strategy;
 
@@ -944,97 +945,18 @@ fn build(root: &Table<'_>) -> Result<Scenario, ScenarioError> {
 
 // --- [planner] -------------------------------------------------------------------------------
 
-/// The `f32` fields of `Params` by name, with their documented range (for messages; the
-/// decision is `Params::validate`'s).
-const PARAM_F32: &[(&str, &str)] = &[
-    ("epsilon_m", "0.01 ..= 10 m"),
-    ("mu", "0 ..= 10 1/s"),
-    ("f_max", "0.001 ..= 100 m/s²"),
-    ("v_max", "0.01 ..= 20 m/s"),
-    ("a_plus", "0.001 ..= 100"),
-    ("a_rotor", "0 ..= 100"),
-    ("a_minus", "0.001 ..= 10000"),
-    ("sigma_m", "0.1 ..= 10000 m"),
-    ("agent_radius_m", "0.01 ..= 100 m"),
-    ("agent_a_plus", "0.001 ..= 100"),
-    ("arrival_radius_m", "0.01 ..= 100 m"),
-    ("ghost_lambda", "0 ..= 1"),
-    ("ghost_alpha", "0.01 ..= 2"),
-    ("ghost_eps_m", "0.01 ..= 100 m"),
-    ("stall_speed", "0 ..= v_max m/s"),
-    ("stall_time_s", "0.1 ..= 600 s"),
-    ("ghost_timeout_s", "1 ..= 3600 s"),
-    ("horizon_s", "0 ..= 120 s"),
-    ("mp_arc_m", "0.1 ..= 100 m"),
-    ("mp_turn_rad", "0.05 ..= 3.14159 rad"),
-    ("mp_xi", "0.001 ..= 10000"),
-    ("mp_eta", "0 ..= 1000000"),
-    ("mp_influence_m", "0.1 ..= 1000 m"),
-    ("nf_kappa", "0 (auto) or 1 ..= 64"),
-    ("nf_workspace_m", "1 ..= 100000 m"),
-    ("route_cell_m", "0 (route layer off) or 0.5 ..= 8 m"),
-    ("turn_rate_rps", "0 (turns at once) or 0.001 ..= 10 rad/s"),
-    ("brake_mps2", "0 (F_max) or 0.001 ..= 100 m/s²"),
-];
-
-fn param_f32<'p>(p: &'p mut Params, name: &str) -> Option<&'p mut f32> {
-    Some(match name {
-        "period_s" => &mut p.period_s,
-        "epsilon_m" => &mut p.epsilon_m,
-        "mu" => &mut p.mu,
-        "f_max" => &mut p.f_max,
-        "v_max" => &mut p.v_max,
-        "a_plus" => &mut p.a_plus,
-        "a_rotor" => &mut p.a_rotor,
-        "a_minus" => &mut p.a_minus,
-        "sigma_m" => &mut p.sigma_m,
-        "agent_radius_m" => &mut p.agent_radius_m,
-        "agent_a_plus" => &mut p.agent_a_plus,
-        "arrival_radius_m" => &mut p.arrival_radius_m,
-        "ghost_lambda" => &mut p.ghost_lambda,
-        "ghost_alpha" => &mut p.ghost_alpha,
-        "ghost_eps_m" => &mut p.ghost_eps_m,
-        "stall_speed" => &mut p.stall_speed,
-        "stall_time_s" => &mut p.stall_time_s,
-        "ghost_timeout_s" => &mut p.ghost_timeout_s,
-        "horizon_s" => &mut p.horizon_s,
-        "mp_arc_m" => &mut p.mp_arc_m,
-        "mp_turn_rad" => &mut p.mp_turn_rad,
-        "mp_xi" => &mut p.mp_xi,
-        "mp_eta" => &mut p.mp_eta,
-        "mp_influence_m" => &mut p.mp_influence_m,
-        "nf_kappa" => &mut p.nf_kappa,
-        "nf_workspace_m" => &mut p.nf_workspace_m,
-        "route_cell_m" => &mut p.route_cell_m,
-        "turn_rate_rps" => &mut p.turn_rate_rps,
-        "brake_mps2" => &mut p.brake_mps2,
-        _ => return None,
-    })
+/// A parameter's declared range and unit, for messages (the decision is `Params::validate`'s).
+fn param_range(id: ParamId) -> String {
+    let range = match (id.range(), id.kind()) {
+        (vpf::params::Range::Any, Kind::U32) => format!("0 ..= {}", u32::MAX),
+        (r, _) => r.to_string(),
+    };
+    format!("{range}{}", unit_suffix(id.unit()))
 }
 
-fn param_range(name: &str) -> String {
-    match name {
-        "period_s" => "0.02 ..= 1 s".into(),
-        "n_gamma" => format!("4 ..= {}", vpf::params::N_GAMMA_MAX),
-        "max_ghosts" => format!("0 ..= {}", vpf::planner::MAX_GHOSTS),
-        "mp_points" => format!("3 ..= {}", vpf::planner::multipoint::MAX_ARC_POINTS),
-        "mp_periphery" => format!("2 ..= {}", vpf::planner::multipoint::MAX_PERIPHERY_POINTS),
-        _ => PARAM_F32
-            .iter()
-            .find(|(n, _)| *n == name)
-            .map_or_else(|| "its documented range".into(), |(_, r)| (*r).into()),
-    }
-}
-
-fn param_value(p: &Params, name: &str) -> String {
-    let mut p = *p;
-    match name {
-        "n_gamma" => p.n_gamma.to_string(),
-        "max_ghosts" => p.max_ghosts.to_string(),
-        "mp_points" => p.mp_points.to_string(),
-        "mp_periphery" => p.mp_periphery.to_string(),
-        _ => param_f32(&mut p, name).map_or_else(String::new, |v| v.to_string()),
-    }
+/// A parameter's value as a scenario would write it.
+fn param_value(p: &Params, id: ParamId) -> String {
+    p.get(id).to_string()
 }
 
 fn planner(root: &Table<'_>, dt: &Got<'_, f64>) -> Result<Params, ScenarioError> {
@@ -1042,6 +964,8 @@ fn planner(root: &Table<'_>, dt: &Got<'_, f64>) -> Result<Params, ScenarioError>
         period_s: dt.v as f32,
         ..Params::default()
     };
+    // Every name validate reports is a declared parameter.
+    let id_of = |name: &str| ParamId::from_name(name).unwrap_or(ParamId::period_s);
     let Some(t) = root.table("planner")? else {
         params.validate().map_err(|e| {
             root.src.err(
@@ -1049,74 +973,51 @@ fn planner(root: &Table<'_>, dt: &Got<'_, f64>) -> Result<Params, ScenarioError>
                 &format!("planner.{}", e.name),
                 format!(
                     "the default value {} is refused by vpf ({e})",
-                    param_value(&params, e.name)
+                    param_value(&params, id_of(e.name))
                 ),
             )
         })?;
         return Ok(params);
     };
-    t.allow(
-        &vpf::link::PARAM_NAMES,
-        "[planner] (the names of vpf::Params' fields)",
-    )?;
+    t.allow(&PARAM_NAMES, "[planner] (the names of vpf::Params' fields)")?;
 
     for &(name, _, _) in &t.entries {
-        match name {
-            "strategy" => {
-                let s = t.req_string(name)?;
-                params.strategy = Strategy::from_name(s.v).ok_or_else(|| {
-                    s.fail(format!(
-                        "unknown strategy \"{}\" (expected \"vpf\", \"multipoint\" or \"navfn\")",
-                        s.v
-                    ))
-                })?;
-            }
-            "period_s" => {
+        let Some(id) = ParamId::from_name(name) else {
+            continue;
+        };
+        let value = match id.kind() {
+            _ if id == ParamId::period_s => {
                 return Err(t.src.err(
                     &t.span_of(name),
                     &t.key(name),
                     "the planner period is the top-level `dt_s`; set it there",
                 ))
             }
-            "bounding" => {
+            Kind::Code(names) => {
                 let s = t.req_string(name)?;
-                params.bounding = choose(
-                    &s,
-                    &[("plain", Bounding::Plain), ("split", Bounding::Split)],
-                    "bounding",
-                )?;
+                let choices: Vec<(&str, u8)> = names.iter().copied().zip(0u8..).collect();
+                Value::Code(choose(&s, &choices, name)?)
             }
-            "n_gamma" | "max_ghosts" | "mp_points" | "mp_periphery" => {
+            Kind::U8 | Kind::U32 => {
                 let i = t.integer(name)?.ok_or_else(|| t.missing(name))?;
-                let v = u8::try_from(i.v).map_err(|_| {
-                    i.fail(format!("must be in {}, got {}", param_range(name), i.v))
-                })?;
-                *match name {
-                    "n_gamma" => &mut params.n_gamma,
-                    "max_ghosts" => &mut params.max_ghosts,
-                    "mp_points" => &mut params.mp_points,
-                    _ => &mut params.mp_periphery,
-                } = v;
-            }
-            "seed" => {
-                let i = t.integer(name)?.ok_or_else(|| t.missing(name))?;
-                params.seed = u32::try_from(i.v)
-                    .map_err(|_| i.fail(format!("must be in 0 ..= {}, got {}", u32::MAX, i.v)))?;
-            }
-            _ => {
-                let n = t.req_number(name)?;
-                if let Some(field) = param_f32(&mut params, name) {
-                    // Out-of-f32 values become infinite and are refused by validate below.
-                    *field = n.v as f32;
+                let refuse = || i.fail(format!("must be in {}, got {}", param_range(id), i.v));
+                if id.kind() == Kind::U8 {
+                    Value::U8(u8::try_from(i.v).map_err(|_| refuse())?)
+                } else {
+                    Value::U32(u32::try_from(i.v).map_err(|_| refuse())?)
                 }
             }
-        }
+            // Out-of-f32 values become infinite and are refused by validate below.
+            Kind::F32 => Value::F32(t.req_number(name)?.v as f32),
+        };
+        params.set(id, value);
     }
 
     params.validate().map_err(|e| {
-        let value = param_value(&params, e.name);
+        let id = id_of(e.name);
+        let value = param_value(&params, id);
         // Every number read is a finite f64, so a non-finite f32 here overflowed: out of range.
-        let problem = format!("must be in {}", param_range(e.name));
+        let problem = format!("must be in {}", param_range(id));
         if e.name == "period_s" {
             dt.fail(format!("{problem}, got {}", dt.v))
         } else if t.has(e.name) {

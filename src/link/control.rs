@@ -3,36 +3,93 @@
 //!
 //! `Mission` and `Params` parse straight into the library's [`Mission`] and [`Params`].
 
-use super::codec::{angle, finite, magnitude, refuse, within, Reader, Writer};
+use super::codec::{magnitude, refuse, within, Reader, Writer};
+use super::formation::{self, FormationRows};
 use super::frame::MessageType;
 use super::payload::Payload;
 use super::shape::{read_shape, shape_len, write_shape};
 use super::{Error, Problem};
 use crate::field::Shape;
 use crate::params::{Kind, ParamId, Params, Value};
-use crate::types::{Formation, Mission, MAX_COORD_M};
+use crate::types::{Mission, MAX_COORD_M};
 use crate::world::{ObjectError, Obstacle, Origin};
+use field::{chart_clear, chart_obstacle, mission};
 
 /// `Mission` payload length without a formation.
 pub const MISSION_LEN: usize = 9;
 /// `Mission` payload length with a formation.
 pub const MISSION_LEN_WITH_FORMATION: usize = 22;
 /// `Mission` flag bit: a formation follows.
-pub const MISSION_FLAG_FORMATION: u8 = 0x01;
+pub const MISSION_FLAG_FORMATION: u8 = formation::FLAG_FORMATION;
+
+/// Each message's rows (docs/protocol.md §6), by name: each constant is the row of the field
+/// it names.
+#[allow(missing_docs)]
+pub mod field {
+    /// `Mission`.
+    pub mod mission {
+        use crate::link::layout::Field;
+
+        pub const GOAL_X: Field = Field::new(0, 0, "f32", "goal_x");
+        pub const GOAL_Y: Field = Field::new(1, 4, "f32", "goal_y");
+        pub const FLAGS: Field = Field::new(2, 8, "u8", "flags");
+        pub const Q: Field = Field::new(3, 9, "u8", "q");
+        pub const LATTICE_M: Field = Field::new(4, 10, "f32", "lattice_m");
+        pub const ORIENTATION: Field = Field::new(5, 14, "f32", "orientation");
+        pub const ATTRACTION: Field = Field::new(6, 18, "f32", "attraction");
+        /// Every row, in order.
+        pub const ALL: &[Field] = &[GOAL_X, GOAL_Y, FLAGS, Q, LATTICE_M, ORIENTATION, ATTRACTION];
+    }
+
+    /// `ChartObstacle`.
+    pub mod chart_obstacle {
+        use crate::link::layout::Field;
+
+        pub const ID: Field = Field::new(0, 0, "u16", "id");
+        pub const A_PLUS: Field = Field::new(1, 2, "f32", "a_plus");
+        pub const SHAPE: Field = Field::new(2, 6, "shape", "shape");
+        /// Every row, in order.
+        pub const ALL: &[Field] = &[ID, A_PLUS, SHAPE];
+    }
+
+    /// `ChartClear`.
+    pub mod chart_clear {
+        use crate::link::layout::Field;
+
+        pub const SCOPE: Field = Field::new(0, 0, "u8", "scope");
+        pub const ID: Field = Field::new(1, 1, "u16", "id");
+        /// Every row, in order.
+        pub const ALL: &[Field] = &[SCOPE, ID];
+    }
+
+    /// `Tick`.
+    pub mod tick {
+        use crate::link::layout::Field;
+
+        pub const TIME_MS: Field = Field::new(0, 0, "u64", "time_ms");
+        /// Every row, in order.
+        pub const ALL: &[Field] = &[TIME_MS];
+    }
+
+    /// `Params`: the rows are the parameters, [`ParamId`](crate::params::ParamId), in
+    /// declaration order.
+    pub use crate::params::ParamId as params;
+}
+
+/// The rows of `Mission`'s formation.
+const FORMATION_ROWS: FormationRows = FormationRows {
+    flags: mission::FLAGS,
+    q: mission::Q,
+    lattice_m: mission::LATTICE_M,
+    orientation: mission::ORIENTATION,
+    attraction: mission::ATTRACTION,
+};
 
 fn check_mission(m: &Mission) -> Result<(), Error> {
-    magnitude(0, m.goal.x, MAX_COORD_M)?;
-    magnitude(1, m.goal.y, MAX_COORD_M)?;
-    if let Some(f) = m.formation {
-        if !matches!(f.q, 3 | 4 | 6) {
-            return refuse(3, Problem::UnknownCode);
-        }
-        // The ranges of Formation::validate, per field so the reply can name it.
-        within(4, f.lattice_m, 0.5, 1000.0)?;
-        angle(5, f.orientation)?;
-        within(6, f.attraction, 0.001, 1e4)?;
-        f.validate()
-            .map_err(|_| Error::field(2, Problem::Invalid))?;
+    magnitude(mission::GOAL_X, m.goal.x, MAX_COORD_M)?;
+    magnitude(mission::GOAL_Y, m.goal.y, MAX_COORD_M)?;
+    if let Some(f) = &m.formation {
+        formation::check(f, &FORMATION_ROWS)?;
     }
     Ok(())
 }
@@ -52,15 +109,10 @@ impl<'a> Payload<'a> for Mission {
         let goal = r.vec2()?;
         let flags = r.u8()?;
         if flags & !MISSION_FLAG_FORMATION != 0 {
-            return refuse(2, Problem::UnknownCode);
+            return refuse(mission::FLAGS, Problem::UnknownCode);
         }
         let formation = if flags & MISSION_FLAG_FORMATION != 0 {
-            Some(Formation {
-                q: r.u8()?,
-                lattice_m: r.f32()?,
-                orientation: r.f32()?,
-                attraction: r.f32()?,
-            })
+            Some(formation::read(&mut r)?)
         } else {
             None
         };
@@ -82,16 +134,7 @@ impl<'a> Payload<'a> for Mission {
         check_mission(self)?;
         let mut w = Writer::new(out);
         w.vec2(self.goal)?;
-        match self.formation {
-            Some(f) => {
-                w.u8(MISSION_FLAG_FORMATION)?;
-                w.u8(f.q)?;
-                w.f32(f.lattice_m)?;
-                w.f32(f.orientation)?;
-                w.f32(f.attraction)?;
-            }
-            None => w.u8(0)?,
-        }
+        formation::write(&mut w, &self.formation)?;
         Ok(w.len())
     }
 }
@@ -118,8 +161,8 @@ impl ChartObstacleRepr {
     }
 
     fn check(&self) -> Result<(), Error> {
-        within(1, self.a_plus, 0.001, 100.0)?;
-        super::shape::check_shape(2, &self.shape)
+        within(chart_obstacle::A_PLUS, self.a_plus, 0.001, 100.0)?;
+        super::shape::check_shape(chart_obstacle::SHAPE, &self.shape)
     }
 }
 
@@ -130,7 +173,7 @@ impl<'a> Payload<'a> for ChartObstacleRepr {
         let mut r = Reader::new(payload);
         let id = r.u16()?;
         let a_plus = r.f32()?;
-        let shape = read_shape(&mut r, 2)?;
+        let shape = read_shape(&mut r, chart_obstacle::SHAPE)?;
         r.finish()?;
         let c = ChartObstacleRepr { id, a_plus, shape };
         c.check()?;
@@ -146,7 +189,7 @@ impl<'a> Payload<'a> for ChartObstacleRepr {
         let mut w = Writer::new(out);
         w.u16(self.id)?;
         w.f32(self.a_plus)?;
-        write_shape(&mut w, 2, &self.shape)?;
+        write_shape(&mut w, chart_obstacle::SHAPE, &self.shape)?;
         Ok(w.len())
     }
 }
@@ -174,9 +217,9 @@ impl<'a> Payload<'a> for ChartClearRepr {
         r.finish()?;
         match (scope, id) {
             (0, 0) => Ok(ChartClearRepr::All),
-            (0, _) => refuse(1, Problem::Invalid),
+            (0, _) => refuse(chart_clear::ID, Problem::Invalid),
             (1, id) => Ok(ChartClearRepr::One(id)),
-            _ => refuse(0, Problem::UnknownCode),
+            _ => refuse(chart_clear::SCOPE, Problem::UnknownCode),
         }
     }
 
@@ -219,7 +262,7 @@ pub const PARAMS_LEN: usize = wire_len(&ParamId::ALL);
 /// The `f32` parameters must be finite (the ranges are the planner's).
 fn check_params(p: &Params) -> Result<(), Error> {
     ParamId::ALL.iter().try_for_each(|&id| match p.get(id) {
-        Value::F32(v) => finite(id.index(), v),
+        Value::F32(v) if !v.is_finite() => Err(Error::field(id.index(), Problem::NonFinite)),
         _ => Ok(()),
     })
 }
@@ -247,7 +290,7 @@ impl<'a> Payload<'a> for Params {
                 Kind::Code(_) => Value::Code(r.u8()?),
             };
             if !p.set(id, v) {
-                return refuse(id.index(), Problem::UnknownCode);
+                return Err(Error::field(id.index(), Problem::UnknownCode));
             }
         }
         r.finish()?;
@@ -312,6 +355,7 @@ pub(crate) mod tests {
     use super::*;
     use crate::link::shape::tests::arb_shape;
     use crate::math::Vec2;
+    use crate::types::Formation;
     use proptest::prelude::*;
     use proptest::strategy::Strategy;
     use std::vec::Vec;

@@ -12,9 +12,11 @@
 //! - [`frame`]: header (version, type, sequence), payload and CRC, COBS-encoded, 0x00-ended;
 //! - [`decoder`]: the stream decoder: bytes in, one [`Outcome`] per byte or chunk, resync on
 //!   the next 0x00, a counter for every rejection;
+//! - [`layout`]: [`Field`](layout::Field), a named row of a message's layout; each message file's
+//!   `field` module names its rows (checked against `docs/protocol.md` by a test);
 //! - [`shape`]: the wire form of an obstacle [`Shape`](crate::field::Shape);
 //! - [`sensors`], [`control`], [`mission`] (host → firmware) and [`report`] (firmware → host):
-//!   the messages;
+//!   the messages; [`modes`] and [`counters`], the mode codes and counters the reports carry;
 //! - [`payload`]: the [`Payload`] trait every message implements (parse, emit, length);
 //! - [`message`]: [`Message`], every message in one enum, and whole-frame parse/emit.
 //!
@@ -36,11 +38,15 @@ pub mod belief;
 pub mod cobs;
 mod codec;
 pub mod control;
+pub mod counters;
 pub mod crc;
 pub mod decoder;
+pub mod formation;
 pub mod frame;
+pub mod layout;
 pub mod message;
 pub mod mission;
+pub mod modes;
 pub mod payload;
 pub mod ping;
 pub mod report;
@@ -51,14 +57,15 @@ pub use belief::{BeliefRepr, BELIEF_ROWS};
 pub use control::{
     param_index, ChartClearRepr, ChartObstacleRepr, TickRepr, PARAMS_LEN, PARAM_NAMES,
 };
+pub use counters::{Ping360Counters, TelemetryCounters};
 pub use decoder::{Decoder, Outcome, RxCounters};
 pub use frame::{encode_frame, frame_buffer_len, split_frame, Direction, Header, MessageType};
 pub use message::Message;
 pub use mission::{MissionCountRepr, MissionItemRepr, SurveyRepr};
 pub use payload::Payload;
 pub use report::{
-    CommandRepr, CostUnit, LogLevel, LogRepr, ReplyRepr, ReplyStatus, TelemetryCounters,
-    TelemetryRepr, FIELD_WHOLE_MESSAGE,
+    CommandRepr, CostUnit, LogLevel, LogRepr, ReplyRepr, ReplyStatus, TelemetryRepr,
+    FIELD_WHOLE_MESSAGE,
 };
 pub use sensors::{BodyVelocity, Contact, ContactKind, ContactList, ContactsRepr, NavRepr};
 

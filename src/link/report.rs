@@ -1,68 +1,180 @@
-//! Reports, firmware → host: `Command`, `Telemetry`, `Reply` and `Log`.
+//! Reports, firmware → host: `Command`, `Telemetry`, `Reply` and `Log`. The mode codes they
+//! carry are [`modes`](super::modes), the counters [`counters`](super::counters).
 
 use super::codec::{angle, finite, refuse, within, Reader, Writer};
+use super::control::field::{chart_obstacle, mission};
 use super::control::param_index;
-use super::decoder::RxCounters;
+use super::counters::{Ping360Counters, TelemetryCounters, TELEMETRY_COUNTERS};
 use super::frame::{Direction, Header, MessageType};
+use super::modes::{mode_codes, mode_from_codes};
 use super::payload::Payload;
 use super::{Error, Problem, MAX_LOG_LEN};
-use crate::params::ParamProblem;
-use crate::params::MAX_GHOSTS;
-use crate::sonar::ping360::Ping360Counters;
+use crate::params::{ParamProblem, MAX_GHOSTS};
 use crate::types::{
-    Command, FormationError, HoldReason, MissionProgress, Mode, PidSetpoints, StepError,
-    MAX_NAV_SPEED, MAX_WAYPOINTS,
+    Command, FormationError, MissionProgress, Mode, PidSetpoints, StepError, MAX_NAV_SPEED,
+    MAX_WAYPOINTS,
 };
 use crate::world::{ObjectError, MAX_AGENTS, MAX_OBSTACLES};
+use field::{command, log, reply, telemetry};
 
-/// The wire codes of a [`Mode`]: (mode, hold reason). Mode 0 hold, 1 transit, 2 escape,
-/// 3 arrived, 4 guarded, 5 loiter; hold reason 0 none (any mode but hold), 1 no mission, 2 stale navigation,
-/// 3 inside an obstacle, 4 collision imminent.
-pub const fn mode_codes(mode: Mode) -> (u8, u8) {
-    match mode {
-        Mode::Hold(r) => (
-            0,
-            match r {
-                HoldReason::NoMission => 1,
-                HoldReason::StaleNav => 2,
-                HoldReason::InsideObstacle => 3,
-                HoldReason::CollisionImminent => 4,
-                HoldReason::FrozenNav => 5,
-                HoldReason::SonarBlind => 6,
-            },
-        ),
-        Mode::Transit => (1, 0),
-        Mode::Escape => (2, 0),
-        Mode::Arrived => (3, 0),
-        Mode::Guarded => (4, 0),
-        Mode::Loiter => (5, 0),
-    }
-}
+/// Each message's rows (docs/protocol.md §6), by name: each constant is the row of the field
+/// it names.
+#[allow(missing_docs)]
+pub mod field {
+    /// `Command`.
+    pub mod command {
+        use crate::link::layout::Field;
 
-/// The [`Mode`] of wire codes (mode, reason) in rows `mode_row` and `mode_row + 1`.
-fn mode_from_codes(mode: u8, reason: u8, mode_row: u8) -> Result<Mode, Error> {
-    let reason_row = mode_row + 1;
-    let m = match mode {
-        0 => Mode::Hold(match reason {
-            1 => HoldReason::NoMission,
-            2 => HoldReason::StaleNav,
-            3 => HoldReason::InsideObstacle,
-            4 => HoldReason::CollisionImminent,
-            5 => HoldReason::FrozenNav,
-            6 => HoldReason::SonarBlind,
-            _ => return refuse(reason_row, Problem::UnknownCode),
-        }),
-        1 => Mode::Transit,
-        2 => Mode::Escape,
-        3 => Mode::Arrived,
-        4 => Mode::Guarded,
-        5 => Mode::Loiter,
-        _ => return refuse(mode_row, Problem::UnknownCode),
-    };
-    if mode != 0 && reason != 0 {
-        return refuse(reason_row, Problem::Invalid);
+        pub const TIME_MS: Field = Field::new(0, 0, "u64", "time_ms");
+        pub const PSI_SET: Field = Field::new(1, 8, "f32", "psi_set");
+        pub const V_SET: Field = Field::new(2, 12, "f32", "v_set");
+        pub const A_C: Field = Field::new(3, 16, "f32", "a_c");
+        pub const V_C: Field = Field::new(4, 20, "f32", "v_c");
+        pub const I_SURGE: Field = Field::new(5, 24, "f32", "i_surge");
+        pub const ALPHA_C: Field = Field::new(6, 28, "f32", "alpha_c");
+        pub const OMEGA_C: Field = Field::new(7, 32, "f32", "omega_c");
+        pub const PHI_C: Field = Field::new(8, 36, "f32", "phi_c");
+        pub const TARGET_X: Field = Field::new(9, 40, "f32", "target_x");
+        pub const TARGET_Y: Field = Field::new(10, 44, "f32", "target_y");
+        pub const CLEARANCE_M: Field = Field::new(11, 48, "f32", "clearance_m");
+        pub const FORCE_X: Field = Field::new(12, 52, "f32", "force_x");
+        pub const FORCE_Y: Field = Field::new(13, 56, "f32", "force_y");
+        pub const VELOCITY_X: Field = Field::new(14, 60, "f32", "velocity_x");
+        pub const VELOCITY_Y: Field = Field::new(15, 64, "f32", "velocity_y");
+        pub const MODE: Field = Field::new(16, 68, "u8", "mode");
+        pub const HOLD_REASON: Field = Field::new(17, 69, "u8", "hold_reason");
+        pub const GHOST_DEPTH: Field = Field::new(18, 70, "u8", "ghost_depth");
+        /// Every row, in order.
+        pub const ALL: &[Field] = &[
+            TIME_MS,
+            PSI_SET,
+            V_SET,
+            A_C,
+            V_C,
+            I_SURGE,
+            ALPHA_C,
+            OMEGA_C,
+            PHI_C,
+            TARGET_X,
+            TARGET_Y,
+            CLEARANCE_M,
+            FORCE_X,
+            FORCE_Y,
+            VELOCITY_X,
+            VELOCITY_Y,
+            MODE,
+            HOLD_REASON,
+            GHOST_DEPTH,
+        ];
     }
-    Ok(m)
+
+    /// `Telemetry`.
+    pub mod telemetry {
+        use crate::link::layout::Field;
+
+        pub const TIME_MS: Field = Field::new(0, 0, "u64", "time_ms");
+        pub const STEP_COST: Field = Field::new(1, 8, "u32", "step_cost");
+        pub const RX_FRAMES: Field = Field::new(2, 12, "u32", "rx_frames");
+        pub const RX_CRC_ERRORS: Field = Field::new(3, 16, "u32", "rx_crc_errors");
+        pub const RX_OVERSIZE: Field = Field::new(4, 20, "u32", "rx_oversize");
+        pub const RX_FRAMING_ERRORS: Field = Field::new(5, 24, "u32", "rx_framing_errors");
+        pub const RX_UNKNOWN: Field = Field::new(6, 28, "u32", "rx_unknown");
+        pub const RX_BAD_PAYLOAD: Field = Field::new(7, 32, "u32", "rx_bad_payload");
+        pub const BAD_NAV: Field = Field::new(8, 36, "u32", "bad_nav");
+        pub const BAD_PARAMS: Field = Field::new(9, 40, "u32", "bad_params");
+        pub const BAD_MISSION: Field = Field::new(10, 44, "u32", "bad_mission");
+        pub const RX_BYTES_DROPPED: Field = Field::new(11, 48, "u32", "rx_bytes_dropped");
+        pub const FEATURES_DROPPED: Field = Field::new(12, 52, "u32", "features_dropped");
+        pub const TX_FRAMES_DROPPED: Field = Field::new(13, 56, "u32", "tx_frames_dropped");
+        pub const DEADLINE_OVERRUNS: Field = Field::new(14, 60, "u32", "deadline_overruns");
+        pub const TABLE_FULL: Field = Field::new(15, 64, "u32", "table_full");
+        pub const TABLE_EVICTED: Field = Field::new(16, 68, "u32", "table_evicted");
+        pub const FEATURES_EXTRACTED: Field = Field::new(17, 72, "u32", "features_extracted");
+        pub const MODE: Field = Field::new(18, 76, "u8", "mode");
+        pub const HOLD_REASON: Field = Field::new(19, 77, "u8", "hold_reason");
+        pub const OBSTACLES: Field = Field::new(20, 78, "u8", "obstacles");
+        pub const AGENTS: Field = Field::new(21, 79, "u8", "agents");
+        pub const GHOST_DEPTH: Field = Field::new(22, 80, "u8", "ghost_depth");
+        pub const COST_UNIT: Field = Field::new(23, 81, "u8", "cost_unit");
+        pub const GUARD_INTERVENTIONS: Field = Field::new(24, 82, "u32", "guard_interventions");
+        pub const FROZEN_NAV_HOLDS: Field = Field::new(25, 86, "u32", "frozen_nav_holds");
+        pub const REQUESTS_BUSY: Field = Field::new(26, 90, "u32", "requests_busy");
+        pub const REQUESTS_UNANSWERED: Field = Field::new(27, 94, "u32", "requests_unanswered");
+        pub const MISSION_WAYPOINT: Field = Field::new(28, 98, "u8", "mission_waypoint");
+        pub const MISSION_WAYPOINTS: Field = Field::new(29, 99, "u8", "mission_waypoints");
+        pub const MISSION_TO_GO_M: Field = Field::new(30, 100, "f32", "mission_to_go_m");
+        pub const PING360_DATA: Field = Field::new(31, 104, "u32", "ping360_data");
+        pub const PING360_COMMANDS: Field = Field::new(32, 108, "u32", "ping360_commands");
+        pub const PING360_TIMEOUTS: Field = Field::new(33, 112, "u32", "ping360_timeouts");
+        pub const PING360_CHECKSUM_ERRORS: Field =
+            Field::new(34, 116, "u32", "ping360_checksum_errors");
+        pub const PING360_MALFORMED: Field = Field::new(35, 120, "u32", "ping360_malformed");
+        pub const PING360_BYTES_SKIPPED: Field =
+            Field::new(36, 124, "u32", "ping360_bytes_skipped");
+        /// Every row, in order.
+        pub const ALL: &[Field] = &[
+            TIME_MS,
+            STEP_COST,
+            RX_FRAMES,
+            RX_CRC_ERRORS,
+            RX_OVERSIZE,
+            RX_FRAMING_ERRORS,
+            RX_UNKNOWN,
+            RX_BAD_PAYLOAD,
+            BAD_NAV,
+            BAD_PARAMS,
+            BAD_MISSION,
+            RX_BYTES_DROPPED,
+            FEATURES_DROPPED,
+            TX_FRAMES_DROPPED,
+            DEADLINE_OVERRUNS,
+            TABLE_FULL,
+            TABLE_EVICTED,
+            FEATURES_EXTRACTED,
+            MODE,
+            HOLD_REASON,
+            OBSTACLES,
+            AGENTS,
+            GHOST_DEPTH,
+            COST_UNIT,
+            GUARD_INTERVENTIONS,
+            FROZEN_NAV_HOLDS,
+            REQUESTS_BUSY,
+            REQUESTS_UNANSWERED,
+            MISSION_WAYPOINT,
+            MISSION_WAYPOINTS,
+            MISSION_TO_GO_M,
+            PING360_DATA,
+            PING360_COMMANDS,
+            PING360_TIMEOUTS,
+            PING360_CHECKSUM_ERRORS,
+            PING360_MALFORMED,
+            PING360_BYTES_SKIPPED,
+        ];
+    }
+
+    /// `Reply`.
+    pub mod reply {
+        use crate::link::layout::Field;
+
+        pub const TO_TYPE: Field = Field::new(0, 0, "u8", "to_type");
+        pub const TO_SEQ: Field = Field::new(1, 1, "u16", "to_seq");
+        pub const STATUS: Field = Field::new(2, 3, "u8", "status");
+        pub const FIELD: Field = Field::new(3, 4, "u8", "field");
+        pub const PROBLEM: Field = Field::new(4, 5, "u8", "problem");
+        /// Every row, in order.
+        pub const ALL: &[Field] = &[TO_TYPE, TO_SEQ, STATUS, FIELD, PROBLEM];
+    }
+
+    /// `Log`.
+    pub mod log {
+        use crate::link::layout::Field;
+
+        pub const LEVEL: Field = Field::new(0, 0, "u8", "level");
+        pub const TEXT: Field = Field::new(1, 1, "n × u8", "text");
+        /// Every row, in order.
+        pub const ALL: &[Field] = &[LEVEL, TEXT];
+    }
 }
 
 /// `Command` payload length.
@@ -88,26 +200,26 @@ impl CommandRepr {
     fn check(&self) -> Result<(), Error> {
         let c = &self.command;
         let s = &c.setpoints;
-        angle(1, c.psi_set)?;
-        within(2, c.v_set, 0.0, MAX_NAV_SPEED)?;
-        finite(3, s.a_c)?;
-        finite(4, s.v_c)?;
-        finite(5, s.i_surge)?;
-        finite(6, s.alpha_c)?;
-        finite(7, s.omega_c)?;
-        angle(8, s.phi_c)?;
-        finite(9, c.target.x)?;
-        finite(10, c.target.y)?;
+        angle(command::PSI_SET, c.psi_set)?;
+        within(command::V_SET, c.v_set, 0.0, MAX_NAV_SPEED)?;
+        finite(command::A_C, s.a_c)?;
+        finite(command::V_C, s.v_c)?;
+        finite(command::I_SURGE, s.i_surge)?;
+        finite(command::ALPHA_C, s.alpha_c)?;
+        finite(command::OMEGA_C, s.omega_c)?;
+        angle(command::PHI_C, s.phi_c)?;
+        finite(command::TARGET_X, c.target.x)?;
+        finite(command::TARGET_Y, c.target.y)?;
         // +∞ is a valid clearance: nothing in the world.
         if c.clearance_m.is_nan() || c.clearance_m == f32::NEG_INFINITY {
-            return refuse(11, Problem::NonFinite);
+            return refuse(command::CLEARANCE_M, Problem::NonFinite);
         }
-        finite(12, c.force.x)?;
-        finite(13, c.force.y)?;
-        finite(14, c.velocity.x)?;
-        finite(15, c.velocity.y)?;
+        finite(command::FORCE_X, c.force.x)?;
+        finite(command::FORCE_Y, c.force.y)?;
+        finite(command::VELOCITY_X, c.velocity.x)?;
+        finite(command::VELOCITY_Y, c.velocity.y)?;
         if usize::from(c.ghost_depth) > MAX_GHOSTS {
-            return refuse(18, Problem::OutOfRange);
+            return refuse(command::GHOST_DEPTH, Problem::OutOfRange);
         }
         Ok(())
     }
@@ -143,7 +255,7 @@ impl<'a> Payload<'a> for CommandRepr {
                 psi_set,
                 v_set,
                 setpoints,
-                mode: mode_from_codes(mode, reason, 16)?,
+                mode: mode_from_codes(mode, reason, command::MODE, command::HOLD_REASON)?,
                 force,
                 velocity,
                 target,
@@ -210,135 +322,13 @@ impl CostUnit {
     }
 }
 
-/// The firmware's counters since boot, each a saturating u32, in wire order.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-#[cfg_attr(feature = "serde", derive(serde::Serialize))]
-pub struct TelemetryCounters {
-    /// Frames received and accepted.
-    pub rx_frames: u32,
-    /// Frames refused for a CRC mismatch.
-    pub rx_crc_errors: u32,
-    /// Frames dropped for exceeding `MAX_FRAME`.
-    pub rx_oversize: u32,
-    /// Frames refused for bad COBS or being shorter than header and CRC.
-    pub rx_framing_errors: u32,
-    /// Frames refused for an unknown version, type or direction.
-    pub rx_unknown: u32,
-    /// Scanline, Contacts and Tick frames whose payload was refused (length or a field), and
-    /// `Tick`s back in time. Requests refused at the wire count in `bad_params` /
-    /// `bad_mission`, Nav in `bad_nav`.
-    pub rx_bad_payload: u32,
-    /// Nav messages refused: at the wire (length or a field), by the planner, or stamped more
-    /// than a second ahead of its time.
-    pub bad_nav: u32,
-    /// Params messages refused, at the wire (a non-finite number, an unknown code, the length)
-    /// or by the planner (a range): each once, here and nowhere else.
-    pub bad_params: u32,
-    /// Mission, ChartObstacle and ChartClear messages refused for their content, at the wire or
-    /// by the planner (a chart refused because the obstacle table is full counts in
-    /// `table_full` instead).
-    pub bad_mission: u32,
-    /// Received bytes lost because the receive queue was full.
-    pub rx_bytes_dropped: u32,
-    /// Sonar features lost because the feature queue was full.
-    pub features_dropped: u32,
-    /// Frames not sent because the transmit queue was full.
-    pub tx_frames_dropped: u32,
-    /// Planner periods that overran their deadline.
-    pub deadline_overruns: u32,
-    /// Obstacles or agents refused because their table was full.
-    pub table_full: u32,
-    /// Sensed obstacles evicted from a full table by nearer ones.
-    pub table_evicted: u32,
-    /// Sonar features extracted.
-    pub features_extracted: u32,
-    /// Periods whose command the guard turned, slowed or stopped (after the sixteen above on
-    /// the wire).
-    pub guard_interventions: u32,
-    /// Periods held because navigation had frozen.
-    pub frozen_nav_holds: u32,
-    /// Requests answered "busy" ([`ReplyStatus::Busy`]): the request queue was full, nothing
-    /// changed, the host sends them again.
-    pub requests_busy: u32,
-    /// Requests dropped without an answer: the request queue and the ring of owed replies were
-    /// both full (more requests between two periods than `REQUESTS_PER_PERIOD`).
-    pub requests_unanswered: u32,
-}
-
-/// Number of counters in [`TelemetryCounters`]'s first block (rows 2 ..= 17); the guard's, the
-/// frozen-navigation and the two request counters follow the byte fields (rows 24 ..= 27).
-pub const TELEMETRY_COUNTERS: usize = 16;
-
-impl TelemetryCounters {
-    /// The counters in wire order.
-    pub const fn to_array(&self) -> [u32; TELEMETRY_COUNTERS] {
-        [
-            self.rx_frames,
-            self.rx_crc_errors,
-            self.rx_oversize,
-            self.rx_framing_errors,
-            self.rx_unknown,
-            self.rx_bad_payload,
-            self.bad_nav,
-            self.bad_params,
-            self.bad_mission,
-            self.rx_bytes_dropped,
-            self.features_dropped,
-            self.tx_frames_dropped,
-            self.deadline_overruns,
-            self.table_full,
-            self.table_evicted,
-            self.features_extracted,
-        ]
-    }
-
-    /// The counters from wire order.
-    pub const fn from_array(a: [u32; TELEMETRY_COUNTERS]) -> Self {
-        let [rx_frames, rx_crc_errors, rx_oversize, rx_framing_errors, rx_unknown, rx_bad_payload, bad_nav, bad_params, bad_mission, rx_bytes_dropped, features_dropped, tx_frames_dropped, deadline_overruns, table_full, table_evicted, features_extracted] =
-            a;
-        TelemetryCounters {
-            rx_frames,
-            rx_crc_errors,
-            rx_oversize,
-            rx_framing_errors,
-            rx_unknown,
-            rx_bad_payload,
-            bad_nav,
-            bad_params,
-            bad_mission,
-            rx_bytes_dropped,
-            features_dropped,
-            tx_frames_dropped,
-            deadline_overruns,
-            table_full,
-            table_evicted,
-            features_extracted,
-            guard_interventions: 0,
-            frozen_nav_holds: 0,
-            requests_busy: 0,
-            requests_unanswered: 0,
-        }
-    }
-
-    /// Copies the stream decoder's counters into the `rx_*` fields.
-    pub fn set_rx(&mut self, rx: &RxCounters) {
-        self.rx_frames = rx.frames;
-        self.rx_crc_errors = rx.crc;
-        self.rx_oversize = rx.oversize;
-        self.rx_framing_errors = rx.framing;
-        self.rx_unknown = rx.version.saturating_add(rx.unknown_type);
-        self.rx_bad_payload = rx.bad_payload;
-    }
-}
-
 /// `Telemetry` payload length: 98 bytes, the mission progress block (rows 28 ..= 30, 6 bytes)
 /// and the Ping360 block (rows 31 ..= 36).
 pub const TELEMETRY_LEN: usize = 104 + 4 * Ping360Counters::COUNT;
 /// The row of the first mission-progress field.
-pub const TELEMETRY_MISSION_ROW: u8 = 28;
+pub const TELEMETRY_MISSION_ROW: u8 = telemetry::MISSION_WAYPOINT.row;
 /// Row of the first Ping360 counter in `Telemetry`.
-pub const TELEMETRY_PING360_ROW: u8 = 31;
+pub const TELEMETRY_PING360_ROW: u8 = telemetry::PING360_DATA.row;
 
 /// `Telemetry` (0x82): health and counters, sent periodically.
 ///
@@ -380,22 +370,21 @@ pub struct TelemetryRepr {
 impl TelemetryRepr {
     fn check(&self) -> Result<(), Error> {
         let m = &self.mission;
-        let row = TELEMETRY_MISSION_ROW;
         if usize::from(m.count) > MAX_WAYPOINTS {
-            return refuse(row + 1, Problem::OutOfRange);
+            return refuse(telemetry::MISSION_WAYPOINTS, Problem::OutOfRange);
         }
         if m.current > m.count {
-            return refuse(row, Problem::OutOfRange);
+            return refuse(telemetry::MISSION_WAYPOINT, Problem::OutOfRange);
         }
-        within(row + 2, m.to_go_m, 0.0, f32::MAX)?;
+        within(telemetry::MISSION_TO_GO_M, m.to_go_m, 0.0, f32::MAX)?;
         if usize::from(self.obstacles) > MAX_OBSTACLES {
-            return refuse(20, Problem::OutOfRange);
+            return refuse(telemetry::OBSTACLES, Problem::OutOfRange);
         }
         if usize::from(self.agents) > MAX_AGENTS {
-            return refuse(21, Problem::OutOfRange);
+            return refuse(telemetry::AGENTS, Problem::OutOfRange);
         }
         if usize::from(self.ghost_depth) > MAX_GHOSTS {
-            return refuse(22, Problem::OutOfRange);
+            return refuse(telemetry::GHOST_DEPTH, Problem::OutOfRange);
         }
         Ok(())
     }
@@ -434,12 +423,13 @@ impl<'a> Payload<'a> for TelemetryRepr {
         r.finish()?;
         let t = TelemetryRepr {
             time_ms,
-            mode: mode_from_codes(mode, reason, 18)?,
+            mode: mode_from_codes(mode, reason, telemetry::MODE, telemetry::HOLD_REASON)?,
             obstacles,
             agents,
             ghost_depth,
             step_cost,
-            cost_unit: CostUnit::from_code(unit).ok_or(Error::field(23, Problem::UnknownCode))?,
+            cost_unit: CostUnit::from_code(unit)
+                .ok_or(telemetry::COST_UNIT.error(Problem::UnknownCode))?,
             counters: TelemetryCounters {
                 guard_interventions,
                 frozen_nav_holds,
@@ -582,10 +572,16 @@ impl ReplyRepr {
                 },
             ),
             // The wire already refused non-finite goals: only the range is left.
-            StepError::BadGoal => (0, Problem::OutOfRange),
-            StepError::BadFormation(FormationError::Descriptor) => (3, Problem::UnknownCode),
-            StepError::BadFormation(FormationError::NonFinite) => (2, Problem::NonFinite),
-            StepError::BadFormation(FormationError::OutOfRange) => (2, Problem::OutOfRange),
+            StepError::BadGoal => (mission::GOAL_X.row, Problem::OutOfRange),
+            StepError::BadFormation(FormationError::Descriptor) => {
+                (mission::Q.row, Problem::UnknownCode)
+            }
+            StepError::BadFormation(FormationError::NonFinite) => {
+                (mission::FLAGS.row, Problem::NonFinite)
+            }
+            StepError::BadFormation(FormationError::OutOfRange) => {
+                (mission::FLAGS.row, Problem::OutOfRange)
+            }
             // Waypoint missions are checked at the wire, row by row (`super::mission`).
             StepError::BadNav | StepError::BadMission(_) => (FIELD_WHOLE_MESSAGE, Problem::Invalid),
             StepError::NonFinite => (FIELD_WHOLE_MESSAGE, Problem::NonFinite),
@@ -601,7 +597,7 @@ impl ReplyRepr {
             ObjectError::NonFinite => Problem::NonFinite,
             ObjectError::OutOfRange => Problem::OutOfRange,
         };
-        ReplyRepr::rejected(to, 1, problem)
+        ReplyRepr::rejected(to, chart_obstacle::A_PLUS.row, problem)
     }
 
     /// The obstacle table was full (charted obstacles are never evicted).
@@ -611,7 +607,7 @@ impl ReplyRepr {
 
     fn check(&self) -> Result<(), Error> {
         if self.to_type.direction() != Direction::ToFirmware {
-            return refuse(0, Problem::Invalid);
+            return refuse(reply::TO_TYPE, Problem::Invalid);
         }
         Ok(())
     }
@@ -629,18 +625,18 @@ impl<'a> Payload<'a> for ReplyRepr {
         let problem = r.u8()?;
         r.finish()?;
         let to_type =
-            MessageType::from_code(to_type).ok_or(Error::field(0, Problem::UnknownCode))?;
+            MessageType::from_code(to_type).ok_or(reply::TO_TYPE.error(Problem::UnknownCode))?;
         let status = match status {
             0 if field == 0 && problem == 0 => ReplyStatus::Accepted,
-            0 => return refuse(3, Problem::Invalid),
+            0 => return refuse(reply::FIELD, Problem::Invalid),
             1 => ReplyStatus::Rejected {
                 field,
                 problem: Problem::from_code(problem)
-                    .ok_or(Error::field(4, Problem::UnknownCode))?,
+                    .ok_or(reply::PROBLEM.error(Problem::UnknownCode))?,
             },
             2 if field == 0 && problem == 0 => ReplyStatus::Busy,
-            2 => return refuse(3, Problem::Invalid),
-            _ => return refuse(2, Problem::UnknownCode),
+            2 => return refuse(reply::FIELD, Problem::Invalid),
+            _ => return refuse(reply::STATUS, Problem::UnknownCode),
         };
         let reply = ReplyRepr {
             to_type,
@@ -735,11 +731,11 @@ impl<'a> Payload<'a> for LogRepr<'a> {
         let mut r = Reader::new(payload);
         let level = r.u8()?;
         let text = r.rest();
-        let level = LogLevel::from_code(level).ok_or(Error::field(0, Problem::UnknownCode))?;
+        let level = LogLevel::from_code(level).ok_or(log::LEVEL.error(Problem::UnknownCode))?;
         if text.len() > MAX_LOG_LEN {
-            return refuse(1, Problem::OutOfRange);
+            return refuse(log::TEXT, Problem::OutOfRange);
         }
-        let text = core::str::from_utf8(text).map_err(|_| Error::field(1, Problem::Invalid))?;
+        let text = core::str::from_utf8(text).map_err(|_| log::TEXT.error(Problem::Invalid))?;
         Ok(LogRepr { level, text })
     }
 
@@ -749,7 +745,7 @@ impl<'a> Payload<'a> for LogRepr<'a> {
 
     fn emit(&self, out: &mut [u8]) -> Result<usize, Error> {
         if self.text.len() > MAX_LOG_LEN {
-            return refuse(1, Problem::OutOfRange);
+            return refuse(log::TEXT, Problem::OutOfRange);
         }
         let mut w = Writer::new(out);
         w.u8(self.level as u8)?;
@@ -762,8 +758,10 @@ impl<'a> Payload<'a> for LogRepr<'a> {
 pub(crate) mod tests {
     extern crate std;
     use super::*;
+    use crate::link::decoder::RxCounters;
     use crate::math::Vec2;
     use crate::params::ParamError;
+    use crate::types::HoldReason;
     use proptest::prelude::*;
     use std::vec;
 

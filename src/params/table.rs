@@ -241,3 +241,37 @@ macro_rules! declare_params {
         }
     };
 }
+
+/// A range as the docs and the scenario reader write it: `0.02 ..= 1`, `0 (auto) or 1 ..= 64`,
+/// `0 ..= v_max`, `any`; π is written π.
+impl core::fmt::Display for Range {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        struct Num(f32);
+        impl core::fmt::Display for Num {
+            fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+                if self.0 == crate::math::PI {
+                    f.write_str("π")
+                } else {
+                    write!(f, "{}", self.0)
+                }
+            }
+        }
+        match *self {
+            Range::Any => f.write_str("any"),
+            Range::Within(lo, hi) => write!(f, "{} ..= {}", Num(lo), Num(hi)),
+            Range::ZeroOr(lo, hi, zero) => write!(f, "0 ({zero}) or {} ..= {}", Num(lo), Num(hi)),
+            Range::UpTo(lo, other) => write!(f, "{} ..= {}", Num(lo), other.name()),
+        }
+    }
+}
+
+/// A value as a scenario file writes it (an enum by its name).
+impl core::fmt::Display for Value {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match *self {
+            Value::F32(v) => write!(f, "{v}"),
+            Value::U8(v) | Value::Code(v) => write!(f, "{v}"),
+            Value::U32(v) => write!(f, "{v}"),
+        }
+    }
+}

@@ -818,20 +818,15 @@ pub fn families(ids: &[String]) -> String {
         .join(", ")
 }
 
-/// A method-independent parameter's value in `p`.
+/// A parameter's value in `p`, as a recipe writes it (an enum by its name).
 fn param_value(p: &vpf::Params, name: &str) -> Option<Value> {
-    let f = |x: f32| Value::Float(x.to_string().parse().unwrap_or(f64::from(x)));
-    Some(match name {
-        "a_plus" => f(p.a_plus),
-        "a_rotor" => f(p.a_rotor),
-        "epsilon_m" => f(p.epsilon_m),
-        "n_gamma" => Value::Int(i64::from(p.n_gamma)),
-        "mu" => f(p.mu),
-        "f_max" => f(p.f_max),
-        "v_max" => f(p.v_max),
-        "sigma_m" => f(p.sigma_m),
-        "a_minus" => f(p.a_minus),
-        _ => return None,
+    use vpf::params::{Kind, ParamId, Value as V};
+    let id = ParamId::from_name(name)?;
+    Some(match (p.get(id), id.kind()) {
+        (V::F32(x), _) => Value::Float(x.to_string().parse().unwrap_or(f64::from(x))),
+        (V::Code(c), Kind::Code(names)) => Value::Str(names.get(usize::from(c))?.to_string()),
+        (V::U8(x) | V::Code(x), _) => Value::Int(i64::from(x)),
+        (V::U32(x), _) => Value::Int(i64::from(x)),
     })
 }
 
