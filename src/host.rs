@@ -1,4 +1,4 @@
-//! The firmware as a host process: the same guidance runtime (`vpf::guidance::SingleContext`)
+//! The firmware as a host process: the same guidance runtime (`vpf::guidance::OneThreadRuntime`)
 //! and the same serial protocol, over stdio or a serial device (a pty from the HIL harness, or a
 //! USB serial adapter).
 //!
@@ -28,7 +28,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{mpsc, Arc};
 use std::time::{Duration, Instant};
 
-use vpf::guidance::{RuntimeConfig, SingleContext};
+use vpf::guidance::{OneThreadRuntime, RuntimeConfig};
 use vpf::link::CostUnit;
 use vpf::sonar::ping360::Ping360Config;
 use vpf::Params;
@@ -287,7 +287,7 @@ fn run(
     is_device: bool,
     sonar: Option<(SonarPort, Ping360Config)>,
 ) -> std::io::Result<()> {
-    let mut fw = SingleContext::new(
+    let mut fw = OneThreadRuntime::new(
         Params::default(),
         RuntimeConfig::default(),
         CostUnit::Microseconds,

@@ -2,7 +2,7 @@
 //! "Faults and bad input").
 //!
 //! A bounded number of inputs, from a small deterministic PRNG (xorshift64*) with a fixed seed,
-//! go through [`SingleContext::on_bytes`] exactly as `src/host.rs` and `tests/runtime.rs` feed
+//! go through [`OneThreadRuntime::on_bytes`] exactly as `src/host.rs` and `tests/runtime.rs` feed
 //! it, each followed by one period (a `Tick` frame in lockstep mode, `on_tick` in real time, as
 //! `src/host.rs` does). Every input is built from frames of all the protocol's message types
 //! (`docs/protocol.md` §4; host → firmware ones as the firmware's input, firmware → host ones,
@@ -50,7 +50,7 @@ use std::f32::consts::{PI, TAU};
 use std::panic::{catch_unwind, AssertUnwindSafe};
 
 use vpf::field::Shape;
-use vpf::guidance::{RuntimeConfig, SingleContext};
+use vpf::guidance::{OneThreadRuntime, RuntimeConfig};
 use vpf::link::{
     BeliefRepr, BodyVelocity, ChartClearRepr, ChartObstacleRepr, CommandRepr, Contact, ContactKind,
     ContactList, ContactsRepr, CostUnit, Decoder, Direction, Error, Header, LogLevel, LogRepr,
@@ -1298,7 +1298,7 @@ struct Sent {
 }
 
 struct Harness {
-    fw: SingleContext,
+    fw: OneThreadRuntime,
     model: Model,
     host: Decoder,
     seq: u16,
@@ -1319,7 +1319,7 @@ struct Harness {
 impl Harness {
     fn new(sonar: bool) -> Self {
         Harness {
-            fw: SingleContext::new(
+            fw: OneThreadRuntime::new(
                 Params::default(),
                 RuntimeConfig::default(),
                 CostUnit::Unknown,

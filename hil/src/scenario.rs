@@ -338,7 +338,7 @@ pub fn parse(text: &str, file: &str) -> Result<Scenario, ScenarioError> {
     if text.len() > MAX_SCENARIO_BYTES {
         return Err(too_big(file, text.len() as u64));
     }
-    let src = Src { file, text };
+    let src = SourceText { file, text };
     let doc = DeTable::parse(text).map_err(|e| src.syntax(&e))?;
     let root = Table::new(src, String::new(), 0..0, doc.get_ref());
     build(&root)
@@ -358,7 +358,7 @@ fn too_big(file: &str, bytes: u64) -> ScenarioError {
 }
 
 /// A name that will become a directory or file name: not blank, at most [`MAX_NAME_CHARS`].
-fn check_name(name: &Got<'_, &str>) -> Result<(), ScenarioError> {
+fn check_name(name: &Located<'_, &str>) -> Result<(), ScenarioError> {
     if name.v.trim().is_empty() {
         return Err(name.fail("must not be empty"));
     }
@@ -376,11 +376,11 @@ fn check_name(name: &Got<'_, &str>) -> Result<(), ScenarioError> {
 /// it gives (`Params::default()` with its overrides) at planner period `dt_s`. Errors name
 /// `file`, the line and the key, as for a scenario.
 pub fn parse_planner(text: &str, file: &str, dt_s: f64) -> Result<Params, ScenarioError> {
-    let src = Src { file, text };
+    let src = SourceText { file, text };
     let doc = DeTable::parse(text).map_err(|e| src.syntax(&e))?;
     let root = Table::new(src, String::new(), 0..0, doc.get_ref());
     root.allow(&["planner"], "a parameter file (only a [planner] table)")?;
-    let dt = Got {
+    let dt = Located {
         v: dt_s,
         span: 0..0,
         key: "dt_s".into(),
@@ -395,12 +395,12 @@ pub fn parse_planner(text: &str, file: &str, dt_s: f64) -> Result<Params, Scenar
 /// A TOML text and its file name, for errors that name file, line and key (shared with the
 /// sweep spec parser, `crate::sweep::spec`).
 #[derive(Clone, Copy)]
-pub(crate) struct Src<'a> {
+pub(crate) struct SourceText<'a> {
     pub(crate) file: &'a str,
     pub(crate) text: &'a str,
 }
 
-impl Src<'_> {
+impl SourceText<'_> {
     pub(crate) fn line_of(&self, offset: usize) -> usize {
         let end = offset.min(self.text.len());
         1 + self.text.as_bytes()[..end]
@@ -453,20 +453,20 @@ impl Src<'_> {
 pub(crate) type Val<'a> = Spanned<DeValue<'a>>;
 
 /// One value with its key path and span, for checks that report it.
-struct Got<'a, T> {
+struct Located<'a, T> {
     v: T,
     span: Range<usize>,
     key: String,
-    src: Src<'a>,
+    src: SourceText<'a>,
 }
 
-impl<T> Got<'_, T> {
+impl<T> Located<'_, T> {
     fn fail(&self, message: impl Into<String>) -> ScenarioError {
         self.src.err(&self.span, &self.key, message)
     }
 }
 
-impl Got<'_, f64> {
+impl Located<'_, f64> {
     /// `lo ..= hi`.
     fn within(&self, lo: f64, hi: f64, unit: &str) -> Result<f64, ScenarioError> {
         if (lo..=hi).contains(&self.v) {
@@ -520,7 +520,7 @@ fn join(path: &str, key: &str) -> String {
 /// A table of the document with its key path and the span of its header (shared with the
 /// sweep spec parser, which adds its own range-checked readers).
 pub(crate) struct Table<'a> {
-    pub(crate) src: Src<'a>,
+    pub(crate) src: SourceText<'a>,
     pub(crate) path: String,
     pub(crate) span: Range<usize>,
     /// (key, key span, value), in file order.
@@ -528,7 +528,12 @@ pub(crate) struct Table<'a> {
 }
 
 impl<'a> Table<'a> {
-    pub(crate) fn new(src: Src<'a>, path: String, span: Range<usize>, t: &'a DeTable<'a>) -> Self {
+    pub(crate) fn new(
+        src: SourceText<'a>,
+        path: String,
+        span: Range<usize>,
+        t: &'a DeTable<'a>,
+    ) -> Self {
         let mut entries: Vec<_> = t
             .iter()
             .map(|(k, v)| (k.get_ref().as_ref(), k.span(), v))
@@ -584,8 +589,8 @@ impl<'a> Table<'a> {
             .err(&self.span, &self.key(key), "missing required key")
     }
 
-    fn got<T>(&self, key: &str, v: T, span: Range<usize>) -> Got<'a, T> {
-        Got {
+    fn got<T>(&self, key: &str, v: T, span: Range<usize>) -> Located<'a, T> {
+        Located {
             v,
             span,
             key: self.key(key),
@@ -593,23 +598,23 @@ impl<'a> Table<'a> {
         }
     }
 
-    fn number(&self, key: &str) -> Result<Option<Got<'a, f64>>, ScenarioError> {
+    fn number(&self, key: &str) -> Result<Option<Located<'a, f64>>, ScenarioError> {
         self.get(key)
             .map(|v| value_number(self.src, &self.key(key), v).map(|x| self.got(key, x, v.span())))
             .transpose()
     }
 
-    fn req_number(&self, key: &str) -> Result<Got<'a, f64>, ScenarioError> {
+    fn req_number(&self, key: &str) -> Result<Located<'a, f64>, ScenarioError> {
         self.number(key)?.ok_or_else(|| self.missing(key))
     }
 
-    fn integer(&self, key: &str) -> Result<Option<Got<'a, i64>>, ScenarioError> {
+    fn integer(&self, key: &str) -> Result<Option<Located<'a, i64>>, ScenarioError> {
         self.get(key)
             .map(|v| value_integer(self.src, &self.key(key), v).map(|x| self.got(key, x, v.span())))
             .transpose()
     }
 
-    fn string(&self, key: &str) -> Result<Option<Got<'a, &'a str>>, ScenarioError> {
+    fn string(&self, key: &str) -> Result<Option<Located<'a, &'a str>>, ScenarioError> {
         self.get(key)
             .map(|v| match v.get_ref() {
                 DeValue::String(s) => Ok(self.got(key, s.as_ref(), v.span())),
@@ -635,19 +640,19 @@ impl<'a> Table<'a> {
             .transpose()
     }
 
-    fn req_string(&self, key: &str) -> Result<Got<'a, &'a str>, ScenarioError> {
+    fn req_string(&self, key: &str) -> Result<Located<'a, &'a str>, ScenarioError> {
         self.string(key)?.ok_or_else(|| self.missing(key))
     }
 
     /// A pair `[x, y]` of finite numbers.
-    fn pair(&self, key: &str) -> Result<Option<Got<'a, P2>>, ScenarioError> {
+    fn pair(&self, key: &str) -> Result<Option<Located<'a, P2>>, ScenarioError> {
         self.get(key)
             .map(|v| value_pair(self.src, &self.key(key), v).map(|p| self.got(key, p, v.span())))
             .transpose()
     }
 
     /// A position: a pair within ±[`MAX_POSITION_M`].
-    fn position(&self, key: &str) -> Result<Option<Got<'a, P2>>, ScenarioError> {
+    fn position(&self, key: &str) -> Result<Option<Located<'a, P2>>, ScenarioError> {
         let Some(p) = self.pair(key)? else {
             return Ok(None);
         };
@@ -655,7 +660,7 @@ impl<'a> Table<'a> {
         Ok(Some(p))
     }
 
-    fn req_position(&self, key: &str) -> Result<Got<'a, P2>, ScenarioError> {
+    fn req_position(&self, key: &str) -> Result<Located<'a, P2>, ScenarioError> {
         self.position(key)?.ok_or_else(|| self.missing(key))
     }
 
@@ -716,7 +721,11 @@ impl<'a> Table<'a> {
     }
 }
 
-fn as_table<'a>(src: Src<'a>, path: String, v: &'a Val<'a>) -> Result<Table<'a>, ScenarioError> {
+fn as_table<'a>(
+    src: SourceText<'a>,
+    path: String,
+    v: &'a Val<'a>,
+) -> Result<Table<'a>, ScenarioError> {
     match v.get_ref() {
         DeValue::Table(t) => Ok(Table::new(src, path, v.span(), t)),
         other => Err(src.err(
@@ -727,7 +736,11 @@ fn as_table<'a>(src: Src<'a>, path: String, v: &'a Val<'a>) -> Result<Table<'a>,
     }
 }
 
-pub(crate) fn value_integer(src: Src<'_>, key: &str, v: &Val<'_>) -> Result<i64, ScenarioError> {
+pub(crate) fn value_integer(
+    src: SourceText<'_>,
+    key: &str,
+    v: &Val<'_>,
+) -> Result<i64, ScenarioError> {
     match v.get_ref() {
         DeValue::Integer(i) => i64::from_str_radix(i.as_str(), i.radix())
             .map_err(|_| src.err(&v.span(), key, format!("integer {i} is too large"))),
@@ -740,7 +753,11 @@ pub(crate) fn value_integer(src: Src<'_>, key: &str, v: &Val<'_>) -> Result<i64,
 }
 
 /// A finite number; integers are accepted where numbers are expected.
-pub(crate) fn value_number(src: Src<'_>, key: &str, v: &Val<'_>) -> Result<f64, ScenarioError> {
+pub(crate) fn value_number(
+    src: SourceText<'_>,
+    key: &str,
+    v: &Val<'_>,
+) -> Result<f64, ScenarioError> {
     let x = match v.get_ref() {
         DeValue::Integer(_) => value_integer(src, key, v)? as f64,
         DeValue::Float(f) => f
@@ -762,7 +779,7 @@ pub(crate) fn value_number(src: Src<'_>, key: &str, v: &Val<'_>) -> Result<f64, 
     }
 }
 
-fn value_pair(src: Src<'_>, key: &str, v: &Val<'_>) -> Result<P2, ScenarioError> {
+fn value_pair(src: SourceText<'_>, key: &str, v: &Val<'_>) -> Result<P2, ScenarioError> {
     match v.get_ref() {
         DeValue::Array(a) if a.len() == 2 => {
             let x = value_number(src, &format!("{key}[0]"), &a[0])?;
@@ -782,7 +799,7 @@ fn value_pair(src: Src<'_>, key: &str, v: &Val<'_>) -> Result<P2, ScenarioError>
     }
 }
 
-fn check_position(p: &Got<'_, P2>) -> Result<(), ScenarioError> {
+fn check_position(p: &Located<'_, P2>) -> Result<(), ScenarioError> {
     if p.v.x.abs() > MAX_POSITION_M || p.v.y.abs() > MAX_POSITION_M {
         return Err(p.fail(format!(
             "coordinates must be within ±{MAX_POSITION_M} m, got [{}, {}]",
@@ -819,7 +836,7 @@ fn edit_distance(a: &str, b: &str) -> usize {
 
 /// Matches a string value against `(name, value)` choices.
 fn choose<T: Copy>(
-    s: &Got<'_, &str>,
+    s: &Located<'_, &str>,
     choices: &[(&str, T)],
     what: &str,
 ) -> Result<T, ScenarioError> {
@@ -959,7 +976,7 @@ fn param_value(p: &Params, id: ParamId) -> String {
     p.get(id).to_string()
 }
 
-fn planner(root: &Table<'_>, dt: &Got<'_, f64>) -> Result<Params, ScenarioError> {
+fn planner(root: &Table<'_>, dt: &Located<'_, f64>) -> Result<Params, ScenarioError> {
     let mut params = Params {
         period_s: dt.v as f32,
         ..Params::default()
@@ -1229,7 +1246,7 @@ fn obstacle(t: &Table<'_>) -> Result<(SimObstacle, Shape), ScenarioError> {
             let center = t.req_position("center")?.v;
             let half = t.pair("half_size")?.ok_or_else(|| t.missing("half_size"))?;
             for (i, v) in [half.v.x, half.v.y].into_iter().enumerate() {
-                let side = Got {
+                let side = Located {
                     v,
                     span: half.span.clone(),
                     key: format!("{}[{i}]", half.key),
@@ -1309,7 +1326,7 @@ fn polygon(t: &Table<'_>) -> Result<Vec<P2>, ScenarioError> {
     }
     let mut pts = Vec::with_capacity(n);
     for (i, item) in items.iter().enumerate() {
-        let p = Got {
+        let p = Located {
             v: value_pair(t.src, &format!("{key}[{i}]"), item)?,
             span: item.span(),
             key: format!("{key}[{i}]"),
@@ -1424,7 +1441,7 @@ fn vehicle(
             )
         }
         (None, Some((_, placed))) => match placed.last() {
-            Some(p) => Got {
+            Some(p) => Located {
                 v: p.at.v,
                 span: p.at.span.clone(),
                 key: p.at.key.clone(),

@@ -4,7 +4,7 @@
 
 use heapless::spsc::Consumer;
 use rtic::Mutex;
-use vpf::guidance::{Background, Control, NavSample, Sighting, Sink};
+use vpf::guidance::{Background, BackgroundOutputs, Control, NavSample, Sighting};
 use vpf::link::ReplyRepr;
 use vpf::route::{Route, Router};
 
@@ -117,13 +117,13 @@ pub struct BackgroundTask {
     queues: Producers,
 }
 
-/// The background's [`Sink`]: its queue ends and the shared resources.
+/// The background's [`BackgroundOutputs`]: its queue ends and the shared resources.
 struct Outlet<'a, X: Exchange> {
     queues: &'a mut Producers,
     exchange: &'a mut X,
 }
 
-impl<X: Exchange> Sink for Outlet<'_, X> {
+impl<X: Exchange> BackgroundOutputs for Outlet<'_, X> {
     fn nav(&mut self, sample: NavSample) {
         self.exchange.publish_nav(sample);
     }

@@ -147,6 +147,8 @@ impl core::fmt::Display for Problem {
     }
 }
 
+impl core::error::Error for Problem {}
+
 /// Why bytes could not be parsed or emitted. Small and `Copy`, like smoltcp's `wire::Error`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]

@@ -1186,7 +1186,7 @@ pub(crate) mod tests {
             })
     }
 
-    /// Owned log fields: (level code, text of at most MAX_LOG_LEN bytes).
+    /// OwnedMessage log fields: (level code, text of at most MAX_LOG_LEN bytes).
     pub(crate) fn arb_log() -> impl Strategy<Value = (u8, std::string::String)> {
         (
             0u8..4,

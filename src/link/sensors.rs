@@ -872,7 +872,7 @@ pub(crate) mod tests {
             })
     }
 
-    /// Owned scanline fields: (time, bearing, step, range, bins).
+    /// OwnedMessage scanline fields: (time, bearing, step, range, bins).
     pub(crate) fn arb_scanline() -> impl Strategy<Value = (u64, f32, f32, f32, Vec<u8>)> {
         (
             any::<u64>(),

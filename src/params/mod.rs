@@ -254,15 +254,24 @@ pub struct ParamError {
     pub problem: ParamProblem,
 }
 
-impl core::fmt::Display for ParamError {
+impl core::fmt::Display for ParamProblem {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        let why = match self.problem {
+        f.write_str(match self {
             ParamProblem::NonFinite => "is not a finite number",
             ParamProblem::OutOfRange => "is out of its documented range",
-        };
-        write!(f, "parameter `{}` {}", self.name, why)
+        })
     }
 }
+
+impl core::error::Error for ParamProblem {}
+
+impl core::fmt::Display for ParamError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        write!(f, "parameter `{}` {}", self.name, self.problem)
+    }
+}
+
+impl core::error::Error for ParamError {}
 
 impl Params {
     /// The deceleration the guard plans stops with, m/s²: `brake_mps2`, or F_max when it is 0.

@@ -38,6 +38,8 @@ impl core::fmt::Display for FormationError {
     }
 }
 
+impl core::error::Error for FormationError {}
+
 impl Formation {
     /// Checks q, λ, θ₀ and A⁻.
     pub fn validate(&self) -> Result<(), FormationError> {

@@ -81,6 +81,8 @@ impl core::fmt::Display for WaypointError {
     }
 }
 
+impl core::error::Error for WaypointError {}
+
 /// Why a mission was refused. Nothing changes when one is.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -122,6 +124,8 @@ impl core::fmt::Display for MissionError {
         }
     }
 }
+
+impl core::error::Error for MissionError {}
 
 /// A waypoint: where, how close counts as arrived, and how fast to fly the leg to it. Built
 /// only through [`Waypoint::new`] (and [`Waypoint::with_speed`]), so every one is valid.

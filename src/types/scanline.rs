@@ -62,6 +62,8 @@ impl core::fmt::Display for ScanError {
     }
 }
 
+impl core::error::Error for ScanError {}
+
 impl Scanline<'_> {
     /// Checks the scanline's numbers and bin count.
     pub fn validate(&self) -> Result<(), ScanError> {

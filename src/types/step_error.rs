@@ -34,3 +34,5 @@ impl core::fmt::Display for StepError {
         }
     }
 }
+
+impl core::error::Error for StepError {}

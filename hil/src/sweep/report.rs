@@ -103,7 +103,7 @@ pub struct Report {
     pub best_by_family: Vec<(String, usize, usize, usize, f64)>,
 }
 
-fn f(x: f64, d: usize) -> String {
+fn fixed(x: f64, d: usize) -> String {
     if x.is_finite() {
         format!("{x:.d$}")
     } else {
@@ -358,13 +358,13 @@ impl Report {
                 st.runs,
                 st.collided,
                 st.close,
-                f(st.mean_clearance_m, 2),
-                f(st.worst_clearance_m, 2),
-                f(st.path_ratio, 3),
-                f(st.time_s, 1),
-                f(st.energy, 1),
-                f(st.oscillation, 2),
-                f(st.cost, 3)
+                fixed(st.mean_clearance_m, 2),
+                fixed(st.worst_clearance_m, 2),
+                fixed(st.path_ratio, 3),
+                fixed(st.time_s, 1),
+                fixed(st.energy, 1),
+                fixed(st.oscillation, 2),
+                fixed(st.cost, 3)
             );
         }
         s
@@ -665,18 +665,18 @@ impl Report {
             b.successes,
             b.runs,
             b.collided,
-            f(b.mean_clearance_m, 2),
-            f(b.worst_clearance_m, 2)
+            fixed(b.mean_clearance_m, 2),
+            fixed(b.worst_clearance_m, 2)
         );
         let _ = writeln!(
             s,
             "#   ({} runs under the {} m margin), path ratio {}, time {} s, energy {}, {} reversals/100 m.",
             b.close,
             spec.craft.margin_m,
-            f(b.path_ratio, 3),
-            f(b.time_s, 1),
-            f(b.energy, 1),
-            f(b.oscillation, 2)
+            fixed(b.path_ratio, 3),
+            fixed(b.time_s, 1),
+            fixed(b.energy, 1),
+            fixed(b.oscillation, 2)
         );
         let _ = writeln!(
             s,
@@ -745,11 +745,11 @@ impl Report {
                 100.0 * st.success_rate(),
                 st.collided,
                 st.close,
-                f(st.mean_clearance_m, 2),
-                f(st.worst_clearance_m, 2),
-                f(st.path_ratio, 2),
-                f(st.time_s, 1),
-                f(st.cost, 3)
+                fixed(st.mean_clearance_m, 2),
+                fixed(st.worst_clearance_m, 2),
+                fixed(st.path_ratio, 2),
+                fixed(st.time_s, 1),
+                fixed(st.cost, 3)
             );
         }
         s

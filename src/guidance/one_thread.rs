@@ -1,7 +1,7 @@
 //! Both halves of the runtime in one context, wired with queues of the same capacities and
 //! policies as the firmware's: the host-process firmware and the tests run this.
 //!
-//! Bytes in with [`SingleContext::on_bytes`]; a period with [`SingleContext::on_tick`] (real
+//! Bytes in with [`OneThreadRuntime::on_bytes`]; a period with [`OneThreadRuntime::on_tick`] (real
 //! time), or by a `Tick` message from the host (lockstep), which runs the period right away.
 //! Outgoing frames are appended to a caller-supplied transmit function.
 
@@ -15,8 +15,8 @@ use crate::sonar::ping360::{ConfigError, Ping360, Ping360Config, Ping360Counters
 use crate::sonar::{EvidenceMap, ExtractorConfig};
 
 use super::{
-    Background, BackgroundCounters, Control, Inputs, NavSample, Periodic, RuntimeConfig, Sighting,
-    Sink, CONTROL_QUEUE, REPLY_QUEUE, SIGHTING_QUEUE,
+    Background, BackgroundCounters, BackgroundOutputs, Control, NavSample, Periodic,
+    PeriodicInputs, RuntimeConfig, Sighting, CONTROL_QUEUE, REPLY_QUEUE, SIGHTING_QUEUE,
 };
 
 /// The queues between the halves.
@@ -34,7 +34,7 @@ struct Queues {
     ping360: Ping360Counters,
 }
 
-impl Sink for Queues {
+impl BackgroundOutputs for Queues {
     fn nav(&mut self, sample: NavSample) {
         self.nav = Some(sample);
     }
@@ -58,7 +58,7 @@ impl Sink for Queues {
     }
 }
 
-impl Inputs for Queues {
+impl PeriodicInputs for Queues {
     fn nav(&mut self) -> Option<NavSample> {
         self.nav
     }
@@ -87,7 +87,7 @@ impl Inputs for Queues {
 pub const PING360_OUTBOX: usize = 96;
 
 /// The runtime in one context.
-pub struct SingleContext {
+pub struct OneThreadRuntime {
     background: Background,
     periodic: Periodic,
     queues: Queues,
@@ -98,7 +98,7 @@ pub struct SingleContext {
     ping360_out: heapless::Vec<u8, PING360_OUTBOX>,
 }
 
-impl SingleContext {
+impl OneThreadRuntime {
     /// A runtime with planner `params`, runtime `config` and default sonar extraction. Step
     /// costs are reported in `cost_unit` (what `cost` passed to the tick functions counts).
     pub fn new(
@@ -114,7 +114,7 @@ impl SingleContext {
                     problem: crate::params::ParamProblem::OutOfRange,
                 }
             })?;
-        Ok(SingleContext {
+        Ok(OneThreadRuntime {
             background,
             periodic,
             queues: Queues {
@@ -158,7 +158,7 @@ impl SingleContext {
     /// and the evidence map, placed with the newest navigation when its data began to arrive.
     /// Ignored without a Ping360 ([`Self::set_ping360`]).
     pub fn on_ping360_bytes(&mut self, bytes: &[u8]) {
-        let SingleContext {
+        let OneThreadRuntime {
             background,
             queues,
             map,
