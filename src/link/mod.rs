@@ -6,6 +6,9 @@
 //! logic: each message is a plain `Repr` (or a library type such as [`Params`]) with
 //! [`Payload::parse`] and [`Payload::emit`], and the runtime decides what to do with it.
 //!
+//! The messages carry the crate's value types ([`crate::types`], [`crate::params`]); nothing
+//! here needs the planner.
+//!
 //! **Layers** (one file each):
 //! - [`crc`]: CRC-16/CCITT-FALSE (poly 0x1021, init 0xFFFF, check 0x29B1), table-free;
 //! - [`cobs`]: Consistent Overhead Byte Stuffing, so 0x00 can delimit frames;
@@ -15,8 +18,10 @@
 //! - [`layout`]: [`Field`](layout::Field), a named row of a message's layout; each message file's
 //!   `field` module names its rows (checked against `docs/protocol.md` by a test);
 //! - [`shape`]: the wire form of an obstacle [`Shape`](crate::field::Shape);
-//! - [`sensors`], [`control`], [`mission`] (host → firmware) and [`report`] (firmware → host):
-//!   the messages; [`modes`] and [`counters`], the mode codes and counters the reports carry;
+//! - [`sensors`], [`control`], [`mission`] (host → firmware), [`report`] (firmware → host) and
+//!   [`belief`]: the messages, each with a `field` module naming its rows; [`formation`], the
+//!   formation block three of them share; [`modes`] and [`counters`], the mode codes and
+//!   counters the reports carry;
 //! - [`payload`]: the [`Payload`] trait every message implements (parse, emit, length);
 //! - [`message`]: [`Message`], every message in one enum, and whole-frame parse/emit.
 //!
