@@ -109,7 +109,15 @@ pub fn run(task: &mut BackgroundTask, shared: &mut impl Exchange) -> ! {
         let sonar = task.poll_sonar(shared);
         let mavlink = task.poll_mavlink(shared);
         if !control && !sonar && !mavlink {
-            cortex_m::asm::wfi();
+            // Interrupts off from the last look to the sleep: one that came between the polls
+            // and WFI would otherwise run first and leave the background asleep until the next
+            // one, which in lockstep (the host waiting on this firmware) never comes. WFI wakes
+            // on a pending interrupt even while they are masked.
+            cortex_m::interrupt::free(|_| {
+                if task.nothing_received() {
+                    cortex_m::asm::wfi();
+                }
+            });
         }
     }
 }
@@ -178,6 +186,12 @@ impl BackgroundTask {
             sonar,
             mav,
         }
+    }
+
+    /// No byte waits in any receive queue (the control link's, the Ping360's, MAVLink's).
+    #[cfg_attr(feature = "selftest", allow(dead_code))]
+    fn nothing_received(&self) -> bool {
+        !self.inbox.ready() && !self.sonar.inbox.ready() && !self.mav.received()
     }
 
     /// Decodes what has been received; `true` if there was anything.

@@ -62,6 +62,11 @@ impl MavPort {
         }
     }
 
+    /// Bytes wait in the receive queue.
+    pub fn received(&self) -> bool {
+        self.inbox.ready()
+    }
+
     /// Feeds up to 64 received bytes at firmware time `now_ms`; `true` if there were any.
     pub fn poll(
         &mut self,
