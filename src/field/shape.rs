@@ -139,10 +139,24 @@ impl Shape {
     /// Signed distance from `p` to the surface in metres: > 0 outside, < 0 inside.
     pub fn signed_distance(&self, p: Vec2) -> f32 {
         match self {
-            Shape::Circle(c) => (p - c.center).norm() - c.radius,
+            Shape::Circle(c) => c.signed_distance(p),
             Shape::Rectangle(r) => r.signed_distance(p),
             Shape::Ellipse(e) => e.signed_distance(p),
             Shape::Polygon(g) => g.signed_distance(p),
+        }
+    }
+
+    /// The signed distance r at `p` (bit for bit [`Shape::signed_distance`]) and its gradient
+    /// ∇r there, analytic: a unit vector for the exact distances (circle, rectangle, polygon;
+    /// outward, also inside), the derivative of the estimate for the ellipse. Where r has no
+    /// gradient (the centre of a circle, equidistant sides inside a rectangle) one of the
+    /// one-sided ones is given. One evaluation, for the far field (`planner::gradient`).
+    pub fn distance_gradient(&self, p: Vec2) -> (f32, Vec2) {
+        match self {
+            Shape::Circle(c) => c.distance_gradient(p),
+            Shape::Rectangle(r) => r.distance_gradient(p),
+            Shape::Ellipse(e) => e.distance_gradient(p),
+            Shape::Polygon(g) => g.distance_gradient(p),
         }
     }
 
@@ -199,6 +213,23 @@ impl Shape {
 }
 
 impl Circle {
+    /// Seed 000 eq. 12's r: the distance to the centre less r₀.
+    #[inline(always)]
+    pub(crate) fn signed_distance(&self, p: Vec2) -> f32 {
+        (p - self.center).norm() - self.radius
+    }
+
+    fn distance_gradient(&self, p: Vec2) -> (f32, Vec2) {
+        let d = p - self.center;
+        let len = d.norm();
+        let n = if len > 0.0 {
+            d * (1.0 / len)
+        } else {
+            Vec2::new(1.0, 0.0)
+        };
+        (len - self.radius, n)
+    }
+
     /// Centre.
     pub fn center(&self) -> Vec2 {
         self.center
@@ -232,12 +263,32 @@ impl Rectangle {
     /// Seed 000 eq. 10–11: outside, r = ‖disc ⊙ (|q| − [a b]ᵀ)‖ with disc the element-wise
     /// `|q| > [a b]ᵀ`, i.e. the Euclidean distance to the box. Inside (where the paper's r is 0)
     /// we return minus the depth, the distance to the nearest side.
-    fn signed_distance(&self, p: Vec2) -> f32 {
+    #[inline(always)]
+    pub(crate) fn signed_distance(&self, p: Vec2) -> f32 {
         let q = self.local(p);
         let d = Vec2::new(q.x.abs() - self.half.x, q.y.abs() - self.half.y);
         let outside = Vec2::new(max(d.x, 0.0), max(d.y, 0.0)).norm();
         let inside = min(max(d.x, d.y), 0.0);
         outside + inside
+    }
+
+    /// Outside, the unit vector from the nearest point of the box; inside, the normal of the
+    /// nearest side. Both in the box's frame, turned back by φ.
+    fn distance_gradient(&self, p: Vec2) -> (f32, Vec2) {
+        let q = self.local(p);
+        let d = Vec2::new(q.x.abs() - self.half.x, q.y.abs() - self.half.y);
+        let o = Vec2::new(max(d.x, 0.0), max(d.y, 0.0));
+        let outside = o.norm();
+        let inside = min(max(d.x, d.y), 0.0);
+        let sign = |v: f32| if v < 0.0 { -1.0 } else { 1.0 };
+        let local = if outside > 0.0 {
+            Vec2::new(sign(q.x) * o.x, sign(q.y) * o.y) * (1.0 / outside)
+        } else if d.x > d.y {
+            Vec2::new(sign(q.x), 0.0)
+        } else {
+            Vec2::new(0.0, sign(q.y))
+        };
+        (outside + inside, local.rotate_cs(self.cos, self.sin))
     }
 
     /// Centre.
@@ -259,7 +310,8 @@ impl Ellipse {
     /// estimate d ≈ k₀(k₀ − 1)/k₁ with k₀ = ‖q ⊘ s‖, k₁ = ‖q ⊘ s²‖ (s the semi-axes): exact on
     /// the surface and along both axes, linear and increasing along every ray from the centre
     /// (so the repulsion stays monotonic), and two square roots instead of an iteration.
-    fn signed_distance(&self, p: Vec2) -> f32 {
+    #[inline(always)]
+    pub(crate) fn signed_distance(&self, p: Vec2) -> f32 {
         let r = &self.0;
         let q = r.local(p);
         let (a, b) = (r.half.x, r.half.y);
@@ -268,8 +320,26 @@ impl Ellipse {
         if k1 > 1e-12 {
             k0 * (k0 - 1.0) / k1
         } else {
-            -a.min(b)
+            -min(a, b)
         }
+    }
+
+    /// The estimate's own gradient: with Q₁ = q ⊘ s², Q₂ = q ⊘ s⁴ (so ∇k₀ = Q₁/k₀ and
+    /// ∇k₁ = Q₂/k₁), ∇d = (2k₀ − 1)·Q₁/(k₀k₁) − d·Q₂/k₁², turned back by φ.
+    fn distance_gradient(&self, p: Vec2) -> (f32, Vec2) {
+        let r = &self.0;
+        let q = r.local(p);
+        let (a, b) = (r.half.x, r.half.y);
+        let k0 = Vec2::new(q.x / a, q.y / b).norm();
+        let q1 = Vec2::new(q.x / (a * a), q.y / (b * b));
+        let k1 = q1.norm();
+        if k1 <= 1e-12 || k0 <= 0.0 {
+            return (-min(a, b), Vec2::new(1.0, 0.0).rotate_cs(r.cos, r.sin));
+        }
+        let d = k0 * (k0 - 1.0) / k1;
+        let q2 = Vec2::new(q1.x / (a * a), q1.y / (b * b));
+        let g = q1 * ((2.0 * k0 - 1.0) / (k0 * k1)) - q2 * (d / (k1 * k1));
+        (d, g.rotate_cs(r.cos, r.sin))
     }
 
     /// The ellipse's centre, semi-axes and rotation, as a rectangle frame.
@@ -337,25 +407,80 @@ impl Polygon {
 
     /// Exact signed distance: the nearest edge segment gives the magnitude; the point is inside
     /// when it lies left of every (counter-clockwise) edge.
-    fn signed_distance(&self, p: Vec2) -> f32 {
-        let v = self.vertices();
+    ///
+    /// Outside, only the segments of the edges the point lies strictly outside of are measured:
+    /// the nearest point q lies on one of them. (If q is inside an edge, p is outside that
+    /// edge's line. If q is a vertex, the direction u = (p − q)/|p − q| lies strictly inside
+    /// the cone of its two edges' outward normals, which are less than π apart, so u makes an
+    /// angle below π/2 with at least one of them — p is outside that edge's line — and that
+    /// edge's segment holds q.) Each edge first costs one cross product; a far point faces
+    /// about half of them. Inside (rare on the sample circle) every segment is measured, as
+    /// before.
+    #[inline(always)]
+    pub(crate) fn signed_distance(&self, p: Vec2) -> f32 {
         let mut best2 = f32::INFINITY;
         let mut inside = true;
-        for (i, inv) in self.inv_len2.iter().take(v.len()).enumerate() {
-            let (a, b) = edge(v, i);
-            let e = b - a;
-            let w = p - a;
-            let t = min(max(w.dot(e) * inv, 0.0), 1.0);
-            best2 = min((w - e * t).norm2(), best2);
-            inside &= e.cross(w) >= 0.0;
-        }
-        let d = sqrt(best2);
+        self.each_edge(p, |e, w, inv| {
+            if e.cross(w) < 0.0 {
+                inside = false;
+                best2 = min(segment_distance2(e, w, inv), best2);
+            }
+        });
         if inside {
-            -d
+            self.each_edge(p, |e, w, inv| best2 = min(segment_distance2(e, w, inv), best2));
+            -sqrt(best2)
         } else {
-            d
+            sqrt(best2)
         }
     }
+
+    /// `f(e, w, 1/|e|²)` for each edge from a to b (e = b − a, w = p − a), the closing edge
+    /// first; no modulo on the way round.
+    #[inline(always)]
+    fn each_edge(&self, p: Vec2, mut f: impl FnMut(Vec2, Vec2, f32)) {
+        let n = usize::from(self.len).min(MAX_POLYGON_VERTICES);
+        let v = self.vertices.get(..n).unwrap_or(&[]);
+        let inv = self.inv_len2.get(..n).unwrap_or(&[]);
+        let (Some(&last), Some(&inv_last)) = (v.last(), inv.last()) else {
+            return;
+        };
+        let mut a = last;
+        let mut inv_a = inv_last;
+        for (&b, &inv_b) in v.iter().zip(inv) {
+            f(b - a, p - a, inv_a);
+            a = b;
+            inv_a = inv_b;
+        }
+    }
+
+    /// The nearest edge's segment gives r and the unit vector from its nearest point.
+    fn distance_gradient(&self, p: Vec2) -> (f32, Vec2) {
+        let r = self.signed_distance(p);
+        let mut best = (f32::INFINITY, Vec2::new(1.0, 0.0));
+        self.each_edge(p, |e, w, inv| {
+            let t = min(max(w.dot(e) * inv, 0.0), 1.0);
+            let from = w - e * t;
+            let d2 = from.norm2();
+            if d2 < best.0 {
+                best = (d2, from);
+            }
+        });
+        let (d2, from) = best;
+        let len = sqrt(d2);
+        let n = if len > 0.0 {
+            from * (1.0 / len)
+        } else {
+            Vec2::new(1.0, 0.0)
+        };
+        (r, if r < 0.0 { -n } else { n })
+    }
+}
+
+/// Squared distance from p to the segment from a along e (w = p − a, `inv` = 1/|e|²).
+#[inline(always)]
+fn segment_distance2(e: Vec2, w: Vec2, inv: f32) -> f32 {
+    let t = min(max(w.dot(e) * inv, 0.0), 1.0);
+    (w - e * t).norm2()
 }
 
 /// Edge `i` of a closed polygon: (vᵢ, vᵢ₊₁ mod n).
