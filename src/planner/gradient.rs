@@ -119,7 +119,6 @@ struct Terms {
 /// 1.6 % of the default F_max (0.5) and a fifth of the friction at the default stall speed
 /// (μ·0.05 = 0.02); a real table's far objects err far less (the bound falls as r⁻⁴).
 pub const FAR_FORCE_ERROR: f32 = 2e-4;
-const NO_FAR: bool = false;
 
 /// The gradient of a stator PDF f(r(x)) (000 eq. 9, 12) at the vehicle, if the object is far
 /// enough to be linearised over the sample circle; `None` if it must be sampled.
@@ -240,7 +239,8 @@ impl Field<'_> {
 
         // The rotor's linear term and the goal-point, at every sample.
         if let Some((first, rest)) = fixed.split_first_mut() {
-            *first = (origin - origin).dot(self.rotor_gradient) + self.goal.potential(origin);
+            // (x − origin is exactly zero at the centre.)
+            *first = Vec2::ZERO.dot(self.rotor_gradient) + self.goal.potential(origin);
             for (f, off) in rest.iter_mut().zip(offsets) {
                 let x = origin + *off;
                 *f = (x - origin).dot(self.rotor_gradient) + self.goal.potential(x);
@@ -544,12 +544,12 @@ mod tests {
             .unwrap(); 32];
             let mut shifts = [Vec2::ZERO; 32];
             for (o, s) in obstacles.iter_mut().zip(shifts.iter_mut()) {
-                let c = Vec2::from_angle(6.283 * u()) * (1.5 + 40.0 * u());
+                let c = Vec2::from_angle(TAU * u()) * (1.5 + 40.0 * u());
                 let size = Vec2::new(0.2 + 2.0 * u(), 0.2 + 2.0 * u());
                 let shape = match (4.0 * u()) as u32 {
                     0 => Shape::circle(c, size.x),
-                    1 => Shape::rectangle(c, size, 6.283 * u()),
-                    2 => Shape::ellipse(c, size, 6.283 * u()),
+                    1 => Shape::rectangle(c, size, TAU * u()),
+                    2 => Shape::ellipse(c, size, TAU * u()),
                     _ => {
                         let hex: [Vec2; 6] = core::array::from_fn(|k| {
                             c + Vec2::from_angle(k as f32 * 1.047 + u()) * size.x
@@ -562,7 +562,7 @@ mod tests {
                 *s = Vec2::new(u() - 0.5, u() - 0.5) * 4.0;
             }
             let agents: [Agent; 8] = core::array::from_fn(|i| {
-                let p = Vec2::from_angle(6.283 * u()) * (1.0 + 30.0 * u());
+                let p = Vec2::from_angle(TAU * u()) * (1.0 + 30.0 * u());
                 Agent::new(i as u16, p, Vec2::ZERO, 0).unwrap()
             });
             let f = Field {
@@ -572,7 +572,7 @@ mod tests {
                 agents: &agents,
                 agent_radius: 0.5,
                 agent_stator: Stator::new(2.5),
-                goal: GoalPdf::new(Vec2::from_angle(6.283 * u()) * 60.0, 50.0, 40.0),
+                goal: GoalPdf::new(Vec2::from_angle(TAU * u()) * 60.0, 50.0, 40.0),
                 leader: Some(GoalPdf::new(Vec2::new(u(), u()) * 5.0, 5.0, 3.0)),
                 rotor_gradient: Vec2::new(u() - 0.5, u() - 0.5),
                 origin: Vec2::ZERO,
