@@ -253,7 +253,7 @@ fn obstacle(i: usize, now_ms: u64, clutter: bool) -> Option<Obstacle> {
         (Vec2::from_angle(a) * (3.0 + 2.0 * ring), 0.5, 0.0)
     } else {
         let c = Vec2::new(10.0 + 7.0 * (i % 8) as f32, -20.0 + 9.0 * (i / 8) as f32);
-        (c, 1.0, if i % 2 == 0 { 0.5 } else { 0.0 })
+        (c, 1.0, if i.is_multiple_of(2) { 0.5 } else { 0.0 })
     };
     let shape = match i % 4 {
         0 => Shape::circle(c, 1.5 * scale),
