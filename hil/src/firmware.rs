@@ -38,9 +38,12 @@ pub enum Target {
     QemuUart,
     /// The same runtime built for the host, as a process.
     Host,
-    /// A real board on a serial device.
-    Port(PathBuf),
+    /// A real board on a serial device, at a baud rate.
+    Port(PathBuf, u32),
 }
+
+/// The boards' control link's baud rate (`--port`'s default).
+pub const PORT_BAUD: u32 = 115_200;
 
 impl std::fmt::Display for Target {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
@@ -48,7 +51,7 @@ impl std::fmt::Display for Target {
             Target::Qemu => f.write_str("qemu"),
             Target::QemuUart => f.write_str("qemu-uart"),
             Target::Host => f.write_str("host"),
-            Target::Port(p) => write!(f, "port:{}", p.display()),
+            Target::Port(p, baud) => write!(f, "port:{} ({baud} baud)", p.display()),
         }
     }
 }
@@ -97,6 +100,8 @@ pub struct Firmware {
     batch: Option<Vec<u8>>,
     /// The link's bytes travel in ethernet frames (QEMU's LAN9118) rather than as a stream.
     ethernet: bool,
+    /// QEMU's second serial port (the board's Ping360 UART), opened raw, until taken.
+    sonar_port: Option<File>,
     /// What runs.
     pub target: Target,
 }
@@ -225,9 +230,9 @@ pub fn build(target: &Target) -> std::io::Result<PathBuf> {
             cmd.args(["--target", "thumbv7em-none-eabihf"]);
             target_dir.join("thumbv7em-none-eabihf/release/vpf-firmware")
         }
-        Target::Host | Target::Port(_) => target_dir.join("release/vpf-firmware"),
+        Target::Host | Target::Port(..) => target_dir.join("release/vpf-firmware"),
     };
-    if matches!(target, Target::Port(_)) {
+    if matches!(target, Target::Port(..)) {
         // A real board is flashed by the user; nothing to build here.
         return Ok(path);
     }
@@ -258,6 +263,43 @@ fn make_raw(f: &File) -> std::io::Result<()> {
         }
     }
     Ok(())
+}
+
+/// A real serial port at `baud`, 8N1, raw, through `serialport` (exclusive, as a real port
+/// should be), as a plain file: reads are bounded by `poll` like a pty's.
+pub fn open_serial(path: &Path, baud: u32) -> std::io::Result<File> {
+    use std::os::fd::IntoRawFd;
+    let port = serialport::new(path.to_string_lossy(), baud)
+        .timeout(Duration::from_millis(10))
+        .open_native()
+        .map_err(|e| std::io::Error::other(format!("{}: {e}", path.display())))?;
+    // SAFETY: the descriptor was just released by its owner, the serial port, and is ours.
+    Ok(unsafe { File::from_raw_fd(port.into_raw_fd()) })
+}
+
+/// The next pty QEMU names on its monitor ("char device redirected to /dev/pts/N (label
+/// serialK)", in the order of the `-serial`s that are ptys); lines before it are skipped.
+fn qemu_pty(lines: &mut impl Iterator<Item = std::io::Result<String>>) -> std::io::Result<String> {
+    loop {
+        let Some(line) = lines.next() else {
+            return Err(std::io::Error::other("qemu exited before naming its ptys"));
+        };
+        let line = line?;
+        if let Some(i) = line.find("/dev/pts/") {
+            let path = line[i..].split_whitespace().next().unwrap_or_default();
+            return Ok(path.to_string());
+        }
+    }
+}
+
+/// A pty (or device) opened for reading and writing, raw.
+fn open_raw(path: &str) -> std::io::Result<File> {
+    let port = std::fs::OpenOptions::new()
+        .read(true)
+        .write(true)
+        .open(path)?;
+    make_raw(&port)?;
+    Ok(port)
 }
 
 /// A new pseudo-terminal pair: (master, slave path). The slave stays open (leaked) so that no
@@ -305,20 +347,16 @@ impl Firmware {
     ) -> std::io::Result<Self> {
         if !extra.is_empty() && *target != Target::Host {
             return Err(std::io::Error::other(format!(
-                "the {target} firmware drives no Ping360 (the board images do not yet): use --firmware host"
+                "the {target} firmware takes no arguments (QEMU's Ping360 port is its second serial port: `Firmware::start_qemu`)"
             )));
         }
         match target {
-            Target::Qemu => Self::start_qemu_ethernet(binary, lockstep),
-            Target::QemuUart => Self::start_qemu(binary, lockstep),
+            Target::Qemu => Self::start_qemu_ethernet(binary, lockstep, false),
+            Target::QemuUart => Self::start_qemu(binary, lockstep, false),
             Target::Host => Self::start_host(binary, extra),
-            Target::Port(path) => {
-                let port = std::fs::OpenOptions::new()
-                    .read(true)
-                    .write(true)
-                    .open(path)?;
-                make_raw(&port)?;
-                Ok(Self::new(None, Port::File(port), target.clone()))
+            Target::Port(path, baud) => {
+                let port = Port::File(open_serial(path, *baud)?);
+                Ok(Self::new(None, port, target.clone()))
             }
         }
     }
@@ -332,15 +370,21 @@ impl Firmware {
             inbox: Vec::new(),
             batch: None,
             ethernet: false,
+            sonar_port: None,
             target,
         }
     }
 
-    /// The arguments that start QEMU's emulated board paused (`-S`), its monitor on stdio.
-    /// `-icount shift=0` makes the firmware's step costs instruction counts; in lockstep,
-    /// `sleep=off` lets the virtual clock jump over the firmware's idle waits instead of
-    /// sleeping them out in real time.
-    fn qemu_command(elf: &Path, lockstep: bool) -> Command {
+    /// The board's Ping360 port (QEMU's second serial port, when started with one), once.
+    pub fn take_sonar_port(&mut self) -> Option<File> {
+        self.sonar_port.take()
+    }
+
+    /// The arguments that start QEMU's emulated board paused (`-S`), its monitor on stdio, and
+    /// `serials` as its `-serial`s (UART0, UART1, ...). `-icount shift=0` makes the firmware's
+    /// step costs instruction counts; in lockstep, `sleep=off` lets the virtual clock jump over
+    /// the firmware's idle waits instead of sleeping them out in real time.
+    fn qemu_command(elf: &Path, lockstep: bool, serials: &[&str]) -> Command {
         let icount = if lockstep {
             "shift=0,sleep=off"
         } else {
@@ -348,6 +392,7 @@ impl Firmware {
         };
         let mut cmd = Command::new("qemu-system-arm");
         cmd.args(["-machine", "mps2-an386", "-cpu", "cortex-m4", "-nographic"])
+            .args(serials)
             .args(["-monitor", "stdio", "-S", "-icount", icount])
             .args(["-semihosting-config", "enable=on,target=native", "-kernel"])
             .arg(elf)
@@ -363,12 +408,20 @@ impl Firmware {
     /// frames each way, where QEMU's CMSDK UART takes one byte per turn of its main loop (the
     /// firmware's side: `src/board/mps2_an386/eth.rs`). Returns once the firmware's first,
     /// empty frame says its controller is up (a frame sent earlier could be lost).
-    fn start_qemu_ethernet(elf: &Path, lockstep: bool) -> std::io::Result<Self> {
+    ///
+    /// With `sonar`, the board's UART1 (its Ping360 port) is a pty
+    /// ([`Firmware::take_sonar_port`]).
+    pub fn start_qemu_ethernet(elf: &Path, lockstep: bool, sonar: bool) -> std::io::Result<Self> {
         use std::os::unix::process::CommandExt;
         let (ours, theirs) = std::os::unix::net::UnixDatagram::pair()?;
         let fd = theirs.as_raw_fd();
-        let mut cmd = Self::qemu_command(elf, lockstep);
-        cmd.args(["-serial", "null", "-nic", "socket,fd=3,model=lan9118"]);
+        let serials: &[&str] = if sonar {
+            &["-serial", "null", "-serial", "pty"]
+        } else {
+            &["-serial", "null"]
+        };
+        let mut cmd = Self::qemu_command(elf, lockstep, serials);
+        cmd.args(["-nic", "socket,fd=3,model=lan9118"]);
         // SAFETY: between fork and exec only async-signal-safe calls (dup2, fcntl) on
         // descriptors this process owns; the child's descriptor 3 is the socket's other end.
         unsafe {
@@ -390,9 +443,14 @@ impl Firmware {
             .stdout
             .take()
             .ok_or_else(|| std::io::Error::other("no qemu stdout"))?;
-        std::thread::spawn(
-            move || for _ in BufReader::new(stdout).lines().map_while(Result::ok) {},
-        );
+        let mut lines = BufReader::new(stdout).lines();
+        let sonar_port = if sonar {
+            let path = qemu_pty(&mut lines)?;
+            Some(open_raw(&path)?)
+        } else {
+            None
+        };
+        std::thread::spawn(move || for _ in lines.map_while(Result::ok) {});
         let mut stdin = child
             .stdin
             .take()
@@ -403,6 +461,7 @@ impl Firmware {
         let port = Port::File(File::from(std::os::fd::OwnedFd::from(ours)));
         let mut fw = Self::new(Some(child), port, Target::Qemu);
         fw.ethernet = true;
+        fw.sonar_port = sonar_port;
         if lockstep {
             // Nothing depends on when within a period the bytes arrive: one frame a period.
             fw.batch = Some(Vec::new());
@@ -452,37 +511,30 @@ impl Firmware {
     }
 
     /// QEMU with the link on UART0 through a pty, paused with `-S` until the pty is open (bytes
-    /// sent before would be lost).
-    fn start_qemu(elf: &Path, lockstep: bool) -> std::io::Result<Self> {
-        let mut child = Self::qemu_command(elf, lockstep)
-            .args(["-serial", "pty"])
-            .spawn()?;
+    /// sent before would be lost). With `sonar`, the board's UART1 (its Ping360 port) is a
+    /// second pty ([`Firmware::take_sonar_port`]).
+    pub fn start_qemu(elf: &Path, lockstep: bool, sonar: bool) -> std::io::Result<Self> {
+        let serials: &[&str] = if sonar {
+            &["-serial", "pty", "-serial", "pty"]
+        } else {
+            &["-serial", "pty"]
+        };
+        let mut child = Self::qemu_command(elf, lockstep, serials).spawn()?;
         let stdout = child
             .stdout
             .take()
             .ok_or_else(|| std::io::Error::other("no qemu stdout"))?;
         let mut lines = BufReader::new(stdout).lines();
-        // QEMU 7.2 names the pty on its monitor: "char device redirected to /dev/pts/N".
-        let path = loop {
-            let Some(line) = lines.next() else {
-                return Err(std::io::Error::other("qemu exited before naming its pty"));
-            };
-            let line = line?;
-            if let Some(i) = line.find("/dev/pts/") {
-                break line[i..]
-                    .split_whitespace()
-                    .next()
-                    .unwrap_or_default()
-                    .to_string();
-            }
-        };
+        let mut paths = Vec::new();
+        while paths.len() < serials.len() / 2 {
+            paths.push(qemu_pty(&mut lines)?);
+        }
         std::thread::spawn(move || for _ in lines.map_while(Result::ok) {});
-        let port = std::fs::OpenOptions::new()
-            .read(true)
-            .write(true)
-            .open(&path)?;
-        make_raw(&port)?;
-        let port = Port::File(port);
+        let port = Port::File(open_raw(&paths[0])?);
+        let sonar_port = match paths.get(1) {
+            Some(p) => Some(open_raw(p)?),
+            None => None,
+        };
         let mut stdin = child
             .stdin
             .take()
@@ -490,7 +542,9 @@ impl Firmware {
         stdin.write_all(b"cont\n")?;
         stdin.flush()?;
         std::mem::forget(stdin); // the monitor stays open while QEMU runs
-        Ok(Self::new(Some(child), port, Target::QemuUart))
+        let mut fw = Self::new(Some(child), port, Target::QemuUart);
+        fw.sonar_port = sonar_port;
+        Ok(fw)
     }
 
     /// The host-process firmware speaking on its stdin/stdout, both one end of a Unix socket
@@ -670,5 +724,36 @@ impl Firmware {
             self.pump(tap)?;
         }
         Ok(std::mem::take(&mut self.inbox))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_serial_port_opens_raw_at_a_baud_rate_and_carries_bytes_both_ways() {
+        // A pty's slave stands in for a board's serial adapter (`--port`).
+        let (mut master, slave) = open_pty().unwrap();
+        let mut port = open_serial(&slave, 57_600).unwrap();
+        // Raw: a 0x00 frame delimiter and a line feed pass unchanged.
+        master.write_all(b"\x00ab\ncd\x00").unwrap();
+        let mut got = Vec::new();
+        let start = Instant::now();
+        while got.len() < 7 && start.elapsed() < Duration::from_secs(5) {
+            let mut buf = [0u8; 16];
+            match port.read(&mut buf) {
+                Ok(n) => got.extend_from_slice(&buf[..n]),
+                Err(e) if e.kind() == std::io::ErrorKind::TimedOut => {}
+                Err(e) if e.kind() == std::io::ErrorKind::WouldBlock => {}
+                Err(e) => panic!("{e}"),
+            }
+        }
+        assert_eq!(got, b"\x00ab\ncd\x00");
+        port.write_all(b"\x01\x02").unwrap();
+        let mut back = [0u8; 2];
+        master.read_exact(&mut back).unwrap();
+        assert_eq!(back, [1, 2]);
+        assert!(open_serial(Path::new("/dev/no-such-port"), 115_200).is_err());
     }
 }

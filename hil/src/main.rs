@@ -1,7 +1,8 @@
 //! `hil`: run a scenario against the VPF firmware.
 //!
 //! ```text
-//! hil run SCENARIO.toml [--out DIR] [--firmware qemu|qemu-uart|host] [--port /dev/ttyXXX] [--quiet]
+//! hil run SCENARIO.toml [--out DIR] [--firmware qemu|qemu-uart|host] [--port /dev/ttyXXX [--baud N]]
+//!         [--quiet]
 //!         [--bit-error-rate X] [--drop-rate X] [--nav-delay-ms X]
 //!         [--nav-freeze FROM:TO] [--nav-loss FROM:TO] [--sonar-dropout FROM:TO]
 //!         [--ping360-bit-error-rate X] [--ping360-drop-rate X]
@@ -41,6 +42,7 @@ options for run:
                             (default), or through its UART on a pty (slower), or the firmware as a
                             host process
   --port /dev/ttyXXX        a real board on a serial adapter (flashed beforehand)
+  --baud N                  the port's baud rate (default 115200; the boards' control link)
   --quiet                   no progress bar
   --params RECIPE.toml      planner parameters from a recipe (replace the scenario's [planner])
   --bit-error-rate X        corrupt bytes sent to the firmware on its main link at this bit-error rate
@@ -112,7 +114,27 @@ fn parse_run(mut it: impl Iterator<Item = String>) -> Result<Args, String> {
                     }
                 }
             }
-            "--port" => args.target = Target::Port(PathBuf::from(value()?)),
+            "--port" => {
+                let baud = match &args.target {
+                    Target::Port(_, b) => *b,
+                    _ => hil::firmware::PORT_BAUD,
+                };
+                args.target = Target::Port(PathBuf::from(value()?), baud);
+            }
+            "--baud" => {
+                let v = value()?;
+                let b: u32 = v
+                    .parse()
+                    .ok()
+                    .filter(|b| (1200..=4_000_000).contains(b))
+                    .ok_or(format!(
+                        "--baud {v}: expected a baud rate, 1200 ..= 4000000"
+                    ))?;
+                match &mut args.target {
+                    Target::Port(_, baud) => *baud = b,
+                    _ => return Err("--baud goes after --port".into()),
+                }
+            }
             "--quiet" => args.quiet = true,
             "--params" => args.params = Some(PathBuf::from(value()?)),
             "-h" | "--help" => return Err(String::new()),

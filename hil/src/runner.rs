@@ -250,25 +250,48 @@ fn simulate(
     for (i, v) in sc.vehicles.iter().enumerate() {
         let lockstep = sc.mode == RunMode::Lockstep;
         let seed = sc.seed.wrapping_add(1000 * i as u64);
-        // A Ping360 of its own: a pty whose slave the firmware opens as its sonar port.
+        // A Ping360 of its own: for the host-process firmware a pty whose slave it opens as its
+        // sonar port; on QEMU the board's UART1, QEMU's second serial port.
         let mut extra = Vec::new();
         let mut ping360_port = None;
-        if sc.sonar.interface == SonarInterface::Ping360 && v.sensing == Sensing::Sonar {
+        let ping360 = sc.sonar.interface == SonarInterface::Ping360 && v.sensing == Sensing::Sonar;
+        let mut ping360_cfg = None;
+        if ping360 {
             let cfg = ping360_sim::firmware_config(&sc.sonar)
                 .map_err(|(k, m)| RunError::Firmware(format!("[sonar] {k}: {m}")))?;
-            let (master, slave) = firmware::open_pty().map_err(fw_err)?;
-            extra = ping360_sim::firmware_args(&slave, &cfg);
-            ping360_port = Some((master, cfg));
+            match target {
+                Target::Host => {
+                    let (master, slave) = firmware::open_pty().map_err(fw_err)?;
+                    extra = ping360_sim::firmware_args(&slave, &cfg);
+                    ping360_port = Some(master);
+                }
+                Target::Qemu | Target::QemuUart => ping360_sim::board_config_matches(&cfg)
+                    .map_err(|(k, m)| RunError::Firmware(format!("[sonar] {k}: {m}")))?,
+                Target::Port(..) => {
+                    return Err(RunError::Firmware(
+                        "a simulated Ping360 needs --firmware host or qemu (a board's sonar UART is wired to a real one)".into(),
+                    ))
+                }
+            }
+            ping360_cfg = Some(cfg);
         }
         // In process only without a Ping360 port (that one is the process's own serial port).
         let mut fw = if how.in_process && lockstep && *target == Target::Host && extra.is_empty() {
             Firmware::in_process()
         } else if how.socket && *target == Target::Host {
             Firmware::start_host_socket(binary, &extra)
+        } else if *target == Target::Qemu {
+            Firmware::start_qemu_ethernet(binary, lockstep, ping360)
+        } else if *target == Target::QemuUart {
+            Firmware::start_qemu(binary, lockstep, ping360)
         } else {
             Firmware::start(target, binary, lockstep, &extra)
         }
         .map_err(fw_err)?;
+        if matches!(target, Target::Qemu | Target::QemuUart) && ping360 {
+            ping360_port = fw.take_sonar_port();
+        }
+        let ping360_port = ping360_port.zip(ping360_cfg);
         if how.stop_early && lockstep {
             // The sweep's runs: one write per period (see `Firmware::set_batching`).
             fw.set_batching(true).map_err(fw_err)?;
@@ -331,6 +354,7 @@ fn simulate(
                 name: v.name.clone(),
                 goal: v.goal,
                 waypoints: marks(v),
+                ping360: ping360.is_some(),
                 ..VehicleRecord::default()
             },
             setpoints: SetPoints {

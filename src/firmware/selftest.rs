@@ -15,8 +15,12 @@
 //!    route layer replans on those), and the least fill of the tables over the measured
 //!    periods; then the stack high-water mark. It exits successfully only if no strategy
 //!    overran, every measured period ran at full tables and every worst step was within
-//!    [`STEP_BUDGET`] (but multipoint's in clutter, which is over it and reported so). Half the obstacles move, so the prediction of moving obstacles is in
-//!    the measured path.
+//!    [`STEP_BUDGET`] (but multipoint's in clutter, which is over it and reported so). Half the
+//!    obstacles move, so the prediction of moving obstacles is in the measured path.
+//! 4. A further flood (VPF, the spread world) brings its pings as Ping360 `device_data`
+//!    through the Ping360 driver and its navigation as MAVLink (ATTITUDE, LOCAL_POSITION_NED)
+//!    through the MAVLink line's decoder, so their paths are measured and in the stack's
+//!    high-water mark; every period also sends the MAVLink set-point and what else is due.
 
 use vpf::field::Shape;
 use vpf::guidance::Sighting;
@@ -68,19 +72,14 @@ pub fn run(idle: &mut BackgroundTask, x: &mut impl Exchange, params: Params) -> 
         } else {
             p
         };
-        let mut frame = [0u8; vpf::link::MAX_FRAME];
-        if let Ok(n) = Message::Params(p).emit_frame(0, &mut frame) {
-            if let Some(f) = frame.get(..n) {
-                idle.feed(f, x);
-            }
-        }
+        set_strategy(idle, x, p);
         // Loaded again per phase: the upserts (same ids) replace the obstacles and refresh the
         // agents, which age out.
         load_world(idle, x, clutter);
         let _ = x.take_stats();
-        let _ = flood(idle, x, WARMUP_PERIODS);
+        let _ = flood(idle, x, WARMUP_PERIODS, None);
         let _ = x.take_stats();
-        let flood = flood(idle, x, PERIODS);
+        let flood = flood(idle, x, PERIODS, None);
         let ghosts = if strategy == Strategy::Vpf {
             p.max_ghosts
         } else {
@@ -88,6 +87,33 @@ pub fn run(idle: &mut BackgroundTask, x: &mut impl Exchange, params: Params) -> 
         };
         ok &= report(strategy, clutter, &flood, x, ghosts);
     }
+    // The Ping360's path: the spread world's flood, its pings as `device_data` through the driver.
+    set_strategy(idle, x, params);
+    load_world(idle, x, false);
+    let _ = x.take_stats();
+    let mut sonar = PingStats::default();
+    flood(idle, x, PERIODS, Some(&mut sonar));
+    let s = x.take_stats();
+    let mut line = Line::new();
+    line.push(b"selftest: Ping360 flood (");
+    line.push(params.strategy.name().as_bytes());
+    line.push(b") periods ");
+    line.num(u64::from(s.periods));
+    line.push(b", overruns ");
+    line.num(u64::from(s.overruns));
+    line.push(b", device_data of 300 samples fed ");
+    line.num(u64::from(sonar.fed));
+    line.push(b", scanlines ");
+    line.num(u64::from(idle.ping360_counters().data));
+    line.push(b" (background per ping max ");
+    line.num(u64::from(sonar.max_cost));
+    line.push(b" mean ");
+    line.num(sonar.sum_cost / u64::from(sonar.measured.max(1)));
+    line.push(b"), MAVLink frames ");
+    line.num(u64::from(idle.mavlink_counters().frames));
+    line.push(b"\n");
+    board::log(line.bytes());
+    ok &= s.overruns == 0 && s.periods >= PERIODS && s.max_cost <= STEP_BUDGET;
     report_object_costs();
     let mut line = Line::new();
     line.push(b"selftest: stack high-water ");
@@ -115,8 +141,71 @@ struct Flood {
     max_nav_cost: u32,
 }
 
-/// `periods` periods of sonar flood.
-fn flood(idle: &mut BackgroundTask, x: &mut impl Exchange, periods: u32) -> Flood {
+/// What the Ping360's path cost during the floods.
+#[derive(Default)]
+struct PingStats {
+    fed: u32,
+    max_cost: u32,
+    sum_cost: u64,
+    measured: u32,
+}
+
+/// One `device_data` of the board's settings (300 samples, one echo at 4–5.5 m) through the Ping360 driver, the extractor and the evidence map, as the sonar UART
+/// would bring it; its buffers in a frame of its own, so the flood's does not grow.
+#[inline(never)]
+fn feed_ping360(idle: &mut BackgroundTask, x: &mut impl Exchange, ping: u32, st: &mut PingStats) {
+    let cfg = vpf::sonar::ping360::Ping360Config::BOARD;
+    let mut data = [0u8; 300];
+    for (i, d) in data.iter_mut().enumerate() {
+        let r = (i as u32).wrapping_mul(2_654_435_761).wrapping_add(ping) >> 28;
+        // The flood's wall (0.1 m a sample, as its scanlines' bins): echoes at 4–5.5 m.
+        *d = if (40..43).contains(&(i as u32).wrapping_sub(ping % 15)) {
+            220
+        } else {
+            (r * 4) as u8
+        };
+    }
+    let m = vpf::link::ping::Message::DeviceData(vpf::link::ping::DeviceDataRepr {
+        settings: cfg.settings(((ping * 2) % 400) as u16),
+        data: &data,
+    });
+    let mut frame = [0u8; 8 + 14 + 300 + 2];
+    let Ok(n) = vpf::link::ping::emit_frame(&m, 2, 0, &mut frame) else {
+        return;
+    };
+    let Some(bytes) = frame.get(..n) else {
+        return;
+    };
+    let periods = x.stats().periods;
+    let start = board::cost_now();
+    idle.feed_ping360(bytes, x);
+    let cost = board::cost_now().wrapping_sub(start);
+    st.fed += 1;
+    if x.stats().periods == periods {
+        st.max_cost = st.max_cost.max(cost);
+        st.sum_cost += u64::from(cost);
+        st.measured += 1;
+    }
+}
+
+/// Switches the planner's parameters by a `Params` message, as a host would.
+fn set_strategy(idle: &mut BackgroundTask, x: &mut impl Exchange, p: Params) {
+    let mut frame = [0u8; vpf::link::MAX_FRAME];
+    if let Ok(n) = Message::Params(p).emit_frame(0, &mut frame) {
+        if let Some(f) = frame.get(..n) {
+            idle.feed(f, x);
+        }
+    }
+}
+
+/// `periods` periods of sonar flood: scanline messages on the control link, or with `sonar`
+/// Ping360 `device_data` through its driver.
+fn flood(
+    idle: &mut BackgroundTask,
+    x: &mut impl Exchange,
+    periods: u32,
+    mut sonar: Option<&mut PingStats>,
+) -> Flood {
     let mut bins = [0u8; 400];
     let mut ping = 0u32;
     let mut f = Flood {
@@ -132,13 +221,22 @@ fn flood(idle: &mut BackgroundTask, x: &mut impl Exchange, periods: u32) -> Floo
         if ping.is_multiple_of(8) {
             let periods = x.stats().periods;
             let start = board::cost_now();
-            send_nav(idle, x);
+            if sonar.is_some() {
+                send_nav_mavlink(idle, x);
+            } else {
+                send_nav(idle, x);
+            }
             let cost = board::cost_now().wrapping_sub(start);
             if x.stats().periods == periods {
                 f.max_nav_cost = f.max_nav_cost.max(cost);
             }
         }
         idle.poll(x);
+        if let Some(st) = sonar.as_deref_mut() {
+            feed_ping360(idle, x, ping, st);
+            ping = ping.wrapping_add(1);
+            continue;
+        }
         // One synthetic ping: a wall of echoes at a bearing-dependent range, with speckle.
         for (i, b) in bins.iter_mut().enumerate() {
             let r = (i as u32).wrapping_mul(2_654_435_761).wrapping_add(ping) >> 28;
@@ -194,6 +292,61 @@ fn send_nav(idle: &mut BackgroundTask, x: &mut impl Exchange) {
     if let Ok(n) = Message::Nav(nav).emit_frame(0, &mut frame) {
         if let Some(f) = frame.get(..n) {
             idle.feed(f, x);
+        }
+    }
+}
+
+/// The same navigation as [`send_nav`], as an autopilot's ATTITUDE and LOCAL_POSITION_NED on
+/// the MAVLink line (NED: north is the firmware's y, yaw = π/2 − heading).
+#[inline(never)]
+fn send_nav_mavlink(idle: &mut BackgroundTask, x: &mut impl Exchange) {
+    use mavlink::dialects::common::{ATTITUDE_DATA, LOCAL_POSITION_NED_DATA};
+    use mavlink::{MavlinkVersion, MessageData};
+    let now = x.now_ms();
+    let att = ATTITUDE_DATA {
+        time_boot_ms: now as u32,
+        yaw: core::f32::consts::FRAC_PI_2,
+        ..ATTITUDE_DATA::default()
+    };
+    let pos = LOCAL_POSITION_NED_DATA {
+        time_boot_ms: now as u32,
+        x: 0.0,
+        y: (now % 1000) as f32 * 1e-5,
+        vx: 0.1,
+        vy: 0.8,
+        ..LOCAL_POSITION_NED_DATA::default()
+    };
+    let mut payload = [0u8; 255];
+    let mut frame = [0u8; 64];
+    let n = att.ser(MavlinkVersion::V2, &mut payload);
+    if let Some(f) = payload.get(..n).and_then(|p| {
+        vpf::link::mavlink::emit_frame(
+            0,
+            (1, 1),
+            (ATTITUDE_DATA::ID, ATTITUDE_DATA::EXTRA_CRC),
+            p,
+            &mut frame,
+        )
+    }) {
+        if let Some(bytes) = frame.get(..f) {
+            idle.feed_mavlink(bytes, x);
+        }
+    }
+    let n = pos.ser(MavlinkVersion::V2, &mut payload);
+    if let Some(f) = payload.get(..n).and_then(|p| {
+        vpf::link::mavlink::emit_frame(
+            1,
+            (1, 1),
+            (
+                LOCAL_POSITION_NED_DATA::ID,
+                LOCAL_POSITION_NED_DATA::EXTRA_CRC,
+            ),
+            p,
+            &mut frame,
+        )
+    }) {
+        if let Some(bytes) = frame.get(..f) {
+            idle.feed_mavlink(bytes, x);
         }
     }
 }

@@ -193,6 +193,11 @@ impl Periodic {
         self.planner.progress(p)
     }
 
+    /// The newest navigation accepted.
+    pub fn nav(&self) -> Option<NavSample> {
+        self.nav
+    }
+
     /// The newest route read from the background.
     pub fn route(&self) -> Option<&Route> {
         self.route.as_ref()
@@ -216,6 +221,45 @@ impl Periodic {
     /// The telemetry counters as last sent.
     pub fn counters(&self) -> &TelemetryCounters {
         &self.counters
+    }
+
+    /// Opens a waypoint upload of `count` waypoints from another protocol (MAVLink's mission
+    /// protocol, `crate::guidance::mavlink`), into the same staging list as `MissionCount`:
+    /// the mission in force keeps flying until the upload is complete. The last waypoint is
+    /// held. `count` must be 1 ..= `MAX_WAYPOINTS` (the caller checked).
+    pub fn open_upload(&mut self, count: u8) {
+        let h = Header {
+            msg_type: crate::link::MessageType::MissionCount,
+            seq: 0,
+        };
+        let c = crate::link::MissionCountRepr {
+            count,
+            end: crate::planner::MissionEnd::Hold,
+            formation: None,
+        };
+        let _ = self.upload.open(h, &c);
+    }
+
+    /// Stores waypoint `index` of the upload [`Self::open_upload`] opened: `Ok(true)` when it
+    /// completed the mission, which is now in force; `Ok(false)` when more are to come;
+    /// `Err` (counted as a refused mission) when no upload is open, the index is beyond it, or
+    /// the whole list was refused.
+    pub fn upload_item(
+        &mut self,
+        index: u8,
+        waypoint: crate::planner::Waypoint,
+    ) -> Result<bool, crate::link::Problem> {
+        let h = Header {
+            msg_type: crate::link::MessageType::MissionItem,
+            seq: 0,
+        };
+        let m = crate::link::MissionItemRepr { index, waypoint };
+        let reply = self.upload.item(h, &m, &mut self.planner);
+        match reply.status {
+            crate::link::ReplyStatus::Accepted => Ok(!self.upload.is_open()),
+            crate::link::ReplyStatus::Rejected { problem, .. } => Err(problem),
+            crate::link::ReplyStatus::Busy => Err(crate::link::Problem::Invalid),
+        }
     }
 
     /// Counts a missed deadline (the board detects it).

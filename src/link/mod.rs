@@ -38,6 +38,7 @@ pub mod control;
 pub mod crc;
 pub mod decoder;
 pub mod frame;
+pub mod mavlink;
 pub mod message;
 pub mod mission;
 pub mod ping;
