@@ -166,16 +166,10 @@ fn selftest_meets_the_budgets_on_the_emulated_cortex_m4() {
                 "{strategy}: the {table} table was not full: {fill}"
             );
         }
-        // Multipoint's arc choice in clutter is over the budget (reported by the self-test as
-        // not yet held to it).
-        if strategy == "multipoint in clutter" {
-            println!("{strategy}: step cost max {max} instructions (budget 100000)");
-        } else {
-            assert!(
-                max <= 100_000,
-                "{strategy}: step cost {max} instructions over budget"
-            );
-        }
+        assert!(
+            max <= 100_000,
+            "{strategy}: step cost {max} instructions over budget"
+        );
         assert!(
             mean > 1_000 && mean <= max,
             "{strategy}: implausible mean {mean}"

@@ -192,10 +192,16 @@ impl Shape {
         match self {
             Shape::Circle(c) => c.radius,
             Shape::Rectangle(r) => r.half.norm(),
-            Shape::Ellipse(Ellipse(r)) => r.half.x.max(r.half.y),
+            Shape::Ellipse(Ellipse(r)) => crate::math::max(r.half.x, r.half.y),
+            // One square root: √ is monotonic and correctly rounded, so the root of the
+            // largest square is the largest root, bit for bit.
             Shape::Polygon(g) => {
                 let c = g.centroid();
-                g.vertices().iter().fold(0.0, |m, v| m.max((*v - c).norm()))
+                let far2 = g
+                    .vertices()
+                    .iter()
+                    .fold(0.0, |m, v| crate::math::max((*v - c).norm2(), m));
+                crate::math::sqrt(far2)
             }
         }
     }

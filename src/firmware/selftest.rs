@@ -15,8 +15,7 @@
 //!    route layer replans on those), and the least fill of the tables over the measured
 //!    periods; then the stack high-water mark. It exits successfully only if no strategy
 //!    overran, every measured period ran at full tables and every worst step was within
-//!    [`STEP_BUDGET`] (but multipoint's in clutter, which is over it and reported so). Half the
-//!    obstacles move, so the prediction of moving obstacles is in the measured path.
+//!    [`STEP_BUDGET`]. Half the obstacles of the spread world move, so the prediction of moving obstacles is in the measured path.
 //! 4. A further flood (VPF, the spread world) brings its pings as Ping360 `device_data`
 //!    through the Ping360 driver and its navigation as MAVLink (ATTITUDE, LOCAL_POSITION_NED)
 //!    through the MAVLink line's decoder, so their paths are measured and in the stack's
@@ -493,19 +492,13 @@ fn report(
     line.num(u64::from(f.ghosts));
     line.push(b" of ");
     line.num(u64::from(ghosts));
-    if clutter && strategy == Strategy::Multipoint {
-        line.push(b"; its step cost is not yet held to the budget");
-    }
     line.push(b"\n");
     board::log(line.bytes());
-    // Multipoint's arc choice in clutter (every obstacle within its influence) is over the
-    // budget, measured here since the clutter world was added: reported, not yet held to it.
-    let budgeted = !(clutter && strategy == Strategy::Multipoint);
     let full = usize::from(f.obstacles) == MAX_OBSTACLES
         && usize::from(f.agents) == MAX_AGENTS
         && usize::from(f.map_cells) == MAX_MAP_CELLS
         && f.ghosts == ghosts;
-    full && s.overruns == 0 && (s.max_cost <= STEP_BUDGET || !budgeted) && s.periods >= PERIODS
+    full && s.overruns == 0 && s.max_cost <= STEP_BUDGET && s.periods >= PERIODS
 }
 
 /// Copies of an object in a measured field: the cost per object is the field's cost less the
