@@ -55,16 +55,28 @@
 //! **Cost per call**, for N arc points, K periphery points and R obstacles within reach
 //! (bounding circle within r + d_t of the vehicle; farther ones cost one norm and are skipped
 //! exactly, since none of their points can reach an arc point):
-//! - R·K ray–boundary intersections (one `sin_cos` each, plus one division per edge for a
-//!   polygon) — no `signed_distance` evaluation;
+//! - R·K ray–boundary intersections (K `sin_cos` per call, one per rectangle or ellipse, plus
+//!   one division per edge for a polygon) — no `signed_distance` evaluation;
 //! - at most N·K·R squared distances, of which those within d_t take a square root and a
-//!   division;
+//!   division (about 27 instructions a pair on the Cortex-M4F);
 //! - N `signed_distance` evaluations per obstacle within reach whose periphery is coarse (see
 //!   below; none with the defaults for obstacles up to 10 m in radius), so at most N·R;
 //! - N norms and divisions for the attraction.
 //!
-//! At the capacities (N = 32, K = 16) and 16 obstacles in reach that is 8192 distance terms.
-//! Stack: about 32·(8 + 4) + 16·8 bytes of arrays.
+//! Stack: about 32·(8 + 4) + 16·(8 + 8) bytes of arrays.
+//!
+//! **Region of interest, held to a budget (our departure).** Seed 003 §3 selects "the
+//! obstacles within this region" of interest, the sonar's detection range and span, and
+//! leaves its size open. Evaluated over every obstacle within reach, the sum is N·(K·R + M)
+//! pairs for M map cells: at full tables in clutter (32 obstacles and 8 vehicles within 9 m,
+//! 32 cells; N = 25, K = 9) 9800 pairs, 330 000 instructions, over the step budget. The
+//! planner therefore narrows the region ([`region_of_interest`], before any shape is built)
+//! to at most [`MAX_PAIRS`] pairs: everything within reach while that fits, else the nearest
+//! distance bands ((r + d_t)/16 deep) whole and, in the first band that does not fit,
+//! sources in table order while they fit. What is left out is the farthest: its terms are the
+//! smallest ((1/d_o − 1/d_t)² falls from 0.14 at 2 m to 0.002 at 6 m with d_t = 8 m), and the
+//! region is chosen afresh at every arc step, so an obstacle left out enters it as the vehicle
+//! closes in. [`choose`] itself evaluates eq. 4–8 over whatever it is given.
 //!
 //! **Coarse peripheries (our addition).** Between two neighbouring periphery points, up to
 //! πρ/(K − 1) apart on an obstacle of bounding radius ρ, the repulsion dips; once that spacing
@@ -1435,6 +1447,63 @@ mod tests {
         assert!(clear > 2.5, "came within {clear} m of an obstacle");
         // About the straight-line 205 m plus detours.
         assert!(steps < 300, "{steps} steps");
+    }
+
+    #[test]
+    fn region_of_interest_takes_everything_in_reach_when_it_fits() {
+        extern crate std;
+        use std::vec::Vec;
+        let cfg = ArcConfig::default();
+        let obstacles = [
+            (Vec2::new(3.0, 0.0), 1.0),
+            (Vec2::new(0.0, -6.0), 2.0),
+            (Vec2::new(30.0, 0.0), 1.0), // beyond r + d_t
+            (Vec2::new(f32::NAN, 0.0), 1.0),
+        ];
+        let points = [Vec2::new(2.0, 2.0), Vec2::new(0.0, 20.0)];
+        let sel = region_of_interest(
+            &cfg,
+            Vec2::ZERO,
+            obstacles.iter().copied(),
+            points.iter().copied(),
+        );
+        let taken: Vec<bool> = (0..4).map(|i| sel.obstacle(i)).collect();
+        assert_eq!(taken, [true, true, false, false]);
+        assert!(sel.point(0) && !sel.point(1));
+    }
+
+    #[test]
+    fn region_of_interest_holds_the_pair_budget_nearest_first() {
+        extern crate std;
+        use std::vec::Vec;
+        let cfg = ArcConfig::default();
+        let (n, k) = (cfg.arc_points(), cfg.periphery_points());
+        // 40 small obstacles from 1.5 m to 9 m, in a shuffled order, and 32 points at 4–5 m.
+        let gap = |i: usize| 1.5 + 7.5 * ((i * 17) % 40) as f32 / 40.0;
+        let obstacles: Vec<(Vec2, f32)> = (0..40)
+            .map(|i| (Vec2::from_angle(i as f32 * 0.7) * (gap(i) + 0.5), 0.5))
+            .collect();
+        let points: Vec<Vec2> = (0..32)
+            .map(|i| Vec2::from_angle(i as f32 * 0.2) * (4.0 + i as f32 / 32.0))
+            .collect();
+        let sel = region_of_interest(
+            &cfg,
+            Vec2::ZERO,
+            obstacles.iter().copied(),
+            points.iter().copied(),
+        );
+        let taken_o: Vec<usize> = (0..40).filter(|&i| sel.obstacle(i)).collect();
+        let taken_p = (0..32).filter(|&i| sel.point(i)).count();
+        let pairs = (taken_o.len() * k + taken_p) * n;
+        assert!(pairs <= MAX_PAIRS, "{pairs} pairs");
+        // Nothing left out is nearer, by a band, than something taken.
+        let band = (cfg.arc_m + cfg.influence_m) / BANDS as f32;
+        let farthest_taken = taken_o.iter().map(|&i| gap(i)).fold(0.0, f32::max);
+        for i in (0..40).filter(|i| !taken_o.contains(i)) {
+            assert!(gap(i) > farthest_taken - band - 1e-4, "obstacle {i}");
+        }
+        // And the budget is used: the next source would not have fitted.
+        assert!(pairs + k * n > MAX_PAIRS, "{pairs} pairs");
     }
 
     #[test]
