@@ -4,7 +4,7 @@
 
 use heapless::spsc::Consumer;
 use rtic::Mutex;
-use vpf::guidance::{Background, Control, NavSample, Sighting, Sink};
+use vpf::guidance::{Background, BackgroundOutputs, Control, NavSample, Sighting};
 use vpf::link::ReplyRepr;
 use vpf::route::{Route, Router};
 
@@ -126,13 +126,13 @@ pub struct BackgroundTask {
     mav: MavPort,
 }
 
-/// The background's [`Sink`]: its queue ends and the shared resources.
+/// The background's [`BackgroundOutputs`]: its queue ends and the shared resources.
 struct Outlet<'a, X: Exchange> {
     queues: &'a mut Producers,
     exchange: &'a mut X,
 }
 
-impl<X: Exchange> Sink for Outlet<'_, X> {
+impl<X: Exchange> BackgroundOutputs for Outlet<'_, X> {
     fn nav(&mut self, sample: NavSample) {
         self.exchange.publish_nav(sample);
     }
@@ -246,7 +246,9 @@ impl BackgroundTask {
     #[cfg_attr(feature = "selftest", allow(dead_code))]
     pub fn poll_sonar(&mut self, exchange: &mut impl Exchange) -> bool {
         let busy = self.sonar_bytes(exchange);
-        if !self.background.lockstep() && vpf::guidance::single::ping360_started(&self.background) {
+        if !self.background.lockstep()
+            && vpf::guidance::one_thread::ping360_started(&self.background)
+        {
             let now = exchange.now_ms();
             self.sonar.poll(now);
         }

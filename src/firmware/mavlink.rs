@@ -17,7 +17,7 @@ use core::sync::atomic::{AtomicU32, Ordering};
 
 use heapless::spsc::{Consumer, Producer, Queue};
 use vpf::guidance::mavlink::{MavConfig, MavInbound, MavMission, MavOutbound};
-use vpf::guidance::{Background, Periodic, Sink};
+use vpf::guidance::{Background, BackgroundOutputs, Periodic};
 use vpf::planner::Command;
 use vpf::route::Router;
 use vpf::sonar::EvidenceMap;
@@ -67,7 +67,7 @@ impl MavPort {
         &mut self,
         now_ms: u64,
         background: &mut Background,
-        sink: &mut impl Sink,
+        sink: &mut impl BackgroundOutputs,
         map: Option<&EvidenceMap>,
         router: Option<&mut Router>,
     ) -> bool {
@@ -95,7 +95,7 @@ impl MavPort {
         bytes: &[u8],
         now_ms: u64,
         background: &mut Background,
-        sink: &mut impl Sink,
+        sink: &mut impl BackgroundOutputs,
         map: Option<&EvidenceMap>,
         router: Option<&mut Router>,
     ) {

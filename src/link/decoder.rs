@@ -605,7 +605,7 @@ mod tests {
     }
 
     fn encode_all(
-        msgs: &[crate::link::message::tests::Owned],
+        msgs: &[crate::link::message::tests::OwnedMessage],
     ) -> (Vec<Vec<u8>>, Vec<(MessageType, u16)>) {
         let mut frames = Vec::new();
         let mut ids = Vec::new();
