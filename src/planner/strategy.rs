@@ -15,8 +15,8 @@ use super::{Context, Motion, Planner};
 use crate::field::Shape;
 use crate::math::{max, min, sqrt, Vec2};
 use crate::params::Params;
-use crate::world::Obstacle;
 use crate::planner::Command;
+use crate::world::Obstacle;
 
 /// Gain of the alternative strategies' velocity tracking, × 1/T. With the bilinear integrator,
 /// F = g·(v_d − v_c) has real poles (no overshoot) for g·T/2 ≤ 3 − 2√2 ≈ 0.17; 0.3/T (g·T/2 =
