@@ -282,25 +282,43 @@ pub const DEFAULT_SCENARIOS: [&str; 3] = [
     "hil/scenarios/crossing_traffic.toml",
 ];
 
-const USAGE: &str = "usage: hil faults [SCENARIO.toml...] [options]
+/// `hil faults`'s command line.
+#[derive(Clone, Debug, clap::Parser)]
+#[command(
+    name = "hil faults",
+    long_about = "Flies each scenario under each kind of fault on the host-process firmware (lockstep) \
+             and prints one table: reached or not, least clearance, and under navigation loss how \
+             soon the firmware held. Without scenarios: random_clutter, narrow_gap and \
+             crossing_traffic from hil/scenarios.",
+    after_help = "Any cell can be flown again with its plots: hil run SCENARIO.toml --firmware host \
+                  <the column's options>."
+)]
+pub struct Args {
+    /// scenario files (default: random_clutter, narrow_gap and crossing_traffic)
+    #[arg(value_name = "SCENARIO.toml")]
+    scenarios: Vec<PathBuf>,
+    /// none, ber (--bit-error-rate 1e-3), drops (--drop-rate 0.2), freeze (--nav-freeze 60:80),
+    /// loss (--nav-loss 60:80), dropout (--sonar-dropout 60:120), all (combined; the loss
+    /// follows the freeze, 80:90) (default: all seven)
+    #[arg(long, value_name = "a,b,...", value_delimiter = ',', value_parser = kind)]
+    kinds: Vec<Kind>,
+    /// planner parameters from a recipe (replace each scenario's [planner])
+    #[arg(long, value_name = "RECIPE.toml")]
+    params: Option<PathBuf>,
+    /// worker threads (default: all cores)
+    #[arg(long, value_name = "N", value_parser = pool::jobs)]
+    jobs: Option<usize>,
+    /// also write faults.md and faults.json there
+    #[arg(long, value_name = "DIR")]
+    out: Option<PathBuf>,
+}
 
-Flies each scenario under each kind of fault on the host-process firmware (lockstep) and prints
-one table: reached or not, least clearance, and under navigation loss how soon the firmware held.
-Without scenarios: random_clutter, narrow_gap and crossing_traffic from hil/scenarios.
-
-options:
-  --kinds a,b,...           none, ber (--bit-error-rate 1e-3), drops (--drop-rate 0.2),
-                            freeze (--nav-freeze 60:80), loss (--nav-loss 60:80),
-                            dropout (--sonar-dropout 60:120), all (combined; the loss follows
-                            the freeze, 80:90) (default: all seven)
-  --params RECIPE.toml      planner parameters from a recipe (replace each scenario's [planner])
-  --jobs N                  worker threads (default: all cores)
-  --out DIR                 also write faults.md and faults.json there
-
-Any cell can be flown again with its plots: hil run SCENARIO.toml --firmware host <the column's options>.";
+fn kind(s: &str) -> Result<Kind, String> {
+    Kind::parse(s.trim()).ok_or_else(|| format!("unknown kind `{s}`"))
+}
 
 /// What to fly.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug)]
 struct Options {
     scenarios: Vec<PathBuf>,
     kinds: Vec<Kind>,
@@ -309,42 +327,24 @@ struct Options {
     out: Option<PathBuf>,
 }
 
-/// Parses the command line after `hil faults`; `Ok(None)` for `--help`.
-fn parse_args(mut it: impl Iterator<Item = String>) -> Result<Option<Options>, String> {
-    let mut o = Options {
-        kinds: KINDS.to_vec(),
-        ..Options::default()
-    };
-    while let Some(a) = it.next() {
-        let mut value = || it.next().ok_or_else(|| format!("{a} needs a value"));
-        match a.as_str() {
-            "-h" | "--help" => return Ok(None),
-            "--kinds" => {
-                let v = value()?;
-                o.kinds = v
-                    .split(',')
-                    .map(|k| Kind::parse(k.trim()).ok_or_else(|| format!("--kinds: unknown `{k}`")))
-                    .collect::<Result<_, _>>()?;
-            }
-            "--params" => o.params = Some(PathBuf::from(value()?)),
-            "--jobs" => {
-                let v = value()?;
-                o.jobs = Some(
-                    v.parse()
-                        .ok()
-                        .filter(|n| (1..=256).contains(n))
-                        .ok_or_else(|| format!("--jobs {v}: expected 1 ..= 256"))?,
-                );
-            }
-            "--out" => o.out = Some(PathBuf::from(value()?)),
-            s if s.starts_with('-') => return Err(format!("unknown option {s}")),
-            s => o.scenarios.push(PathBuf::from(s)),
+impl From<Args> for Options {
+    fn from(a: Args) -> Self {
+        Options {
+            scenarios: if a.scenarios.is_empty() {
+                DEFAULT_SCENARIOS.iter().map(PathBuf::from).collect()
+            } else {
+                a.scenarios
+            },
+            kinds: if a.kinds.is_empty() {
+                KINDS.to_vec()
+            } else {
+                a.kinds
+            },
+            params: a.params,
+            jobs: a.jobs,
+            out: a.out,
         }
     }
-    if o.scenarios.is_empty() {
-        o.scenarios = DEFAULT_SCENARIOS.iter().map(PathBuf::from).collect();
-    }
-    Ok(Some(o))
 }
 
 /// Loads the scenarios (a recipe's `[planner]` replacing theirs).
@@ -370,19 +370,8 @@ fn load(o: &Options) -> Result<Vec<Scenario>, String> {
 }
 
 /// `hil faults ...`.
-pub fn cli(it: impl Iterator<Item = String>) -> ExitCode {
-    let o = match parse_args(it) {
-        Ok(Some(o)) => o,
-        Ok(None) => {
-            println!("{USAGE}");
-            return ExitCode::SUCCESS;
-        }
-        Err(e) => {
-            eprintln!("hil faults: {e}\n\n{USAGE}");
-            return ExitCode::from(2);
-        }
-    };
-    match campaign(&o) {
+pub fn cli(args: Args) -> ExitCode {
+    match campaign(&args.into()) {
         Ok(table) => {
             println!("{table}");
             ExitCode::SUCCESS
@@ -432,25 +421,24 @@ fn campaign(o: &Options) -> Result<String, String> {
 mod tests {
     use super::*;
 
+    use clap::Parser as _;
+
+    fn parse(args: &[&str]) -> Result<Options, clap::Error> {
+        Args::try_parse_from(std::iter::once("faults").chain(args.iter().copied())).map(Into::into)
+    }
+
     #[test]
     fn arguments_parse_and_refuse_with_a_reason() {
-        let o = parse_args(
-            ["a.toml", "--kinds", "ber,loss"]
-                .map(String::from)
-                .into_iter(),
-        )
-        .unwrap()
-        .unwrap();
+        let o = parse(&["a.toml", "--kinds", "ber,loss"]).unwrap();
         assert_eq!(o.kinds, [Kind::BitErrors, Kind::NavLoss]);
         assert_eq!(o.scenarios, [PathBuf::from("a.toml")]);
-        let o = parse_args(std::iter::empty()).unwrap().unwrap();
+        let o = parse(&[]).unwrap();
         assert_eq!(o.kinds, KINDS);
         assert_eq!(o.scenarios.len(), DEFAULT_SCENARIOS.len());
-        let e = parse_args(["--kinds", "ber,eels"].map(String::from).into_iter()).unwrap_err();
+        let e = parse(&["--kinds", "ber,eels"]).unwrap_err().to_string();
         assert!(e.contains("eels"), "{e}");
-        assert!(parse_args(["--help"].map(String::from).into_iter())
-            .unwrap()
-            .is_none());
+        let help = parse(&["--help"]).unwrap_err();
+        assert_eq!(help.kind(), clap::error::ErrorKind::DisplayHelp);
     }
 
     #[test]

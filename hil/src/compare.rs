@@ -136,68 +136,71 @@ pub fn table(rows: &[Row]) -> String {
     s
 }
 
-const USAGE: &str = "usage: hil compare [SCENARIO.toml...] [--strategies vpf,multipoint,navfn]
-                   [--firmware host|qemu] [--jobs N] [--out DIR]
+/// `hil compare`'s command line.
+#[derive(Clone, Debug, clap::Parser)]
+#[command(
+    name = "hil compare",
+    long_about = "Flies each scenario (default: every hil/scenarios/*.toml) with each strategy and \
+             prints a markdown table (also written to OUT/comparison.md); each run's outputs are \
+             in OUT/<scenario>/<strategy>/."
+)]
+pub struct Args {
+    /// scenario files (default: every hil/scenarios/*.toml)
+    #[arg(value_name = "SCENARIO.toml")]
+    files: Vec<PathBuf>,
+    /// the strategies (default: all three)
+    #[arg(long, value_name = "vpf,multipoint,navfn", value_delimiter = ',', value_parser = strategy)]
+    strategies: Vec<Strategy>,
+    /// the firmware as a host process (default) or in QEMU
+    #[arg(long, value_name = "host|qemu", value_parser = firmware)]
+    firmware: Option<Target>,
+    /// worker threads (default: the number of cores)
+    #[arg(long, value_name = "N", value_parser = crate::sweep::pool::jobs)]
+    jobs: Option<usize>,
+    /// output directory (default runs/compare-TIME)
+    #[arg(long, value_name = "DIR")]
+    out: Option<PathBuf>,
+}
 
-Flies each scenario (default: every hil/scenarios/*.toml) with each strategy and prints a
-markdown table (also written to OUT/comparison.md); each run's outputs are in
-OUT/<scenario>/<strategy>/. Default firmware: host; default jobs: the number of cores.";
+fn strategy(s: &str) -> Result<Strategy, String> {
+    Strategy::from_name(s.trim())
+        .ok_or_else(|| format!("unknown strategy `{s}` (vpf, multipoint or navfn)"))
+}
+
+fn firmware(s: &str) -> Result<Target, String> {
+    match s {
+        "host" => Ok(Target::Host),
+        "qemu" => Ok(Target::Qemu),
+        _ => Err("expected host or qemu".into()),
+    }
+}
 
 /// `hil compare ...`.
-pub fn cli(it: impl Iterator<Item = String>) -> std::process::ExitCode {
-    match cli_inner(it) {
+pub fn cli(args: Args) -> std::process::ExitCode {
+    match cli_inner(args) {
         Ok(()) => std::process::ExitCode::SUCCESS,
-        // `--help`: the usage, on stdout, and success.
-        Err(e) if e.is_empty() => {
-            println!("{USAGE}");
-            std::process::ExitCode::SUCCESS
-        }
         Err(e) => {
-            eprintln!("hil compare: {e}\n\n{USAGE}");
+            eprintln!("hil compare: {e}");
             std::process::ExitCode::from(2)
         }
     }
 }
 
-fn cli_inner(mut it: impl Iterator<Item = String>) -> Result<(), String> {
-    let mut files: Vec<PathBuf> = Vec::new();
-    let mut strategies = STRATEGIES.to_vec();
-    let mut target = Target::Host;
-    let mut jobs = std::thread::available_parallelism().map_or(1, |n| n.get());
-    let mut out = None;
-    while let Some(a) = it.next() {
-        let mut value = || it.next().ok_or_else(|| format!("{a} needs a value"));
-        match a.as_str() {
-            "--strategies" => {
-                strategies = value()?
-                    .split(',')
-                    .map(|s| {
-                        Strategy::from_name(s.trim()).ok_or_else(|| {
-                            format!("unknown strategy `{s}` (vpf, multipoint or navfn)")
-                        })
-                    })
-                    .collect::<Result<_, _>>()?;
-            }
-            "--firmware" => {
-                target = match value()?.as_str() {
-                    "host" => Target::Host,
-                    "qemu" => Target::Qemu,
-                    other => return Err(format!("--firmware {other}: expected host or qemu")),
-                }
-            }
-            "--jobs" => {
-                jobs = value()?
-                    .parse()
-                    .ok()
-                    .filter(|&n| n > 0)
-                    .ok_or("--jobs needs a positive integer")?;
-            }
-            "--out" => out = Some(PathBuf::from(value()?)),
-            "--help" | "-h" => return Err(String::new()),
-            s if s.starts_with("--") => return Err(format!("unknown option {s}")),
-            s => files.push(PathBuf::from(s)),
-        }
-    }
+fn cli_inner(args: Args) -> Result<(), String> {
+    let Args {
+        mut files,
+        strategies,
+        firmware,
+        jobs,
+        out,
+    } = args;
+    let strategies = if strategies.is_empty() {
+        STRATEGIES.to_vec()
+    } else {
+        strategies
+    };
+    let target = firmware.unwrap_or(Target::Host);
+    let jobs = jobs.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
     if files.is_empty() {
         let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios");
         let entries = std::fs::read_dir(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;

@@ -20,42 +20,122 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
+use clap::{CommandFactory as _, FromArgMatches as _, Parser, Subcommand};
 use hil::firmware::Target;
 use hil::runner::{run, RunConfig};
 use hil::scenario::{self, Scenario, Window};
 
-const USAGE: &str = "usage:
-  hil run SCENARIO.toml [options]   run a scenario, write outputs to --out (default runs/NAME-TIME)
-  hil check SCENARIO.toml...        validate scenario files
-  hil sweep SPEC.toml [options]     tune the planner's parameters over a scenario batch
-  hil merge DIR...                  combine a sweep's shards (hil sweep --help)
-  hil compare [SCENARIO.toml...]    fly scenarios with each strategy, print a table (hil compare --help)
-  hil bench [options]               fly generated worlds, tabulate success and safety (hil bench --help)
-  hil faults SCENARIO.toml... [options]  fly each scenario under each fault, print a table (hil faults --help)
-  hil sonar-replay --ping360 FILE [options]  raw Ping360 bytes through the firmware's parser and extractor
-  hil ping360-raw DUMP.txt OUT.bin  a brping text dump of device_data messages as raw Ping bytes
+/// `hil`'s command line.
+#[derive(Parser)]
+#[command(
+    name = "hil",
+    about = "The host-side hardware-in-the-loop harness: simulated vehicles and sonars against the \
+             VPF firmware.",
+    after_help = "Scenario files: hil/scenarios/README.md. Outputs: trajectory_*.csv, \
+                  metrics.json, plot.svg, commands.svg, frames_*.log."
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
 
-options for run:
-  --out DIR                 output directory
-  --firmware qemu|qemu-uart|host
-                            the emulated Cortex-M4 in QEMU, linked through its ethernet controller
-                            (default), or through its UART on a pty (slower), or the firmware as a
-                            host process
-  --port /dev/ttyXXX        a real board on a serial adapter (flashed beforehand)
-  --baud N                  the port's baud rate (default 115200; the boards' control link)
-  --quiet                   no progress bar
-  --params RECIPE.toml      planner parameters from a recipe (replace the scenario's [planner])
-  --bit-error-rate X        corrupt bytes sent to the firmware on its main link at this bit-error rate
-  --drop-rate X             drop this fraction of the frames sent to the firmware on its main link
-  --ping360-bit-error-rate X  the same on the simulated Ping360's port ([sonar] interface = \"ping360\")
-  --ping360-drop-rate X     drop this fraction of the Ping360's device_data frames
-  --nav-delay-ms X          delay navigation by X ms
-  --nav-freeze FROM:TO      repeat the same navigation fix between FROM and TO seconds
-  --nav-loss FROM:TO        send no navigation between FROM and TO seconds
-  --sonar-dropout FROM:TO   send no sonar between FROM and TO seconds
+#[derive(Subcommand)]
+enum Command {
+    #[command(about = "run a scenario, write outputs to --out (default runs/NAME-TIME)")]
+    Run(RunArgs),
+    #[command(about = "validate scenario files")]
+    Check(CheckArgs),
+    #[command(about = "tune the planner's parameters over a scenario batch")]
+    Sweep(hil::sweep::cli::SweepArgs),
+    #[command(about = "combine a sweep's shards (hil sweep --help)")]
+    Merge(hil::sweep::cli::MergeArgs),
+    #[command(about = "fly scenarios with each strategy, print a table")]
+    Compare(hil::compare::Args),
+    #[command(about = "fly generated worlds, tabulate success and safety")]
+    Bench(hil::bench::Args),
+    #[command(about = "fly each scenario under each fault, print a table")]
+    Faults(hil::campaign::Args),
+    #[command(about = "raw Ping360 bytes through the firmware's parser and extractor")]
+    SonarReplay(hil::ping360::replay::Args),
+    #[command(
+        name = "ping360-raw",
+        about = "a brping text dump of device_data messages as raw Ping bytes"
+    )]
+    Ping360Raw(hil::ping360::replay::RawArgs),
+}
 
-Scenario files: hil/scenarios/README.md. Outputs: trajectory_*.csv, metrics.json, plot.svg,
-commands.svg, frames_*.log.";
+/// `hil run`'s options.
+#[derive(clap::Args)]
+#[command(
+    after_help = "Scenario files: hil/scenarios/README.md. Outputs: trajectory_*.csv, \
+                        metrics.json, plot.svg, commands.svg, frames_*.log."
+)]
+struct RunArgs {
+    /// the scenario file
+    #[arg(value_name = "SCENARIO.toml")]
+    scenario: PathBuf,
+    /// output directory
+    #[arg(long, value_name = "DIR")]
+    out: Option<PathBuf>,
+    /// the emulated Cortex-M4 in QEMU, linked through its ethernet controller (default), or
+    /// through its UART on a pty (slower), or the firmware as a host process
+    #[arg(long, value_name = "qemu|qemu-uart|host", value_parser = firmware)]
+    firmware: Option<Target>,
+    /// a real board on a serial adapter (flashed beforehand)
+    #[arg(long, value_name = "/dev/ttyXXX", conflicts_with = "firmware")]
+    port: Option<PathBuf>,
+    /// the port's baud rate (default 115200; the boards' control link)
+    #[arg(long, value_name = "N", requires = "port",
+          value_parser = clap::value_parser!(u32).range(1200..=4_000_000))]
+    baud: Option<u32>,
+    /// no progress bar
+    #[arg(long)]
+    quiet: bool,
+    /// planner parameters from a recipe (replace the scenario's [planner])
+    #[arg(long, value_name = "RECIPE.toml")]
+    params: Option<PathBuf>,
+    /// corrupt bytes sent to the firmware on its main link at this bit-error rate
+    #[arg(long, value_name = "X", value_parser = |s: &str| rate(s, 0.01))]
+    bit_error_rate: Option<f64>,
+    /// drop this fraction of the frames sent to the firmware on its main link
+    #[arg(long, value_name = "X", value_parser = |s: &str| rate(s, 1.0))]
+    drop_rate: Option<f64>,
+    /// the same on the simulated Ping360's port ([sonar] interface = "ping360")
+    #[arg(long, value_name = "X", value_parser = |s: &str| rate(s, 0.01))]
+    ping360_bit_error_rate: Option<f64>,
+    /// drop this fraction of the Ping360's device_data frames
+    #[arg(long, value_name = "X", value_parser = |s: &str| rate(s, 1.0))]
+    ping360_drop_rate: Option<f64>,
+    /// delay navigation by X ms
+    #[arg(long, value_name = "X", value_parser = |s: &str| rate(s, 10_000.0))]
+    nav_delay_ms: Option<f64>,
+    /// repeat the same navigation fix between FROM and TO seconds
+    #[arg(long, value_name = "FROM:TO", value_parser = window)]
+    nav_freeze: Option<Window>,
+    /// send no navigation between FROM and TO seconds
+    #[arg(long, value_name = "FROM:TO", value_parser = window)]
+    nav_loss: Option<Window>,
+    /// send no sonar between FROM and TO seconds
+    #[arg(long, value_name = "FROM:TO", value_parser = window)]
+    sonar_dropout: Option<Window>,
+}
+
+/// `hil check`'s options.
+#[derive(clap::Args)]
+struct CheckArgs {
+    /// the scenario files
+    #[arg(value_name = "SCENARIO.toml", required = true)]
+    files: Vec<PathBuf>,
+}
+
+fn firmware(s: &str) -> Result<Target, String> {
+    match s {
+        "qemu" => Ok(Target::Qemu),
+        "qemu-uart" => Ok(Target::QemuUart),
+        "host" => Ok(Target::Host),
+        _ => Err("expected qemu, qemu-uart or host".into()),
+    }
+}
 
 fn window(s: &str) -> Result<Window, String> {
     let (a, b) = s
@@ -78,104 +158,18 @@ fn rate(s: &str, max: f64) -> Result<f64, String> {
     }
 }
 
-struct Args {
-    scenario: PathBuf,
-    out: Option<PathBuf>,
-    target: Target,
-    quiet: bool,
-    faults: Vec<(String, String)>,
-    params: Option<PathBuf>,
-}
-
-/// The options of `hil run`; `Err("")` for `--help`.
-fn parse_run(mut it: impl Iterator<Item = String>) -> Result<Args, String> {
-    let mut args = Args {
-        scenario: PathBuf::new(),
-        out: None,
-        target: Target::Qemu,
-        quiet: false,
-        faults: Vec::new(),
-        params: None,
-    };
-    let mut scenario = None;
-    while let Some(a) = it.next() {
-        let mut value = || it.next().ok_or_else(|| format!("{a} needs a value"));
-        match a.as_str() {
-            "--out" => args.out = Some(PathBuf::from(value()?)),
-            "--firmware" => {
-                args.target = match value()?.as_str() {
-                    "qemu" => Target::Qemu,
-                    "qemu-uart" => Target::QemuUart,
-                    "host" => Target::Host,
-                    other => {
-                        return Err(format!(
-                            "--firmware {other}: expected qemu, qemu-uart or host"
-                        ))
-                    }
-                }
-            }
-            "--port" => {
-                let baud = match &args.target {
-                    Target::Port(_, b) => *b,
-                    _ => hil::firmware::PORT_BAUD,
-                };
-                args.target = Target::Port(PathBuf::from(value()?), baud);
-            }
-            "--baud" => {
-                let v = value()?;
-                let b: u32 = v
-                    .parse()
-                    .ok()
-                    .filter(|b| (1200..=4_000_000).contains(b))
-                    .ok_or(format!(
-                        "--baud {v}: expected a baud rate, 1200 ..= 4000000"
-                    ))?;
-                match &mut args.target {
-                    Target::Port(_, baud) => *baud = b,
-                    _ => return Err("--baud goes after --port".into()),
-                }
-            }
-            "--quiet" => args.quiet = true,
-            "--params" => args.params = Some(PathBuf::from(value()?)),
-            "-h" | "--help" => return Err(String::new()),
-            "--bit-error-rate"
-            | "--drop-rate"
-            | "--nav-delay-ms"
-            | "--nav-freeze"
-            | "--nav-loss"
-            | "--sonar-dropout"
-            | "--ping360-bit-error-rate"
-            | "--ping360-drop-rate" => {
-                let v = value()?;
-                args.faults.push((a.clone(), v));
-            }
-            s if s.starts_with("--") => return Err(format!("unknown option {s}")),
-            s => {
-                if scenario.replace(PathBuf::from(s)).is_some() {
-                    return Err("one scenario per run".into());
-                }
-            }
-        }
-    }
-    args.scenario = scenario.ok_or("which scenario? (hil run SCENARIO.toml)")?;
-    Ok(args)
-}
-
-fn apply_faults(sc: &mut Scenario, faults: &[(String, String)]) -> Result<(), String> {
-    for (k, v) in faults {
-        match k.as_str() {
-            "--bit-error-rate" => sc.faults.bit_error_rate = rate(v, 0.01)?,
-            "--drop-rate" => sc.faults.drop_rate = rate(v, 1.0)?,
-            "--nav-delay-ms" => sc.faults.nav_delay_ms = rate(v, 10_000.0)?,
-            "--nav-freeze" => sc.faults.nav_freeze = Some(window(v)?),
-            "--nav-loss" => sc.faults.nav_loss = Some(window(v)?),
-            "--sonar-dropout" => sc.faults.sonar_dropout = Some(window(v)?),
-            "--ping360-bit-error-rate" => sc.faults.ping360_bit_error_rate = rate(v, 0.01)?,
-            "--ping360-drop-rate" => sc.faults.ping360_drop_rate = rate(v, 1.0)?,
-            _ => {}
-        }
-    }
-    Ok(())
+/// The command line's faults over the scenario's own.
+fn apply_faults(sc: &mut Scenario, a: &RunArgs) {
+    let f = &mut sc.faults;
+    let set = |to: &mut f64, v: Option<f64>| *to = v.unwrap_or(*to);
+    set(&mut f.bit_error_rate, a.bit_error_rate);
+    set(&mut f.drop_rate, a.drop_rate);
+    set(&mut f.nav_delay_ms, a.nav_delay_ms);
+    set(&mut f.ping360_bit_error_rate, a.ping360_bit_error_rate);
+    set(&mut f.ping360_drop_rate, a.ping360_drop_rate);
+    f.nav_freeze = a.nav_freeze.or(f.nav_freeze);
+    f.nav_loss = a.nav_loss.or(f.nav_loss);
+    f.sonar_dropout = a.sonar_dropout.or(f.sonar_dropout);
 }
 
 fn default_out(name: &str) -> PathBuf {
@@ -185,18 +179,7 @@ fn default_out(name: &str) -> PathBuf {
     PathBuf::from("runs").join(format!("{}-{secs}", hil::output::file_stem(name)))
 }
 
-fn cmd_run(it: impl Iterator<Item = String>) -> ExitCode {
-    let args = match parse_run(it) {
-        Ok(a) => a,
-        Err(e) if e.is_empty() => {
-            println!("{USAGE}");
-            return ExitCode::SUCCESS;
-        }
-        Err(e) => {
-            eprintln!("hil run: {e}\n\n{USAGE}");
-            return ExitCode::from(2);
-        }
-    };
+fn cmd_run(args: RunArgs) -> ExitCode {
     let mut sc = match scenario::load(&args.scenario) {
         Ok(s) => s,
         Err(e) => {
@@ -226,11 +209,11 @@ fn cmd_run(it: impl Iterator<Item = String>) -> ExitCode {
             }
         }
     }
-    if let Err(e) = apply_faults(&mut sc, &args.faults) {
-        eprintln!("hil run: {e}");
-        return ExitCode::from(2);
-    }
-    let mut target = args.target;
+    apply_faults(&mut sc, &args);
+    let mut target = match args.port {
+        Some(port) => Target::Port(port, args.baud.unwrap_or(hil::firmware::PORT_BAUD)),
+        None => args.firmware.unwrap_or(Target::Qemu),
+    };
     if matches!(target, Target::Qemu | Target::QemuUart) && !hil::firmware::qemu_available() {
         eprintln!("hil: qemu-system-arm not found; running the host-process firmware instead");
         target = Target::Host;
@@ -293,26 +276,21 @@ fn cmd_run(it: impl Iterator<Item = String>) -> ExitCode {
     }
 }
 
-fn cmd_check(files: impl Iterator<Item = String>) -> ExitCode {
+fn cmd_check(args: CheckArgs) -> ExitCode {
     let mut ok = true;
-    let mut any = false;
-    for f in files {
-        if f == "-h" || f == "--help" {
-            println!("{USAGE}");
-            return ExitCode::SUCCESS;
-        }
-        any = true;
-        match scenario::load(std::path::Path::new(&f)) {
-            Ok(s) => println!("{f}: ok ({}, {} vehicles)", s.name, s.vehicles.len()),
+    for f in &args.files {
+        match scenario::load(f) {
+            Ok(s) => println!(
+                "{}: ok ({}, {} vehicles)",
+                f.display(),
+                s.name,
+                s.vehicles.len()
+            ),
             Err(e) => {
                 eprintln!("{e}");
                 ok = false;
             }
         }
-    }
-    if !any {
-        eprintln!("{USAGE}");
-        return ExitCode::from(2);
     }
     if ok {
         ExitCode::SUCCESS
@@ -321,25 +299,26 @@ fn cmd_check(files: impl Iterator<Item = String>) -> ExitCode {
     }
 }
 
+/// Every command's help opens with its usage line, as the README writes them.
+const HELP: &str = "{about-with-newline}\nusage: {usage}\n\n{all-args}{after-help}";
+
 fn main() -> ExitCode {
-    let mut it = std::env::args().skip(1);
-    match it.next().as_deref() {
-        Some("run") => cmd_run(it),
-        Some("check") => cmd_check(it),
-        Some("sweep") => hil::sweep::cli_sweep(it),
-        Some("merge") => hil::sweep::cli_merge(it),
-        Some("compare") => hil::compare::cli(it),
-        Some("bench") => hil::bench::cli(it),
-        Some("faults") => hil::campaign::cli(it),
-        Some("sonar-replay") => hil::ping360::replay::cli(it),
-        Some("ping360-raw") => hil::ping360::replay::cli_raw(it),
-        Some("-h" | "--help") => {
-            println!("{USAGE}");
-            ExitCode::SUCCESS
-        }
-        _ => {
-            eprintln!("{USAGE}");
-            ExitCode::from(2)
-        }
+    let cmd = Cli::command()
+        .help_template(HELP)
+        .mut_subcommands(|c| c.help_template(HELP));
+    let cli = match Cli::from_arg_matches(&cmd.get_matches()) {
+        Ok(c) => c,
+        Err(e) => e.exit(),
+    };
+    match cli.command {
+        Command::Run(a) => cmd_run(a),
+        Command::Check(a) => cmd_check(a),
+        Command::Sweep(a) => hil::sweep::cli::cli_sweep(a),
+        Command::Merge(a) => hil::sweep::cli::cli_merge(a),
+        Command::Compare(a) => hil::compare::cli(a),
+        Command::Bench(a) => hil::bench::cli(a),
+        Command::Faults(a) => hil::campaign::cli(a),
+        Command::SonarReplay(a) => hil::ping360::replay::cli(a),
+        Command::Ping360Raw(a) => hil::ping360::replay::cli_raw(a),
     }
 }

@@ -239,7 +239,17 @@ fn hil_run_refuses_an_output_directory_it_cannot_write_before_it_flies() {
 
 #[test]
 fn every_subcommand_answers_help_with_its_usage() {
-    for cmd in ["run", "check", "sweep", "merge", "compare", "bench"] {
+    for cmd in [
+        "run",
+        "check",
+        "sweep",
+        "merge",
+        "compare",
+        "bench",
+        "faults",
+        "sonar-replay",
+        "ping360-raw",
+    ] {
         for flag in ["--help", "-h"] {
             let out = hil(&[cmd, flag]);
             let stdout = String::from_utf8_lossy(&out.stdout);
@@ -255,5 +265,25 @@ fn every_subcommand_answers_help_with_its_usage() {
                 "hil {cmd} {flag}: {stdout}"
             );
         }
+    }
+}
+
+#[test]
+fn a_bad_command_line_is_refused_with_status_2_naming_the_option() {
+    for (args, names) in [
+        (&["run", "a.toml", "--baud", "9600"][..], "--port"),
+        (&["run", "a.toml", "--drop-rate", "2"][..], "--drop-rate"),
+        (&["run", "a.toml", "--nav-loss", "80:60"][..], "FROM < TO"),
+        (&["bench", "--seeds", "0"][..], "--seeds"),
+        (&["sweep", "s.toml", "--shard", "3/2"][..], "1 <= K <= N"),
+        (&["faults", "--kinds", "ber,eels"][..], "eels"),
+        (&["compare", "--jobs", "0"][..], "--jobs"),
+        (&["check"][..], "SCENARIO.toml"),
+        (&["fly"][..], "fly"),
+    ] {
+        let out = hil(args);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "hil {args:?}: {err}");
+        assert!(err.contains(names), "hil {args:?}: {err}");
     }
 }

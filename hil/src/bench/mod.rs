@@ -45,27 +45,6 @@ pub const FORMAT: &str = "hil-bench-1";
 /// Most runs one bench may hold (families × seeds × strategies × models × sensing).
 pub const MAX_RUNS: usize = 100_000;
 
-const USAGE: &str = "usage: hil bench [options]
-
-Flies generated worlds the planner was not tuned on and tabulates how it did.
-
-options:
-  --families a,b,...        world families (default: these twelve): clutter, boxes, wall_gap,
-                            harbour, utrap, ltrap, channel, serpentine, rocks, crossing, head_on,
-                            formation; and, when named, the waypoint missions: survey
-  --seeds N                 worlds per family, seeds 0 .. N-1 (default 17: 204 worlds)
-  --strategies a,b,...      vpf, multipoint, navfn (default vpf)
-  --models a,b,...          videoray, flatfish (default videoray)
-  --sensing a,b,...         scanlines (the vehicle's own sonar), contacts (perfect perception)
-                            (default scanlines)
-  --params RECIPE.toml      planner parameters from a recipe instead of the defaults
-  --jobs N                  worker threads (default: all cores)
-  --out DIR                 output directory (default bench/default, or bench/<recipe>)
-  --quiet                   no progress bar
-
-Writes runs.jsonl (one row per run; rerun to resume), bench.md and bench.json (tables per
-family and overall), and failed/<run>/{plot.svg, world.toml} for every run that failed.";
-
 /// What to bench.
 #[derive(Clone, Debug)]
 pub struct Options {
@@ -105,27 +84,85 @@ impl Default for Options {
     }
 }
 
-fn list<T>(s: &str, what: &str, parse: impl Fn(&str) -> Option<T>) -> Result<Vec<T>, String> {
-    let v: Result<Vec<T>, String> = s
-        .split(',')
-        .map(|x| parse(x.trim()).ok_or_else(|| format!("--{what}: unknown `{x}`")))
-        .collect();
-    v.and_then(|v| {
-        if v.is_empty() {
-            Err(format!("--{what}: empty list"))
-        } else {
-            Ok(v)
-        }
-    })
+/// `hil bench`'s command line.
+#[derive(Clone, Debug, clap::Parser)]
+#[command(
+    name = "hil bench",
+    long_about = "Flies generated worlds the planner was not tuned on and tabulates how it did.",
+    after_help = "Writes runs.jsonl (one row per run; rerun to resume), bench.md and bench.json \
+                  (tables per family and overall), and failed/<run>/{plot.svg, world.toml} for \
+                  every run that failed."
+)]
+pub struct Args {
+    /// world families (default: these twelve): clutter, boxes, wall_gap, harbour, utrap, ltrap,
+    /// channel, serpentine, rocks, crossing, head_on, formation; and, when named, the waypoint
+    /// missions: survey
+    #[arg(long, value_name = "a,b,...", value_delimiter = ',', value_parser = family)]
+    families: Vec<Family>,
+    /// worlds per family, seeds 0 .. N-1 (default 17: 204 worlds)
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=10_000))]
+    seeds: Option<u64>,
+    /// vpf, multipoint, navfn (default vpf)
+    #[arg(long, value_name = "a,b,...", value_delimiter = ',', value_parser = strategy)]
+    strategies: Vec<Strategy>,
+    /// videoray, flatfish (default videoray)
+    #[arg(long, value_name = "a,b,...", value_delimiter = ',', value_parser = model)]
+    models: Vec<ModelKind>,
+    /// scanlines (the vehicle's own sonar), contacts (perfect perception) (default scanlines)
+    #[arg(long, value_name = "a,b,...", value_delimiter = ',', value_parser = sensing)]
+    sensing: Vec<Sensing>,
+    /// planner parameters from a recipe instead of the defaults
+    #[arg(long, value_name = "RECIPE.toml")]
+    params: Option<PathBuf>,
+    /// worker threads (default: all cores)
+    #[arg(long, value_name = "N", value_parser = crate::sweep::pool::jobs)]
+    jobs: Option<usize>,
+    /// output directory (default bench/default, or bench/<recipe>)
+    #[arg(long, value_name = "DIR")]
+    out: Option<PathBuf>,
+    /// no progress bar
+    #[arg(long)]
+    quiet: bool,
 }
 
-fn parse_strategy(s: &str) -> Option<Strategy> {
+/// `v`, or `default` if it is empty.
+fn or<T>(v: Vec<T>, default: Vec<T>) -> Vec<T> {
+    if v.is_empty() {
+        default
+    } else {
+        v
+    }
+}
+
+impl From<Args> for Options {
+    fn from(a: Args) -> Self {
+        let d = Options::default();
+        Options {
+            families: or(a.families, d.families),
+            seeds: a.seeds.unwrap_or(d.seeds),
+            strategies: or(a.strategies, d.strategies),
+            models: or(a.models, d.models),
+            sensing: or(a.sensing, d.sensing),
+            params: a.params,
+            jobs: a.jobs,
+            out: a.out,
+            quiet: a.quiet,
+        }
+    }
+}
+
+fn family(s: &str) -> Result<Family, String> {
+    Family::parse(s).ok_or_else(|| format!("unknown family `{s}`"))
+}
+
+fn strategy(s: &str) -> Result<Strategy, String> {
     [Strategy::Vpf, Strategy::Multipoint, Strategy::Navfn]
         .into_iter()
         .find(|x| x.name() == s)
+        .ok_or_else(|| format!("unknown strategy `{s}` (vpf, multipoint or navfn)"))
 }
 
-fn parse_model(s: &str) -> Option<ModelKind> {
+fn model(s: &str) -> Result<ModelKind, String> {
     [
         ModelKind::VideoRay,
         ModelKind::FlatFish,
@@ -133,51 +170,15 @@ fn parse_model(s: &str) -> Option<ModelKind> {
     ]
     .into_iter()
     .find(|m| m.name() == s)
+    .ok_or_else(|| format!("unknown model `{s}`"))
 }
 
-fn parse_sensing(s: &str) -> Option<Sensing> {
+fn sensing(s: &str) -> Result<Sensing, String> {
     match s {
-        "scanlines" | "sonar" => Some(Sensing::Sonar),
-        "contacts" => Some(Sensing::Contacts),
-        _ => None,
+        "scanlines" | "sonar" => Ok(Sensing::Sonar),
+        "contacts" => Ok(Sensing::Contacts),
+        _ => Err(format!("unknown sensing `{s}` (scanlines or contacts)")),
     }
-}
-
-/// Parses the command line after `hil bench`; `Ok(None)` for `--help`.
-pub fn parse_args(mut it: impl Iterator<Item = String>) -> Result<Option<Options>, String> {
-    let mut o = Options::default();
-    while let Some(a) = it.next() {
-        let mut value = || it.next().ok_or_else(|| format!("{a} needs a value"));
-        match a.as_str() {
-            "-h" | "--help" => return Ok(None),
-            "--families" => o.families = list(&value()?, "families", Family::parse)?,
-            "--seeds" => {
-                let v = value()?;
-                o.seeds = v
-                    .parse()
-                    .ok()
-                    .filter(|n| (1..=10_000).contains(n))
-                    .ok_or_else(|| format!("--seeds {v}: expected 1 ..= 10000"))?;
-            }
-            "--strategies" => o.strategies = list(&value()?, "strategies", parse_strategy)?,
-            "--models" => o.models = list(&value()?, "models", parse_model)?,
-            "--sensing" => o.sensing = list(&value()?, "sensing", parse_sensing)?,
-            "--params" => o.params = Some(PathBuf::from(value()?)),
-            "--jobs" => {
-                let v = value()?;
-                o.jobs = Some(
-                    v.parse()
-                        .ok()
-                        .filter(|n| (1..=256).contains(n))
-                        .ok_or_else(|| format!("--jobs {v}: expected 1 ..= 256"))?,
-                );
-            }
-            "--out" => o.out = Some(PathBuf::from(value()?)),
-            "--quiet" => o.quiet = true,
-            other => return Err(format!("unknown option {other}")),
-        }
-    }
-    Ok(Some(o))
 }
 
 /// Every case of `o`, in table order.
@@ -331,19 +332,8 @@ pub fn bench(o: &Options) -> Result<(PathBuf, report::Report), String> {
 }
 
 /// `hil bench ...`.
-pub fn cli(it: impl Iterator<Item = String>) -> ExitCode {
-    let o = match parse_args(it) {
-        Ok(Some(o)) => o,
-        Ok(None) => {
-            println!("{USAGE}");
-            return ExitCode::SUCCESS;
-        }
-        Err(e) => {
-            eprintln!("hil bench: {e}\n\n{USAGE}");
-            return ExitCode::from(2);
-        }
-    };
-    match bench(&o) {
+pub fn cli(args: Args) -> ExitCode {
+    match bench(&args.into()) {
         Ok((dir, rep)) => {
             println!("{}", rep.markdown());
             println!("outputs in {}", dir.display());
@@ -360,30 +350,32 @@ pub fn cli(it: impl Iterator<Item = String>) -> ExitCode {
 mod tests {
     use super::*;
 
+    use clap::Parser as _;
+
+    fn parse(args: &[&str]) -> Result<Options, clap::Error> {
+        Args::try_parse_from(std::iter::once("bench").chain(args.iter().copied())).map(Into::into)
+    }
+
     #[test]
     fn arguments_parse_and_refuse_with_a_reason() {
-        let o = parse_args(
-            [
-                "--families",
-                "clutter,harbour",
-                "--seeds",
-                "3",
-                "--sensing",
-                "scanlines,contacts",
-            ]
-            .map(String::from)
-            .into_iter(),
-        )
-        .unwrap()
+        let o = parse(&[
+            "--families",
+            "clutter,harbour",
+            "--seeds",
+            "3",
+            "--sensing",
+            "scanlines,contacts",
+        ])
         .unwrap();
         assert_eq!(o.families, [Family::Clutter, Family::Harbour]);
         assert_eq!(cases(&o).len(), 2 * 3 * 2);
-        let e = parse_args(["--families", "reef"].map(String::from).into_iter()).unwrap_err();
+        let e = parse(&["--families", "reef"]).unwrap_err().to_string();
         assert!(e.contains("reef"), "{e}");
-        assert!(parse_args(["--seeds", "0"].map(String::from).into_iter()).is_err());
-        assert!(parse_args(["--help"].map(String::from).into_iter())
-            .unwrap()
-            .is_none());
+        assert!(parse(&["--seeds", "0"]).is_err());
+        let help = parse(&["--help"]).unwrap_err();
+        assert_eq!(help.kind(), clap::error::ErrorKind::DisplayHelp);
+        assert!(help.to_string().contains("--families"), "{help}");
+        assert_eq!(cases(&parse(&[]).unwrap()).len(), 12 * 17);
         assert_eq!(cases(&Options::default()).len(), 12 * 17);
     }
 }

@@ -21,23 +21,73 @@ use crate::output::svg::{Frame, Svg};
 /// Largest file read, bytes (a 360° sweep of 1200-sample pings is under 0.5 MB).
 pub const MAX_REPLAY_BYTES: u64 = 256 << 20;
 
-const USAGE: &str = "usage:
-  hil sonar-replay --ping360 FILE [options]   raw Ping360 bytes through the firmware's parser and extractor
-  hil ping360-raw DUMP.txt OUT.bin            a brping text dump of device_data messages as raw bytes
+/// `hil sonar-replay`'s command line.
+#[derive(Clone, Debug, clap::Parser)]
+#[command(
+    name = "hil sonar-replay",
+    long_about = "Raw Ping360 bytes through the firmware's parser and extractor.",
+    after_help = "The other extractor settings are the firmware's defaults. For the tank \
+                  recording in shared/data/ping360/ (2 m range, gain 0): --threshold 100 --peak \
+                  120 --blanking-m 0.15 --gain-per-m 0 --cluster-gap-m 0.1. Making such a file \
+                  from a brping text dump: hil ping360-raw --help."
+)]
+pub struct Args {
+    /// the raw Ping bytes
+    #[arg(long, value_name = "FILE")]
+    ping360: PathBuf,
+    /// draw the pings' echoes and the features, seen from above
+    #[arg(long, value_name = "FILE.svg")]
+    plot: Option<PathBuf>,
+    /// head step the sweep used, gradians (default 1)
+    #[arg(long, value_name = "G")]
+    step: Option<u16>,
+    /// m/s (default 1500)
+    #[arg(long, value_name = "C")]
+    sound_speed: Option<f32>,
+    /// bearing of head angle 0 from the bow, degrees counter-clockwise (default 180)
+    #[arg(long, value_name = "DEG[:ccw]", value_parser = mount)]
+    mount: Option<(f32, bool)>,
+    /// detection threshold on the (gain-compensated) intensity (default 90)
+    #[arg(long, value_name = "X")]
+    threshold: Option<f32>,
+    /// least peak of an echo run (default 120, at least the threshold)
+    #[arg(long, value_name = "X")]
+    peak: Option<f32>,
+    /// ignore echoes nearer than this, m (default 1.0)
+    #[arg(long, value_name = "M")]
+    blanking_m: Option<f32>,
+    /// range compensation slope, per m (default 0.04)
+    #[arg(long, value_name = "K")]
+    gain_per_m: Option<f32>,
+    /// largest range step between beams of one feature, m (default 1.0)
+    #[arg(long, value_name = "M")]
+    cluster_gap_m: Option<f32>,
+}
 
-options for sonar-replay:
-  --plot FILE.svg        draw the pings' echoes and the features, seen from above
-  --step G               head step the sweep used, gradians (default 1)
-  --sound-speed C        m/s (default 1500)
-  --mount DEG[:ccw]      bearing of head angle 0 from the bow, degrees counter-clockwise (default 180)
-  --threshold X          detection threshold on the (gain-compensated) intensity (default 90)
-  --peak X               least peak of an echo run (default 120, at least the threshold)
-  --blanking-m M         ignore echoes nearer than this, m (default 1.0)
-  --gain-per-m K         range compensation slope, per m (default 0.04)
-  --cluster-gap-m M      largest range step between beams of one feature, m (default 1.0)
-The other extractor settings are the firmware's defaults. For the tank recording in
-shared/data/ping360/ (2 m range, gain 0): --threshold 100 --peak 120 --blanking-m 0.15
---gain-per-m 0 --cluster-gap-m 0.1.";
+/// `DEG[:ccw]` → (zero bearing in rad, clockwise).
+fn mount(v: &str) -> Result<(f32, bool), String> {
+    let (deg, sense) = v.split_once(':').unwrap_or((v, "cw"));
+    let deg: f32 = deg
+        .parse()
+        .map_err(|_| format!("`{deg}` is not a number"))?;
+    Ok((deg.to_radians(), sense != "ccw"))
+}
+
+/// `hil ping360-raw`'s command line.
+#[derive(Clone, Debug, clap::Parser)]
+#[command(
+    name = "hil ping360-raw",
+    long_about = "A brping text dump of device_data messages as raw Ping bytes (each frame rebuilt and \
+             checked against the checksum the dump logged), for hil sonar-replay."
+)]
+pub struct RawArgs {
+    /// the brping text dump
+    #[arg(value_name = "DUMP.txt")]
+    dump: PathBuf,
+    /// the raw bytes written
+    #[arg(value_name = "OUT.bin")]
+    out: PathBuf,
+}
 
 /// One ping as replayed: head angle, bow-relative bearing (rad), range (m), the nearest echo's
 /// range if any, and the scanline's bins.
@@ -196,15 +246,8 @@ fn read_bounded(path: &Path) -> Result<Vec<u8>, String> {
     Ok(bytes)
 }
 
-fn num<T: std::str::FromStr>(flag: &str, v: Option<String>) -> Result<T, String> {
-    let v = v.ok_or(format!("{flag} needs a value"))?;
-    v.parse().map_err(|_| format!("{flag} {v}: not a number"))
-}
-
 /// `hil sonar-replay`.
-pub fn cli(mut it: impl Iterator<Item = String>) -> ExitCode {
-    let mut file: Option<PathBuf> = None;
-    let mut plot_to: Option<PathBuf> = None;
+pub fn cli(args: Args) -> ExitCode {
     let mut cfg = Ping360Config {
         step_grad: 1,
         samples: 1200,
@@ -212,44 +255,18 @@ pub fn cli(mut it: impl Iterator<Item = String>) -> ExitCode {
         ..Ping360Config::default()
     };
     let mut ex = ExtractorConfig::default();
-    let parsed: Result<(), String> = (|| {
-        while let Some(a) = it.next() {
-            match a.as_str() {
-                "--ping360" => {
-                    file = Some(PathBuf::from(it.next().ok_or("--ping360 needs a file")?))
-                }
-                "--plot" => plot_to = Some(PathBuf::from(it.next().ok_or("--plot needs a file")?)),
-                "--step" => cfg.step_grad = num(&a, it.next())?,
-                "--sound-speed" => cfg.sound_speed = num(&a, it.next())?,
-                "--mount" => {
-                    let v = it.next().ok_or("--mount needs DEG[:ccw]")?;
-                    let (deg, sense) = v.split_once(':').unwrap_or((&v, "cw"));
-                    cfg.zero_bearing_rad = num::<f32>(&a, Some(deg.to_string()))?.to_radians();
-                    cfg.clockwise = sense != "ccw";
-                }
-                "--threshold" => ex.threshold = num(&a, it.next())?,
-                "--peak" => ex.peak_min = num(&a, it.next())?,
-                "--blanking-m" => ex.blanking_m = num(&a, it.next())?,
-                "--gain-per-m" => ex.gain_per_m = num(&a, it.next())?,
-                "--cluster-gap-m" => ex.cluster_gap_m = num(&a, it.next())?,
-                "-h" | "--help" => return Err(String::new()),
-                other => return Err(format!("unknown argument `{other}`")),
-            }
-        }
-        Ok(())
-    })();
-    if let Err(e) = parsed {
-        if e.is_empty() {
-            println!("{USAGE}");
-            return ExitCode::SUCCESS;
-        }
-        eprintln!("hil sonar-replay: {e}\n\n{USAGE}");
-        return ExitCode::from(2);
+    let set = |to: &mut f32, v: Option<f32>| *to = v.unwrap_or(*to);
+    cfg.step_grad = args.step.unwrap_or(cfg.step_grad);
+    set(&mut cfg.sound_speed, args.sound_speed);
+    if let Some((zero, clockwise)) = args.mount {
+        (cfg.zero_bearing_rad, cfg.clockwise) = (zero, clockwise);
     }
-    let Some(file) = file else {
-        eprintln!("hil sonar-replay: which file? (--ping360 FILE)\n\n{USAGE}");
-        return ExitCode::from(2);
-    };
+    set(&mut ex.threshold, args.threshold);
+    set(&mut ex.peak_min, args.peak);
+    set(&mut ex.blanking_m, args.blanking_m);
+    set(&mut ex.gain_per_m, args.gain_per_m);
+    set(&mut ex.cluster_gap_m, args.cluster_gap_m);
+    let (file, plot_to) = (args.ping360, args.plot);
     let run = || -> Result<(), String> {
         let bytes = read_bounded(&file)?;
         let r = replay(&bytes, cfg, ex)?;
@@ -307,17 +324,10 @@ pub fn cli(mut it: impl Iterator<Item = String>) -> ExitCode {
 }
 
 /// `hil ping360-raw DUMP.txt OUT.bin`.
-pub fn cli_raw(mut it: impl Iterator<Item = String>) -> ExitCode {
-    let (Some(dump_path), Some(out)) = (it.next(), it.next()) else {
-        eprintln!("{USAGE}");
-        return ExitCode::from(2);
-    };
-    if dump_path == "-h" || dump_path == "--help" {
-        println!("{USAGE}");
-        return ExitCode::SUCCESS;
-    }
+pub fn cli_raw(args: RawArgs) -> ExitCode {
+    let (dump_path, out) = (args.dump, args.out);
     let run = || -> Result<String, String> {
-        let msgs = super::dump::read(Path::new(&dump_path))?;
+        let msgs = super::dump::read(&dump_path)?;
         let mut bytes = Vec::new();
         for (i, m) in msgs.iter().enumerate() {
             let f = m.frame()?;
@@ -330,9 +340,10 @@ pub fn cli_raw(mut it: impl Iterator<Item = String>) -> ExitCode {
             }
             bytes.extend_from_slice(&f);
         }
-        std::fs::write(&out, &bytes).map_err(|e| format!("{out}: {e}"))?;
+        std::fs::write(&out, &bytes).map_err(|e| format!("{}: {e}", out.display()))?;
         Ok(format!(
-            "{out}: {} frames, {} bytes, every checksum as the dump logged",
+            "{}: {} frames, {} bytes, every checksum as the dump logged",
+            out.display(),
             msgs.len(),
             bytes.len()
         ))

@@ -8,6 +8,7 @@
 //! hil merge DIR... [--out DIR]
 //! ```
 //!
+//! - [`cli`]: `hil sweep` and `hil merge` on the command line;
 //! - [`spec`]: the sweep file;
 //! - [`generate`]: the random scenarios and the batch;
 //! - [`measure`]: one run's row (success, clearance, path ratio, time, energy, oscillation);
@@ -25,6 +26,7 @@
 //! mixed in. The reports are always made from `runs.csv` as written (sorted by run), so the
 //! merge of the shards gives the same files as the unsharded sweep.
 
+pub mod cli;
 pub mod criterion;
 pub mod csv;
 pub mod generate;
@@ -35,7 +37,6 @@ pub mod spec;
 
 use std::io::Write as _;
 use std::path::{Path, PathBuf};
-use std::process::ExitCode;
 use std::time::{Duration, Instant};
 
 use crate::firmware::{self, Target};
@@ -96,23 +97,6 @@ pub fn fnv1a(parts: &[&[u8]]) -> u64 {
         h = h.wrapping_mul(0x0100_0000_01b3);
     }
     h
-}
-
-/// `"K/N"` → `(K, N)` with `1 <= K <= N`.
-pub fn parse_shard(s: &str) -> Result<(usize, usize), String> {
-    let (k, n) = s
-        .split_once('/')
-        .ok_or_else(|| format!("--shard {s}: expected K/N, e.g. 2/8"))?;
-    let k: usize = k
-        .parse()
-        .map_err(|_| format!("--shard {s}: K is not a number"))?;
-    let n: usize = n
-        .parse()
-        .map_err(|_| format!("--shard {s}: N is not a number"))?;
-    if n == 0 || k == 0 || k > n {
-        return Err(format!("--shard {s}: need 1 <= K <= N"));
-    }
-    Ok((k, n))
 }
 
 fn io_error<'a>(what: &str, path: &'a Path) -> impl Fn(std::io::Error) -> String + 'a {
@@ -435,247 +419,4 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<(Report, Spec, usize), Stri
     let report =
         report::write(out, &spec, &rows, &ctx).map_err(io_error("cannot write to", out))?;
     Ok((report, spec, total))
-}
-
-const USAGE: &str = "usage:
-  hil sweep SPEC.toml [--out DIR] [--jobs N] [--shard K/N] [--quiet]
-  hil merge DIR... [--out DIR]
-
-sweep: runs every parameter set of SPEC over its scenarios (files and generated ones) on the
-host-process firmware, ranks the sets and writes runs.csv, sets.csv, ranking.md,
-heatmap_success.svg, heatmap_clearance.svg and recipe.toml to --out (default sweeps/NAME, or
-sweeps/NAME/shard-K-of-N). Re-running with the same --out resumes.
-  --jobs N      worker threads (default: the number of cores)
-  --shard K/N   run only the K-th of N slices of the run list (e.g. a Slurm array task)
-  --quiet       no progress bar, no table
-  --show ID     print scenario ID of the batch (e.g. clutter:3) as a scenario file, and exit
-  --link inproc|socket|pty  the host firmware: its runtime in this process (default: no
-                process wake-up and no system call per period), or the vpf-firmware process on a
-                socket pair or a pty
-merge: combines the runs.csv of a sweep's shards into one report (default --out: the parent
-of the first DIR, merged/).
-Spec format: hil/sweeps/README.md.";
-
-fn print_outcome(o: &Outcome, spec_name: &str) {
-    let rate = if o.elapsed.as_secs_f64() > 0.0 && o.ran > 0 {
-        format!(
-            ", {:.2} runs/s on {} workers",
-            o.ran as f64 / o.elapsed.as_secs_f64(),
-            o.jobs
-        )
-    } else {
-        String::new()
-    };
-    println!(
-        "sweep \"{spec_name}\": {} runs done now, {} resumed, {} of {} in this directory, in {}{rate}",
-        o.ran,
-        o.skipped,
-        o.report.runs,
-        o.mine,
-        pool::clock(o.elapsed.as_secs_f64())
-    );
-}
-
-fn print_report(r: &Report, spec: &Spec, dir: &Path) {
-    print!("{}", r.print(spec, 10));
-    if let Some(b) = r.best() {
-        println!(
-            "recommended: set {} ({}); recipe {}",
-            b.set,
-            spec.params
-                .iter()
-                .zip(&spec.sets[b.set])
-                .map(|(p, v)| format!("{} = {}", p.name, v.plain()))
-                .collect::<Vec<_>>()
-                .join(", "),
-            dir.join("recipe.toml").display()
-        );
-    }
-    println!(
-        "outputs in {}: runs.csv, sets.csv, ranking.md, heatmap_success.svg, heatmap_clearance.svg, recipe.toml",
-        dir.display()
-    );
-}
-
-/// `hil sweep ...`.
-pub fn cli_sweep(mut it: impl Iterator<Item = String>) -> ExitCode {
-    let mut opts = Options::default();
-    let mut spec_path = None;
-    let mut dirs = Vec::new();
-    let mut merge_mode = false;
-    let mut show = None;
-    let parsed: Result<(), String> = (|| {
-        while let Some(a) = it.next() {
-            let mut value = || it.next().ok_or_else(|| format!("{a} needs a value"));
-            match a.as_str() {
-                "--out" => opts.out = Some(PathBuf::from(value()?)),
-                "--jobs" => {
-                    let v = value()?;
-                    let n: usize = v
-                        .parse()
-                        .ok()
-                        .filter(|n| *n > 0)
-                        .ok_or(format!("--jobs {v}: expected a positive number"))?;
-                    opts.jobs = Some(n);
-                }
-                "--shard" => opts.shard = Some(parse_shard(&value()?)?),
-                "--quiet" => opts.quiet = true,
-                "--link" => {
-                    (opts.process, opts.pty) = match value()?.as_str() {
-                        "inproc" => (false, false),
-                        "socket" => (true, false),
-                        "pty" => (true, true),
-                        other => {
-                            return Err(format!("--link {other}: expected inproc, socket or pty"))
-                        }
-                    }
-                }
-                "--merge" => merge_mode = true,
-                "--show" => show = Some(value()?),
-                "-h" | "--help" => return Err(String::new()),
-                s if s.starts_with("--") => return Err(format!("unknown option {s}")),
-                s if merge_mode => dirs.push(PathBuf::from(s)),
-                s => {
-                    if spec_path.replace(PathBuf::from(s)).is_some() {
-                        return Err("one spec per sweep".into());
-                    }
-                }
-            }
-        }
-        Ok(())
-    })();
-    if let Err(e) = parsed {
-        if e.is_empty() {
-            println!("{USAGE}");
-            return ExitCode::SUCCESS;
-        }
-        eprintln!("hil sweep: {e}\n\n{USAGE}");
-        return ExitCode::from(2);
-    }
-    if merge_mode {
-        // `hil sweep --merge DIR...`: the same as `hil merge`.
-        if let Some(s) = spec_path.take() {
-            dirs.insert(0, s);
-        }
-        return do_merge(&dirs, opts.out, opts.quiet);
-    }
-    let Some(spec_path) = spec_path else {
-        eprintln!("hil sweep: which spec?\n\n{USAGE}");
-        return ExitCode::from(2);
-    };
-    if let Some(id) = show {
-        return show_scenario(&spec_path, &id);
-    }
-    match sweep(&spec_path, &opts) {
-        Ok(o) => {
-            let spec = spec::load(&spec_path);
-            if let Ok(spec) = spec {
-                print_outcome(&o, &spec.name);
-                if !opts.quiet {
-                    print_report(&o.report, &spec, &o.dir);
-                }
-            }
-            ExitCode::SUCCESS
-        }
-        Err(e) => {
-            eprintln!("hil sweep: {e}");
-            ExitCode::from(2)
-        }
-    }
-}
-
-/// `hil sweep SPEC --show ID`: prints a scenario of the batch as a scenario file (with the
-/// craft's model; a scenario file is printed as it is).
-fn show_scenario(spec_path: &Path, id: &str) -> ExitCode {
-    let spec = match spec::load(spec_path) {
-        Ok(s) => s,
-        Err(e) => {
-            eprintln!("{e}");
-            return ExitCode::from(2);
-        }
-    };
-    let spec_dir = spec_path.parent().unwrap_or(Path::new("."));
-    match generate::batch(&spec, spec_dir) {
-        Ok(batch) => match batch.iter().find(|b| b.id == id) {
-            Some(b) => {
-                print!("{}", b.text);
-                ExitCode::SUCCESS
-            }
-            None => {
-                let ids: Vec<&str> = batch.iter().map(|b| b.id.as_str()).collect();
-                eprintln!(
-                    "hil sweep: no scenario `{id}` in this batch: {}",
-                    ids.join(", ")
-                );
-                ExitCode::from(2)
-            }
-        },
-        Err(e) => {
-            eprintln!("{e}");
-            ExitCode::from(2)
-        }
-    }
-}
-
-fn do_merge(dirs: &[PathBuf], out: Option<PathBuf>, quiet: bool) -> ExitCode {
-    if dirs.is_empty() {
-        eprintln!("hil merge: which directories?\n\n{USAGE}");
-        return ExitCode::from(2);
-    }
-    let out = out.unwrap_or_else(|| {
-        dirs[0]
-            .parent()
-            .map_or_else(|| PathBuf::from("merged"), |p| p.join("merged"))
-    });
-    match merge(dirs, &out) {
-        Ok((r, spec, total)) => {
-            println!(
-                "merged {} directories: {} of {total} runs{}",
-                dirs.len(),
-                r.runs,
-                if r.runs < total {
-                    " (INCOMPLETE: some shards are missing or unfinished)"
-                } else {
-                    ""
-                }
-            );
-            if !quiet {
-                print_report(&r, &spec, &out);
-            }
-            ExitCode::SUCCESS
-        }
-        Err(e) => {
-            eprintln!("hil merge: {e}");
-            ExitCode::from(2)
-        }
-    }
-}
-
-/// `hil merge DIR... [--out DIR]`.
-pub fn cli_merge(mut it: impl Iterator<Item = String>) -> ExitCode {
-    let mut dirs = Vec::new();
-    let mut out = None;
-    let mut quiet = false;
-    while let Some(a) = it.next() {
-        match a.as_str() {
-            "--out" => match it.next() {
-                Some(v) => out = Some(PathBuf::from(v)),
-                None => {
-                    eprintln!("hil merge: --out needs a value");
-                    return ExitCode::from(2);
-                }
-            },
-            "--quiet" => quiet = true,
-            "-h" | "--help" => {
-                println!("{USAGE}");
-                return ExitCode::SUCCESS;
-            }
-            s if s.starts_with("--") => {
-                eprintln!("hil merge: unknown option {s}\n\n{USAGE}");
-                return ExitCode::from(2);
-            }
-            s => dirs.push(PathBuf::from(s)),
-        }
-    }
-    do_merge(&dirs, out, quiet)
 }

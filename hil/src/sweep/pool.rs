@@ -117,6 +117,17 @@ pub fn run_all<R: Send>(
     result
 }
 
+/// Most worker threads a command line may ask for.
+pub const MAX_JOBS: usize = 256;
+
+/// `--jobs N`: `1 ..= MAX_JOBS` worker threads.
+pub fn jobs(s: &str) -> Result<usize, String> {
+    s.parse()
+        .ok()
+        .filter(|n| (1..=MAX_JOBS).contains(n))
+        .ok_or_else(|| format!("expected 1 ..= {MAX_JOBS}"))
+}
+
 /// `1:02:03` or `2:03`.
 pub fn clock(secs: f64) -> String {
     let s = if secs.is_finite() {
