@@ -6,11 +6,9 @@
 //! Numbers use Rust's shortest round-trip form (`NaN` where the data had one); `mode` is quoted
 //! only if it holds a comma, quote or line break.
 
-use std::fmt::Write as _;
-use std::io::Write as _;
 use std::path::Path;
 
-use crate::types::{Sample, VehicleRecord};
+use crate::types::VehicleRecord;
 
 /// The header line (without the newline).
 pub const HEADER: &str = "t_s,x_m,y_m,heading_rad,u_mps,v_mps,r_radps,vx_mps,vy_mps,psi_cmd_rad,\
@@ -18,56 +16,55 @@ speed_cmd_mps,mode,ghost_depth,target_x_m,target_y_m,nearest_m,thrust";
 
 /// Writes the vehicle's samples as CSV to `path`.
 pub fn write_csv(path: &Path, v: &VehicleRecord) -> std::io::Result<()> {
-    let mut w = std::io::BufWriter::new(std::fs::File::create(path)?);
-    w.write_all(to_csv(v).as_bytes())?;
+    let mut w = writer(std::fs::File::create(path)?);
+    write_rows(&mut w, v)?;
     w.flush()
 }
 
 /// The CSV text: header and one row per sample.
 pub fn to_csv(v: &VehicleRecord) -> String {
-    let mut out = String::with_capacity(64 + v.samples.len() * 160);
-    out.push_str(HEADER);
-    out.push('\n');
+    let mut w = writer(Vec::with_capacity(64 + v.samples.len() * 160));
+    // Writing to memory cannot fail.
+    let _ = write_rows(&mut w, v);
+    String::from_utf8(w.into_inner().unwrap_or_default()).unwrap_or_default()
+}
+
+/// RFC 4180 quoting only where needed, `\n` line ends.
+fn writer<W: std::io::Write>(w: W) -> csv::Writer<W> {
+    csv::WriterBuilder::new()
+        .terminator(csv::Terminator::Any(b'\n'))
+        .from_writer(w)
+}
+
+fn write_rows<W: std::io::Write>(w: &mut csv::Writer<W>, v: &VehicleRecord) -> csv::Result<()> {
+    w.write_record(HEADER.split(','))?;
     for s in &v.samples {
-        row(&mut out, s);
+        let st = &s.state;
+        let nums = [
+            s.t,
+            st.position.x,
+            st.position.y,
+            st.heading,
+            st.u,
+            st.v,
+            st.r,
+            st.velocity.x,
+            st.velocity.y,
+            s.psi_cmd,
+            s.speed_cmd,
+        ];
+        for x in nums {
+            w.write_field(x.to_string())?;
+        }
+        w.write_field(&s.mode)?;
+        w.write_field(s.ghost_depth.to_string())?;
+        w.write_field(s.target.x.to_string())?;
+        w.write_field(s.target.y.to_string())?;
+        w.write_field(s.nearest_m.to_string())?;
+        w.write_field(st.thrust.to_string())?;
+        w.write_record(None::<&[u8]>)?;
     }
-    out
-}
-
-fn row(out: &mut String, s: &Sample) {
-    let st = &s.state;
-    let nums = [
-        s.t,
-        st.position.x,
-        st.position.y,
-        st.heading,
-        st.u,
-        st.v,
-        st.r,
-        st.velocity.x,
-        st.velocity.y,
-        s.psi_cmd,
-        s.speed_cmd,
-    ];
-    for x in nums {
-        // Writing to a String cannot fail.
-        let _ = write!(out, "{x},");
-    }
-    out.push_str(&quote(&s.mode));
-    let _ = writeln!(
-        out,
-        ",{},{},{},{},{}",
-        s.ghost_depth, s.target.x, s.target.y, s.nearest_m, st.thrust
-    );
-}
-
-/// RFC 4180 quoting, only when needed.
-fn quote(field: &str) -> String {
-    if field.contains([',', '"', '\n', '\r']) {
-        format!("\"{}\"", field.replace('"', "\"\""))
-    } else {
-        field.to_string()
-    }
+    Ok(())
 }
 
 #[cfg(test)]

@@ -19,43 +19,39 @@ pub const METRIC_COLUMNS: [&str; 11] = [
     "end",
 ];
 
-/// The header line (no newline) for `spec`.
-pub fn header(spec: &Spec) -> String {
+/// The header's columns for `spec`.
+pub fn header(spec: &Spec) -> Vec<String> {
     let mut cols: Vec<String> = vec!["run".into(), "set".into(), "scenario".into()];
     cols.extend(spec.params.iter().map(|p| p.name.clone()));
     cols.extend(METRIC_COLUMNS.iter().map(|c| c.to_string()));
-    cols.join(",")
+    cols
 }
 
-/// A field quoted if it needs to be.
-pub fn quote(s: &str) -> String {
-    if s.contains([',', '"', '\n', '\r']) {
-        format!("\"{}\"", s.replace('"', "\"\"").replace(['\n', '\r'], " "))
-    } else {
-        s.to_string()
-    }
+/// A CSV writer on `w`: RFC 4180 quoting only where needed, `\n` line ends.
+pub fn writer<W: std::io::Write>(w: W) -> ::csv::Writer<W> {
+    ::csv::WriterBuilder::new()
+        .terminator(::csv::Terminator::Any(b'\n'))
+        .from_writer(w)
 }
 
-/// Splits one CSV line (RFC 4180 quoting, no embedded newlines).
-pub fn split(line: &str) -> Vec<String> {
-    let mut out = Vec::new();
-    let mut cur = String::new();
-    let mut quoted = false;
-    let mut chars = line.chars().peekable();
-    while let Some(c) = chars.next() {
-        match (c, quoted) {
-            ('"', true) if chars.peek() == Some(&'"') => {
-                cur.push('"');
-                chars.next();
-            }
-            ('"', true) => quoted = false,
-            ('"', false) if cur.is_empty() => quoted = true,
-            (',', false) => out.push(std::mem::take(&mut cur)),
-            (c, _) => cur.push(c),
-        }
-    }
-    out.push(cur);
-    out
+/// A text field on one line: the file is read back line by line.
+pub fn one_line(s: &str) -> String {
+    s.replace(['\n', '\r'], " ")
+}
+
+/// The fields of each line of `text` (RFC 4180 quoting, no embedded newlines), blank lines
+/// skipped; a line that is not valid CSV gives no fields.
+fn records(text: &str) -> impl Iterator<Item = Vec<String>> + '_ {
+    text.lines().filter(|l| !l.trim().is_empty()).map(|l| {
+        ::csv::ReaderBuilder::new()
+            .has_headers(false)
+            .from_reader(l.as_bytes())
+            .into_records()
+            .next()
+            .and_then(Result::ok)
+            .map(|r| r.iter().map(String::from).collect())
+            .unwrap_or_default()
+    })
 }
 
 fn num(x: f64, decimals: usize) -> String {
@@ -75,12 +71,12 @@ fn num(x: f64, decimals: usize) -> String {
     }
 }
 
-/// One row as a CSV line (no newline). The last column, `end`, is a fixed `.`: a line cut off
-/// by an interruption lacks it and is dropped on resume.
-pub fn line(spec: &Spec, r: &RunRow) -> String {
-    let mut cols: Vec<String> = vec![r.run.to_string(), r.set.to_string(), quote(&r.scenario)];
+/// One row's fields. The last column, `end`, is a fixed `.`: a line cut off by an interruption
+/// lacks it and is dropped on resume.
+pub fn record(spec: &Spec, r: &RunRow) -> Vec<String> {
+    let mut cols: Vec<String> = vec![r.run.to_string(), r.set.to_string(), one_line(&r.scenario)];
     if let Some(values) = spec.sets.get(r.set) {
-        cols.extend(values.iter().map(|v| quote(&v.plain())));
+        cols.extend(values.iter().map(|v| one_line(&v.plain())));
     }
     cols.extend([
         u8::from(r.success).to_string(),
@@ -92,10 +88,10 @@ pub fn line(spec: &Spec, r: &RunRow) -> String {
         num(r.oscillation, 3),
         r.ghosts.to_string(),
         num(r.sim_time_s, 2),
-        quote(&r.error),
+        one_line(&r.error),
         ".".into(),
     ]);
-    cols.join(",")
+    cols
 }
 
 fn float(s: &str) -> Option<f64> {
@@ -108,8 +104,7 @@ fn float(s: &str) -> Option<f64> {
 
 /// Reads a line back; `None` if it is incomplete or does not fit the spec (wrong column count,
 /// a set or run out of range, parameter values that are not the set's).
-pub fn parse(spec: &Spec, line: &str, total_runs: usize) -> Option<RunRow> {
-    let c = split(line);
+pub fn parse(spec: &Spec, c: &[String], total_runs: usize) -> Option<RunRow> {
     let np = spec.params.len();
     if c.len() != 3 + np + METRIC_COLUMNS.len() || c.last().map(String::as_str) != Some(".") {
         return None;
@@ -145,21 +140,22 @@ pub fn parse(spec: &Spec, line: &str, total_runs: usize) -> Option<RunRow> {
 /// Reads `runs.csv`'s text: the complete rows, and how many lines were dropped as incomplete.
 /// Errors if the header is not this spec's.
 pub fn read(spec: &Spec, text: &str, total_runs: usize) -> Result<(Vec<RunRow>, usize), String> {
-    let mut lines = text.lines();
+    let mut lines = records(text);
     match lines.next() {
         Some(h) if h == header(spec) => {}
         Some(h) => {
             return Err(format!(
-                "its header is not this sweep's:\n  found:    {h}\n  expected: {}",
-                header(spec)
+                "its header is not this sweep's:\n  found:    {}\n  expected: {}",
+                h.join(","),
+                header(spec).join(",")
             ))
         }
         None => return Ok((Vec::new(), 0)),
     }
     let mut rows = Vec::new();
     let mut dropped = 0;
-    for l in lines.filter(|l| !l.trim().is_empty()) {
-        match parse(spec, l, total_runs) {
+    for l in lines {
+        match parse(spec, &l, total_runs) {
             Some(r) => rows.push(r),
             None => dropped += 1,
         }
@@ -169,13 +165,13 @@ pub fn read(spec: &Spec, text: &str, total_runs: usize) -> Result<(Vec<RunRow>, 
 
 /// The whole file for `rows` (sorted by run), header included.
 pub fn render(spec: &Spec, rows: &[RunRow]) -> String {
-    let mut s = header(spec);
-    s.push('\n');
+    let mut w = writer(Vec::new());
+    // Writing to memory cannot fail.
+    let _ = w.write_record(header(spec));
     for r in rows {
-        s.push_str(&line(spec, r));
-        s.push('\n');
+        let _ = w.write_record(record(spec, r));
     }
-    s
+    String::from_utf8(w.into_inner().unwrap_or_default()).unwrap_or_default()
 }
 
 #[cfg(test)]
@@ -183,9 +179,13 @@ mod tests {
     use super::*;
 
     #[test]
-    fn quoting_round_trips() {
-        let fields = ["a", "b,c", "say \"hi\"", ""];
-        let line: Vec<String> = fields.iter().map(|f| quote(f)).collect();
-        assert_eq!(split(&line.join(",")), fields);
+    fn quoting_round_trips_on_one_line() {
+        let fields = ["a", "b,c", "say \"hi\"", "", "two\nlines"];
+        let mut w = writer(Vec::new());
+        w.write_record(fields.map(one_line)).unwrap();
+        let text = String::from_utf8(w.into_inner().unwrap()).unwrap();
+        assert_eq!(text, "a,\"b,c\",\"say \"\"hi\"\"\",,two lines\n");
+        let back: Vec<Vec<String>> = records(&text).collect();
+        assert_eq!(back, [fields.map(one_line)]);
     }
 }

@@ -35,7 +35,6 @@ pub mod pool;
 pub mod report;
 pub mod spec;
 
-use std::io::Write as _;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
@@ -246,7 +245,7 @@ pub fn sweep(spec_path: &Path, opts: &Options) -> Result<Outcome, String> {
             .append(true)
             .open(&csv_path)
             .map_err(io_error("cannot open", &csv_path))?;
-        let mut file = std::io::BufWriter::new(file);
+        let mut file = csv::writer(file);
         pool::run_all(
             &|run| pool::run_one(&work, run),
             &pending,
@@ -255,7 +254,7 @@ pub fn sweep(spec_path: &Path, opts: &Options) -> Result<Outcome, String> {
             skipped,
             mine.len(),
             |row| {
-                writeln!(file, "{}", csv::line(&spec, &row))?;
+                file.write_record(csv::record(&spec, &row))?;
                 file.flush()
             },
         )
