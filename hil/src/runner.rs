@@ -415,7 +415,11 @@ fn simulate(
 
     let steps = (sc.duration_s / sc.dt_s).round().max(1.0) as u64;
     let started = Instant::now();
-    let show = how.progress && std::io::stderr().is_terminal();
+    let bar = progress_bar(
+        steps,
+        how.progress && std::io::stderr().is_terminal(),
+        "t = {msg} s",
+    );
     for k in 0..steps {
         let t = k as f64 * sc.dt_s;
         let t_ms = (t * 1000.0).round() as u64;
@@ -476,16 +480,15 @@ fn simulate(
             }
             s.model.step(sc.dt_s, &s.setpoints, sc.current.velocity);
         }
-        if show && (k % 50 == 0 || k + 1 == steps) {
-            progress_bar(k + 1, steps, &format!("t = {t:7.1} s"));
+        if !bar.is_hidden() && (k % 50 == 0 || k + 1 == steps) {
+            bar.set_position(k + 1);
+            bar.set_message(format!("{t:7.1}"));
         }
         if how.stop_early && finished(&sims, f64::from(params.arrival_radius_m)) {
             break;
         }
     }
-    if show {
-        eprintln!();
-    }
+    end_progress(&bar);
 
     for s in sims.iter_mut() {
         if let Some((p, _, _)) = s.ping360.as_mut() {
@@ -782,15 +785,32 @@ fn nearest(
     obstacles.chain(vehicles).fold(f64::INFINITY, f64::min)
 }
 
-/// The progress bar on stderr (`\r[####    ]  42%  {what}`), redrawn in place; the caller
-/// ends the line when done. Shared by `hil run` and `hil sweep`.
-pub fn progress_bar(done: u64, total: u64, what: &str) {
-    let width = 40;
-    let filled = (done.min(total) * width / total.max(1)) as usize;
-    eprint!(
-        "\r[{}{}] {:3}%  {what}",
-        "#".repeat(filled),
-        " ".repeat(width as usize - filled),
-        done.min(total) * 100 / total.max(1)
-    );
+/// A progress bar on stderr (`[####    ]  42%  {what}`) for `total` steps, redrawn in place
+/// (at most 20 times a second) if `show`, hidden otherwise; `what` is an indicatif template
+/// after the percentage, which may also use `{rate}` (steps per second) and `{left}` (the
+/// estimated time left, `1:02:03`). Shared by `hil run` and `hil sweep`; [`end_progress`]
+/// ends its line.
+pub fn progress_bar(total: u64, show: bool, what: &str) -> indicatif::ProgressBar {
+    use indicatif::{ProgressState, ProgressStyle};
+    if !show {
+        return indicatif::ProgressBar::hidden();
+    }
+    let style = ProgressStyle::with_template(&format!("[{{bar:40}}] {{percent:>3}}%  {what}"))
+        .unwrap_or_else(|_| ProgressStyle::default_bar())
+        .progress_chars("## ")
+        .with_key("rate", |s: &ProgressState, w: &mut dyn std::fmt::Write| {
+            let _ = write!(w, "{:.1}", s.per_sec());
+        })
+        .with_key("left", |s: &ProgressState, w: &mut dyn std::fmt::Write| {
+            let _ = write!(w, "{}", crate::sweep::pool::clock(s.eta().as_secs_f64()));
+        });
+    indicatif::ProgressBar::new(total).with_style(style)
+}
+
+/// Leaves the bar as it is and ends its line.
+pub fn end_progress(bar: &indicatif::ProgressBar) {
+    if !bar.is_hidden() {
+        bar.abandon();
+        eprintln!();
+    }
 }

@@ -5,12 +5,11 @@
 use std::io::IsTerminal;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::mpsc;
-use std::time::Instant;
 
 use super::generate::BatchScenario;
 use super::measure::{self, RunRow};
 use super::spec::Spec;
-use crate::runner::{progress_bar, run_quiet, QuietRun};
+use crate::runner::{end_progress, progress_bar, run_quiet, QuietRun};
 
 /// What the workers need.
 pub struct Work<'a> {
@@ -67,7 +66,6 @@ pub fn run_all<R: Send>(
 ) -> std::io::Result<()> {
     let next = AtomicUsize::new(0);
     let show = !quiet && std::io::stderr().is_terminal();
-    let started = Instant::now();
     let mut result = Ok(());
     std::thread::scope(|s| {
         let (tx, rx) = mpsc::channel::<R>();
@@ -83,36 +81,23 @@ pub fn run_all<R: Send>(
             });
         }
         drop(tx);
-        let mut done = 0usize;
-        if show {
-            progress_bar(already as u64, total as u64, "starting");
-        }
+        let bar = progress_bar(
+            total as u64,
+            show,
+            "{pos}/{len} runs  {rate} runs/s  ETA {left}",
+        );
+        bar.set_position(already as u64);
+        bar.reset_eta();
         for row in rx {
-            done += 1;
             if let Err(e) = on_row(row) {
                 // Stop handing out runs; the workers finish the ones they hold.
                 next.store(usize::MAX / 2, Ordering::Relaxed);
                 result = Err(e);
                 break;
             }
-            if show {
-                let secs = started.elapsed().as_secs_f64().max(1e-3);
-                let rate = done as f64 / secs;
-                let left = (pending.len() - done) as f64 / rate.max(1e-9);
-                progress_bar(
-                    (already + done) as u64,
-                    total as u64,
-                    &format!(
-                        "{}/{total} runs  {rate:.1} runs/s  ETA {}",
-                        already + done,
-                        clock(left)
-                    ),
-                );
-            }
+            bar.inc(1);
         }
-        if show {
-            eprintln!();
-        }
+        end_progress(&bar);
     });
     result
 }
