@@ -16,7 +16,6 @@
 //! they fail instead, so CI cannot skip them.
 
 use std::io::{BufRead, BufReader, Read, Write};
-use std::os::fd::AsRawFd;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::sync::Mutex;
@@ -310,21 +309,27 @@ fn boot_on_pty(elf: &Path) -> (Qemu, std::fs::File) {
         .write(true)
         .open(&path)
         .unwrap();
-    // Raw mode: no echo, no line discipline between the test and the UART.
-    // SAFETY: plain termios calls on a file descriptor we own.
-    unsafe {
-        let mut t: libc::termios = std::mem::zeroed();
-        assert_eq!(libc::tcgetattr(pty.as_raw_fd(), &mut t), 0);
-        libc::cfmakeraw(&mut t);
-        t.c_cc[libc::VMIN] = 0;
-        t.c_cc[libc::VTIME] = 1;
-        assert_eq!(libc::tcsetattr(pty.as_raw_fd(), libc::TCSANOW, &t), 0);
-    }
+    // Raw mode: no echo, no line discipline between the test and the UART; a read returns
+    // after 0.1 s without bytes.
+    raw(&pty, Some((0, 1)));
     let mut stdin = child.stdin.take().unwrap();
     stdin.write_all(b"cont\n").unwrap();
     stdin.flush().unwrap();
     std::mem::forget(stdin); // keep the monitor open for the life of QEMU
     (Qemu(child), pty)
+}
+
+/// Puts a pty in raw mode (no echo, no line discipline); `(VMIN, VTIME)` if given, else
+/// cfmakeraw's (a read waits for one byte).
+fn raw(f: &std::fs::File, min_time: Option<(u8, u8)>) {
+    use nix::sys::termios::{self, SetArg, SpecialCharacterIndices as Cc};
+    let mut t = termios::tcgetattr(f).expect("tcgetattr on the pty");
+    termios::cfmakeraw(&mut t);
+    if let Some((min, time)) = min_time {
+        t.control_chars[Cc::VMIN as usize] = min;
+        t.control_chars[Cc::VTIME as usize] = time;
+    }
+    termios::tcsetattr(f, SetArg::TCSANOW, &t).expect("tcsetattr on the pty");
 }
 
 /// What came back from the firmware.
@@ -544,13 +549,7 @@ fn the_board_image_speaks_mavlink_to_a_pymavlink_autopilot_and_ground_station() 
         .write(true)
         .open(&path)
         .unwrap();
-    // SAFETY: plain termios calls on a file descriptor we own.
-    unsafe {
-        let mut t: libc::termios = std::mem::zeroed();
-        assert_eq!(libc::tcgetattr(uart0.as_raw_fd(), &mut t), 0);
-        libc::cfmakeraw(&mut t);
-        assert_eq!(libc::tcsetattr(uart0.as_raw_fd(), libc::TCSANOW, &t), 0);
-    }
+    raw(&uart0, None);
     stdin.write_all(b"cont\n").unwrap();
     stdin.flush().unwrap();
     uart0.write_all(&pymavlink::rock()).unwrap();

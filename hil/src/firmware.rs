@@ -8,7 +8,11 @@
 
 use std::fs::File;
 use std::io::{BufRead, BufReader, Read, Write};
-use std::os::fd::{AsRawFd, FromRawFd};
+use std::os::fd::{AsFd, AsRawFd, FromRawFd};
+
+use nix::errno::Errno;
+use nix::poll::{poll, PollFd, PollFlags, PollTimeout};
+use nix::sys::termios;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
@@ -174,20 +178,7 @@ impl Port {
             Port::File(f) => f,
             Port::InProcess(p) => return Ok(!p.out.is_empty()),
         };
-        let mut pfd = libc::pollfd {
-            fd: f.as_raw_fd(),
-            events: libc::POLLIN,
-            revents: 0,
-        };
-        // SAFETY: one valid pollfd for a descriptor we own.
-        let ready = unsafe { libc::poll(&mut pfd, 1, ms) };
-        if ready < 0 {
-            let e = std::io::Error::last_os_error();
-            if e.kind() != std::io::ErrorKind::Interrupted {
-                return Err(e);
-            }
-        }
-        Ok(ready > 0)
+        readable(f, ms)
     }
 }
 
@@ -243,25 +234,28 @@ pub fn build(target: &Target) -> std::io::Result<PathBuf> {
     Ok(path)
 }
 
+/// Whether `f` has something to read within `ms` (negative: no limit); an interrupted wait
+/// counts as nothing yet.
+pub fn readable(f: &impl AsFd, ms: i32) -> std::io::Result<bool> {
+    let mut fds = [PollFd::new(f.as_fd(), PollFlags::POLLIN)];
+    let timeout = PollTimeout::try_from(ms).unwrap_or(PollTimeout::NONE);
+    match poll(&mut fds, timeout) {
+        Ok(n) => Ok(n > 0),
+        Err(Errno::EINTR) => Ok(false),
+        Err(e) => Err(e.into()),
+    }
+}
+
 /// Puts a terminal in raw mode (no echo, no line discipline). Reads block until a byte comes
 /// (VMIN = 1): the firmware reading the slave side must not mistake a quiet line for the end of
 /// input; this side bounds its own waits with `poll`.
-fn make_raw(f: &File) -> std::io::Result<()> {
-    // SAFETY: termios calls on a descriptor we own.
-    unsafe {
-        let mut t: libc::termios = std::mem::zeroed();
-        if libc::tcgetattr(f.as_raw_fd(), &mut t) != 0 {
-            return Err(std::io::Error::last_os_error());
-        }
-        libc::cfmakeraw(&mut t);
-        libc::cfsetispeed(&mut t, libc::B115200);
-        libc::cfsetospeed(&mut t, libc::B115200);
-        t.c_cc[libc::VMIN] = 1;
-        t.c_cc[libc::VTIME] = 0;
-        if libc::tcsetattr(f.as_raw_fd(), libc::TCSANOW, &t) != 0 {
-            return Err(std::io::Error::last_os_error());
-        }
-    }
+fn make_raw(f: &impl AsFd) -> std::io::Result<()> {
+    let mut t = termios::tcgetattr(f)?;
+    termios::cfmakeraw(&mut t);
+    termios::cfsetspeed(&mut t, termios::BaudRate::B115200)?;
+    t.control_chars[termios::SpecialCharacterIndices::VMIN as usize] = 1;
+    t.control_chars[termios::SpecialCharacterIndices::VTIME as usize] = 0;
+    termios::tcsetattr(f, termios::SetArg::TCSANOW, &t)?;
     Ok(())
 }
 
@@ -305,32 +299,13 @@ fn open_raw(path: &str) -> std::io::Result<File> {
 /// A new pseudo-terminal pair: (master, slave path). The slave stays open (leaked) so that no
 /// byte written before its user opens it is lost.
 pub fn open_pty() -> std::io::Result<(File, PathBuf)> {
-    let (mut master, mut slave) = (0, 0);
-    // SAFETY: openpty writes two descriptors we then own; the name buffer is large enough.
-    let mut name = [0 as libc::c_char; 128];
-    let rc = unsafe {
-        libc::openpty(
-            &mut master,
-            &mut slave,
-            name.as_mut_ptr(),
-            std::ptr::null(),
-            std::ptr::null(),
-        )
-    };
-    if rc != 0 {
-        return Err(std::io::Error::last_os_error());
-    }
-    // SAFETY: both descriptors are fresh and ours.
-    let (master, slave) = unsafe { (File::from_raw_fd(master), File::from_raw_fd(slave)) };
-    make_raw(&slave)?;
-    make_raw(&master)?;
-    // SAFETY: openpty wrote a NUL-terminated name.
-    let path = unsafe { std::ffi::CStr::from_ptr(name.as_ptr()) }
-        .to_string_lossy()
-        .into_owned();
+    let pty = nix::pty::openpty(None, None)?;
+    make_raw(&pty.slave)?;
+    make_raw(&pty.master)?;
+    let path = nix::unistd::ttyname(&pty.slave)?;
     // The slave stays open here until the firmware has it, so no byte is lost meanwhile.
-    std::mem::forget(slave);
-    Ok((master, PathBuf::from(path)))
+    std::mem::forget(pty.slave);
+    Ok((File::from(pty.master), path))
 }
 
 impl Firmware {

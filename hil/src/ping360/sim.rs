@@ -25,7 +25,6 @@
 
 use std::fs::File;
 use std::io::{BufWriter, Read, Write};
-use std::os::fd::AsRawFd;
 use std::path::Path;
 use std::time::{Duration, Instant};
 
@@ -210,13 +209,8 @@ impl SimPing360 {
     /// Reads what the firmware sent, waiting at most `wait_ms` for the first bytes; each
     /// `transducer` becomes the pending command, sent at `sent_at` s.
     fn read(&mut self, wait_ms: i32, sent_at: f64) -> std::io::Result<usize> {
-        let mut pfd = libc::pollfd {
-            fd: self.port.as_raw_fd(),
-            events: libc::POLLIN,
-            revents: 0,
-        };
-        // SAFETY: one valid pollfd for a descriptor we own.
-        if unsafe { libc::poll(&mut pfd, 1, wait_ms) } <= 0 {
+        // A failed wait counts as nothing to read, as a quiet line does.
+        if !crate::firmware::readable(&self.port, wait_ms).unwrap_or(false) {
             return Ok(0);
         }
         let mut buf = [0u8; 1024];
