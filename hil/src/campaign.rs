@@ -17,6 +17,7 @@ use std::fmt::Write as _;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
+use crate::error::Error;
 use crate::output::metrics::Summary;
 use crate::output::RunOutput;
 use crate::runner::{run_quiet, QuietRun};
@@ -348,10 +349,10 @@ impl From<Args> for Options {
 }
 
 /// Loads the scenarios (a recipe's `[planner]` replacing theirs).
-fn load(o: &Options) -> Result<Vec<Scenario>, String> {
+fn load(o: &Options) -> Result<Vec<Scenario>, Error> {
     let recipe = match &o.params {
         Some(p) => Some((
-            std::fs::read_to_string(p).map_err(|e| format!("cannot read {}: {e}", p.display()))?,
+            std::fs::read_to_string(p).map_err(Error::io("cannot read", p))?,
             p.display().to_string(),
         )),
         None => None,
@@ -359,10 +360,9 @@ fn load(o: &Options) -> Result<Vec<Scenario>, String> {
     o.scenarios
         .iter()
         .map(|path| {
-            let mut sc = scenario::load(path).map_err(|e| e.to_string())?;
+            let mut sc = scenario::load(path)?;
             if let Some((text, file)) = &recipe {
-                sc.params =
-                    scenario::parse_planner(text, file, sc.dt_s).map_err(|e| e.to_string())?;
+                sc.params = scenario::parse_planner(text, file, sc.dt_s)?;
             }
             Ok(sc)
         })
@@ -383,13 +383,12 @@ pub fn cli(args: Args) -> ExitCode {
     }
 }
 
-fn campaign(o: &Options) -> Result<String, String> {
+fn campaign(o: &Options) -> Result<String, Error> {
     let scenarios = load(o)?;
     if let Some(dir) = &o.out {
-        std::fs::create_dir_all(dir)
-            .map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
+        std::fs::create_dir_all(dir).map_err(Error::io("cannot create", dir))?;
     }
-    let run = QuietRun::host_until_done().map_err(|e| format!("building the firmware: {e}"))?;
+    let run = QuietRun::host_until_done().map_err(Error::Build)?;
     let jobs = o.jobs.unwrap_or_else(|| {
         std::thread::available_parallelism().map_or(2, std::num::NonZeroUsize::get)
     });
@@ -401,17 +400,16 @@ fn campaign(o: &Options) -> Result<String, String> {
     pool::run_all(&work, &pending, jobs, false, 0, total, |(i, cell)| {
         cells[i] = Some(cell);
         Ok(())
-    })
-    .map_err(|e| e.to_string())?;
+    })?;
     let cells: Vec<Cell> = cells.into_iter().flatten().collect();
     let table = markdown(&scenarios, &o.kinds, &cells);
     if let Some(dir) = &o.out {
         let write = |name: &str, text: String| {
             let p = dir.join(name);
-            std::fs::write(&p, text).map_err(|e| format!("cannot write {}: {e}", p.display()))
+            std::fs::write(&p, text).map_err(Error::io("cannot write", &p))
         };
         write("faults.md", table.clone())?;
-        let json = serde_json::to_string_pretty(&cells).map_err(|e| e.to_string())?;
+        let json = serde_json::to_string_pretty(&cells)?;
         write("faults.json", json + "\n")?;
     }
     Ok(table)

@@ -13,6 +13,7 @@ use std::sync::Mutex;
 
 use vpf::Strategy;
 
+use crate::error::Error;
 use crate::firmware::Target;
 use crate::output::file_stem;
 use crate::output::metrics::VehicleMetrics;
@@ -186,7 +187,7 @@ pub fn cli(args: Args) -> std::process::ExitCode {
     }
 }
 
-fn cli_inner(args: Args) -> Result<(), String> {
+fn cli_inner(args: Args) -> Result<(), Error> {
     let Args {
         mut files,
         strategies,
@@ -203,7 +204,7 @@ fn cli_inner(args: Args) -> Result<(), String> {
     let jobs = jobs.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
     if files.is_empty() {
         let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios");
-        let entries = std::fs::read_dir(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+        let entries = std::fs::read_dir(&dir).map_err(Error::io("cannot list", &dir))?;
         files = entries
             .filter_map(|e| e.ok().map(|e| e.path()))
             .filter(|p| p.extension().is_some_and(|x| x == "toml"))
@@ -212,7 +213,7 @@ fn cli_inner(args: Args) -> Result<(), String> {
     }
     let mut scenarios = files
         .iter()
-        .map(|f| crate::scenario::load(f).map_err(|e| e.to_string()))
+        .map(|f| crate::scenario::load(f))
         .collect::<Result<Vec<_>, _>>()?;
     if target != Target::Host {
         // The board images drive their Ping360 with `Ping360Config::BOARD` only (QEMU), and a
@@ -249,7 +250,8 @@ fn cli_inner(args: Args) -> Result<(), String> {
     let rows = compare(&scenarios, &strategies, &target, &out, jobs);
     let md = table(&rows);
     println!("{md}");
-    std::fs::create_dir_all(&out).map_err(|e| e.to_string())?;
-    std::fs::write(out.join("comparison.md"), &md).map_err(|e| e.to_string())?;
+    std::fs::create_dir_all(&out).map_err(Error::io("cannot create", &out))?;
+    let path = out.join("comparison.md");
+    std::fs::write(&path, &md).map_err(Error::io("cannot write", &path))?;
     Ok(())
 }

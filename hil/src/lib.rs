@@ -13,12 +13,14 @@
 //! - [`firmware`]: building, starting and talking to a firmware (QEMU, host process, board);
 //! - [`faults`]: link faults (bit errors, dropped frames) and the frame-log tap;
 //! - [`runner`]: the lockstep / real-time loop that ties the rest together;
+//! - [`error`]: the commands' errors;
 //! - [`compare`]: the same scenarios flown with each guidance strategy, side by side;
 //! - [`sweep`]: parameter tuning sweeps over scenario batches, and their recipes (seed 002).
 
 pub mod bench;
 pub mod campaign;
 pub mod compare;
+pub mod error;
 pub mod faults;
 pub mod firmware;
 pub mod output;

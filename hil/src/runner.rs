@@ -74,27 +74,18 @@ pub struct RunConfig {
 }
 
 /// Why a run failed.
-#[derive(Debug)]
+#[derive(Debug, thiserror::Error)]
 pub enum RunError {
     /// Building, starting or talking to a firmware failed.
+    #[error("firmware: {0}")]
     Firmware(String),
     /// The firmware refused the scenario's parameters or mission.
+    #[error("the firmware refused {0}")]
     Refused(String),
     /// Writing the outputs failed.
+    #[error("writing outputs: {0}")]
     Output(std::io::Error),
 }
-
-impl std::fmt::Display for RunError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            RunError::Firmware(m) => write!(f, "firmware: {m}"),
-            RunError::Refused(m) => write!(f, "the firmware refused {m}"),
-            RunError::Output(e) => write!(f, "writing outputs: {e}"),
-        }
-    }
-}
-
-impl std::error::Error for RunError {}
 
 fn fw_err(e: std::io::Error) -> RunError {
     RunError::Firmware(e.to_string())

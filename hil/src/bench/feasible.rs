@@ -21,27 +21,18 @@ pub const BORDER_M: f64 = 20.0;
 pub const MAX_SIDE: usize = 2000;
 
 /// Why a world could not be searched.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum Infeasible {
     /// The start or the goal is within `clearance` of an obstacle.
+    #[error("start or goal too close to an obstacle for the hull")]
     EndpointBlocked,
     /// No path: the goal is walled off.
+    #[error("no path wide enough for the hull")]
     NoPath,
     /// The world is larger than [`MAX_SIDE`] cells a side.
+    #[error("world larger than the feasibility grid")]
     TooLarge,
 }
-
-impl std::fmt::Display for Infeasible {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(match self {
-            Infeasible::EndpointBlocked => "start or goal too close to an obstacle for the hull",
-            Infeasible::NoPath => "no path wide enough for the hull",
-            Infeasible::TooLarge => "world larger than the feasibility grid",
-        })
-    }
-}
-
-impl std::error::Error for Infeasible {}
 
 #[derive(Clone, Copy, PartialEq)]
 struct Node {

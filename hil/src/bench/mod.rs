@@ -28,11 +28,12 @@ pub mod worlds;
 
 use std::collections::HashSet;
 use std::io::Write as _;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::process::ExitCode;
 
 use vpf::Strategy;
 
+use crate::error::Error;
 use crate::runner::QuietRun;
 use crate::scenario::{self, Sensing};
 use crate::sim::ModelKind;
@@ -204,24 +205,19 @@ pub fn cases(o: &Options) -> Vec<Case> {
     v
 }
 
-fn io_error<'a>(what: &'a str, p: &'a Path) -> impl Fn(std::io::Error) -> String + 'a {
-    move |e| format!("{what} {}: {e}", p.display())
-}
-
 /// Runs the bench; returns the report over every row in the output directory.
-pub fn bench(o: &Options) -> Result<(PathBuf, report::Report), String> {
+pub fn bench(o: &Options) -> Result<(PathBuf, report::Report), Error> {
     let all = cases(o);
     if all.len() > MAX_RUNS {
-        return Err(format!(
+        return Err(Error::Size(format!(
             "{} runs asked for; at most {MAX_RUNS} (fewer seeds, families or configurations)",
             all.len()
-        ));
+        )));
     }
     let (params, recipe_text) = match &o.params {
         Some(p) => {
-            let text = std::fs::read_to_string(p).map_err(io_error("cannot read", p))?;
-            let prm = scenario::parse_planner(&text, &p.display().to_string(), 0.1)
-                .map_err(|e| e.to_string())?;
+            let text = std::fs::read_to_string(p).map_err(Error::io("cannot read", p))?;
+            let prm = scenario::parse_planner(&text, &p.display().to_string(), 0.1)?;
             (Some(prm), text)
         }
         None => (None, String::new()),
@@ -234,7 +230,7 @@ pub fn bench(o: &Options) -> Result<(PathBuf, report::Report), String> {
             .map_or("default".to_string(), |s| s.to_string_lossy().into_owned());
         PathBuf::from("bench").join(crate::output::file_stem(&name))
     });
-    std::fs::create_dir_all(&dir).map_err(io_error("cannot create", &dir))?;
+    std::fs::create_dir_all(&dir).map_err(Error::io("cannot create", &dir))?;
     let identity = format!(
         "{:016x}",
         fnv1a(&[FORMAT.as_bytes(), recipe_text.as_bytes()])
@@ -242,16 +238,16 @@ pub fn bench(o: &Options) -> Result<(PathBuf, report::Report), String> {
     let id_path = dir.join("identity");
     match std::fs::read_to_string(&id_path) {
         Ok(old) if old.trim() != identity => {
-            return Err(format!(
+            return Err(Error::Mismatch(format!(
                 "{} holds a bench with other parameters (identity {}; this one is {identity}): \
                  use another --out, or delete it to start over",
                 dir.display(),
                 old.trim()
-            ))
+            )))
         }
         Ok(_) => {}
         Err(_) => {
-            std::fs::write(&id_path, &identity).map_err(io_error("cannot write", &id_path))?
+            std::fs::write(&id_path, &identity).map_err(Error::io("cannot write", &id_path))?
         }
     }
 
@@ -285,13 +281,13 @@ pub fn bench(o: &Options) -> Result<(PathBuf, report::Report), String> {
         );
     }
     if !pending.is_empty() {
-        let run = QuietRun::host_until_done().map_err(|e| format!("building the firmware: {e}"))?;
+        let run = QuietRun::host_until_done().map_err(Error::Build)?;
         let failed = dir.join("failed");
         let file = std::fs::OpenOptions::new()
             .create(true)
             .append(true)
             .open(&rows_path)
-            .map_err(io_error("cannot open", &rows_path))?;
+            .map_err(Error::io("cannot open", &rows_path))?;
         let mut file = std::io::BufWriter::new(file);
         let fly = |i: usize| case::fly(&all[i], params.as_ref(), &run, &failed);
         pool::run_all(
@@ -309,7 +305,7 @@ pub fn bench(o: &Options) -> Result<(PathBuf, report::Report), String> {
                 Ok(())
             },
         )
-        .map_err(io_error("cannot append to", &rows_path))?;
+        .map_err(Error::io("cannot append to", &rows_path))?;
     }
     // The report covers the cases asked for, in table order.
     let wanted: HashSet<String> = all.iter().map(Case::id).collect();
@@ -320,14 +316,14 @@ pub fn bench(o: &Options) -> Result<(PathBuf, report::Report), String> {
     rows.dedup_by(|a, b| a.id == b.id);
     let rep = report::Report::of(&rows, &params.unwrap_or_default(), o.params.as_deref());
     let md = dir.join("bench.md");
-    std::fs::write(&md, rep.markdown()).map_err(io_error("cannot write", &md))?;
+    std::fs::write(&md, rep.markdown()).map_err(Error::io("cannot write", &md))?;
     let js = dir.join("bench.json");
     let json = serde_json::json!({ "format": FORMAT, "summary": rep.json(), "runs": rows });
     std::fs::write(
         &js,
         serde_json::to_string_pretty(&json).unwrap_or_default() + "\n",
     )
-    .map_err(io_error("cannot write", &js))?;
+    .map_err(Error::io("cannot write", &js))?;
     Ok((dir, rep))
 }
 

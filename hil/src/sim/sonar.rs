@@ -51,7 +51,6 @@
 use super::rng::Rng;
 use super::vehicle::wrap_pi;
 use crate::types::{SimObstacle, SimShape, VehicleState, P2};
-use std::fmt;
 use vpf::link::{Contact, ContactKind};
 use vpf::sonar::{Pose, Scanline};
 
@@ -158,23 +157,12 @@ impl Default for SonarConfig {
 }
 
 /// A sonar configuration field out of range (its name, as in [`SonarConfig`]).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("sonar `{field}` is out of range or not a finite number (see SonarConfig)")]
 pub struct SonarConfigError {
     /// The field.
     pub field: &'static str,
 }
-
-impl fmt::Display for SonarConfigError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(
-            f,
-            "sonar `{}` is out of range or not a finite number (see SonarConfig)",
-            self.field
-        )
-    }
-}
-
-impl std::error::Error for SonarConfigError {}
 
 /// `x` clamped to `lo ..= hi`, or `default` if not finite.
 fn clampf(x: f64, lo: f64, hi: f64, default: f64) -> f64 {

@@ -97,20 +97,9 @@ impl fmt::Display for ModelKind {
 }
 
 /// A model name that is none of `kinematic`, `videoray`, `flatfish`.
-#[derive(Clone, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("unknown vehicle model `{0}` (expected `kinematic`, `videoray` or `flatfish`)")]
 pub struct UnknownModel(pub String);
-
-impl fmt::Display for UnknownModel {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(
-            f,
-            "unknown vehicle model `{}` (expected `kinematic`, `videoray` or `flatfish`)",
-            self.0
-        )
-    }
-}
-
-impl std::error::Error for UnknownModel {}
 
 impl std::str::FromStr for ModelKind {
     type Err = UnknownModel;

@@ -38,6 +38,7 @@ pub mod spec;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
+use crate::error::Error;
 use crate::firmware::{self, Target};
 use crate::runner::QuietRun;
 
@@ -98,16 +99,11 @@ pub fn fnv1a(parts: &[&[u8]]) -> u64 {
     h
 }
 
-fn io_error<'a>(what: &str, path: &'a Path) -> impl Fn(std::io::Error) -> String + 'a {
-    let what = what.to_string();
-    move |e| format!("{what} {}: {e}", path.display())
-}
-
 /// The sweep described by the file at `spec_path`.
-pub fn sweep(spec_path: &Path, opts: &Options) -> Result<Outcome, String> {
-    let spec = spec::load(spec_path).map_err(|e| e.to_string())?;
+pub fn sweep(spec_path: &Path, opts: &Options) -> Result<Outcome, Error> {
+    let spec = spec::load(spec_path)?;
     let spec_dir = spec_path.parent().unwrap_or(Path::new("."));
-    let batch = generate::batch(&spec, spec_dir).map_err(|e| e.to_string())?;
+    let batch = generate::batch(&spec, spec_dir)?;
     let n_scen = batch.len();
     let total = spec.sets.len() * n_scen;
     let mut parts: Vec<&[u8]> = vec![FORMAT.as_bytes(), spec.text.as_bytes()];
@@ -124,18 +120,18 @@ pub fn sweep(spec_path: &Path, opts: &Options) -> Result<Outcome, String> {
             None => base,
         }
     });
-    std::fs::create_dir_all(&dir).map_err(io_error("cannot create", &dir))?;
+    std::fs::create_dir_all(&dir).map_err(Error::io("cannot create", &dir))?;
     let scenario_ids: Vec<String> = batch.iter().map(|b| b.id.clone()).collect();
 
     // The directory's identity: new, or the same sweep and shard.
     let meta_path = dir.join("sweep.json");
     if let Ok(text) = std::fs::read_to_string(&meta_path) {
         let meta: serde_json::Value =
-            serde_json::from_str(&text).map_err(|e| format!("{}: {e}", meta_path.display()))?;
+            serde_json::from_str(&text).map_err(Error::unreadable(&meta_path))?;
         let same =
             meta["identity"] == identity.as_str() && meta["shard"] == serde_json::json!(shard_name);
         if !same {
-            return Err(format!(
+            return Err(Error::Mismatch(format!(
                 "{} holds another sweep (identity {}, shard {}); this one is {identity}, shard {}. \
                  The spec or one of its scenarios changed: use another --out, or delete the \
                  directory to start over.",
@@ -143,7 +139,7 @@ pub fn sweep(spec_path: &Path, opts: &Options) -> Result<Outcome, String> {
                 meta["identity"],
                 meta["shard"],
                 shard_name.as_deref().unwrap_or("none")
-            ));
+            )));
         }
     } else {
         let meta = serde_json::json!({
@@ -157,18 +153,18 @@ pub fn sweep(spec_path: &Path, opts: &Options) -> Result<Outcome, String> {
             "scenarios": scenario_ids,
             "craft": spec.craft.model.name(),
         });
-        let text = serde_json::to_string_pretty(&meta).map_err(|e| e.to_string())?;
-        std::fs::write(&meta_path, text + "\n").map_err(io_error("cannot write", &meta_path))?;
+        let text = serde_json::to_string_pretty(&meta)?;
+        std::fs::write(&meta_path, text + "\n").map_err(Error::io("cannot write", &meta_path))?;
         let copy = dir.join("spec.toml");
-        std::fs::write(&copy, &spec.text).map_err(io_error("cannot write", &copy))?;
+        std::fs::write(&copy, &spec.text).map_err(Error::io("cannot write", &copy))?;
     }
 
     // What is done already: complete rows of runs.csv (rewritten without a cut-off last line).
     let csv_path = dir.join("runs.csv");
     let mut rows = match std::fs::read_to_string(&csv_path) {
         Ok(text) => {
-            let (rows, dropped) = csv::read(&spec, &text, total)
-                .map_err(|e| format!("{}: {e}", csv_path.display()))?;
+            let (rows, dropped) =
+                csv::read(&spec, &text, total).map_err(Error::unreadable(&csv_path))?;
             if dropped > 0 {
                 eprintln!(
                     "hil sweep: {}: dropped {dropped} incomplete row(s) (an interrupted write)",
@@ -182,7 +178,7 @@ pub fn sweep(spec_path: &Path, opts: &Options) -> Result<Outcome, String> {
     rows.sort_by_key(|r| r.run);
     rows.dedup_by_key(|r| r.run);
     std::fs::write(&csv_path, csv::render(&spec, &rows))
-        .map_err(io_error("cannot write", &csv_path))?;
+        .map_err(Error::io("cannot write", &csv_path))?;
 
     let in_shard = |r: usize| opts.shard.is_none_or(|(k, n)| r % n == k - 1);
     let mine: Vec<usize> = (0..total).filter(|&r| in_shard(r)).collect();
@@ -211,15 +207,14 @@ pub fn sweep(spec_path: &Path, opts: &Options) -> Result<Outcome, String> {
     let mut started = Instant::now();
     let mut private = None;
     if !pending.is_empty() {
-        let built =
-            firmware::build(&Target::Host).map_err(|e| format!("building the firmware: {e}"))?;
+        let built = firmware::build(&Target::Host).map_err(Error::Build)?;
         // A private copy: a rebuild during the sweep (someone's `cargo test`) must not change
         // the firmware under the runs still to come.
         let binary = private_copy(&built)?;
         private = Some(binary.clone());
         let fw_hash = format!(
             "{:016x}",
-            fnv1a(&[&std::fs::read(&binary).map_err(io_error("cannot read", &binary))?])
+            fnv1a(&[&std::fs::read(&binary).map_err(Error::io("cannot read", &binary))?])
         );
         note_firmware(&meta_path, &fw_hash, opts.quiet)?;
         started = Instant::now();
@@ -244,7 +239,7 @@ pub fn sweep(spec_path: &Path, opts: &Options) -> Result<Outcome, String> {
         let file = std::fs::OpenOptions::new()
             .append(true)
             .open(&csv_path)
-            .map_err(io_error("cannot open", &csv_path))?;
+            .map_err(Error::io("cannot open", &csv_path))?;
         let mut file = csv::writer(file);
         pool::run_all(
             &|run| pool::run_one(&work, run),
@@ -258,7 +253,7 @@ pub fn sweep(spec_path: &Path, opts: &Options) -> Result<Outcome, String> {
                 file.flush()
             },
         )
-        .map_err(io_error("cannot append to", &csv_path))?;
+        .map_err(Error::io("cannot append to", &csv_path))?;
     }
     let elapsed = started.elapsed();
     if let Some(copy) = &private {
@@ -266,12 +261,12 @@ pub fn sweep(spec_path: &Path, opts: &Options) -> Result<Outcome, String> {
     }
 
     // Sorted by run, then the reports from the file as written.
-    let text = std::fs::read_to_string(&csv_path).map_err(io_error("cannot read", &csv_path))?;
-    let (mut rows, _) = csv::read(&spec, &text, total).map_err(|e| e.to_string())?;
+    let text = std::fs::read_to_string(&csv_path).map_err(Error::io("cannot read", &csv_path))?;
+    let (mut rows, _) = csv::read(&spec, &text, total).map_err(Error::unreadable(&csv_path))?;
     rows.sort_by_key(|r| r.run);
     rows.dedup_by_key(|r| r.run);
     std::fs::write(&csv_path, csv::render(&spec, &rows))
-        .map_err(io_error("cannot write", &csv_path))?;
+        .map_err(Error::io("cannot write", &csv_path))?;
     let ctx = report::Context {
         spec_file: spec.file.clone(),
         identity,
@@ -280,7 +275,7 @@ pub fn sweep(spec_path: &Path, opts: &Options) -> Result<Outcome, String> {
         date: report::today(),
     };
     let report =
-        report::write(&dir, &spec, &rows, &ctx).map_err(io_error("cannot write to", &dir))?;
+        report::write(&dir, &spec, &rows, &ctx).map_err(Error::io("cannot write to", &dir))?;
     Ok(Outcome {
         dir,
         ran: pending.len(),
@@ -294,20 +289,20 @@ pub fn sweep(spec_path: &Path, opts: &Options) -> Result<Outcome, String> {
 
 /// Copies the firmware binary to a file of this process's own (in the system's temporary
 /// directory).
-fn private_copy(built: &Path) -> Result<PathBuf, String> {
+fn private_copy(built: &Path) -> Result<PathBuf, Error> {
     static COUNT: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
     let k = COUNT.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
     let copy = std::env::temp_dir().join(format!("hil-sweep-firmware-{}-{k}", std::process::id()));
-    std::fs::copy(built, &copy).map_err(io_error("cannot copy the firmware to", &copy))?;
+    std::fs::copy(built, &copy).map_err(Error::io("cannot copy the firmware to", &copy))?;
     Ok(copy)
 }
 
 /// Records the firmware's hash in `sweep.json`; warns if the directory's earlier runs used
 /// another build (their rows are kept: the spec's identity does not cover the firmware).
-fn note_firmware(meta_path: &Path, hash: &str, quiet: bool) -> Result<(), String> {
-    let text = std::fs::read_to_string(meta_path).map_err(io_error("cannot read", meta_path))?;
+fn note_firmware(meta_path: &Path, hash: &str, quiet: bool) -> Result<(), Error> {
+    let text = std::fs::read_to_string(meta_path).map_err(Error::io("cannot read", meta_path))?;
     let mut meta: serde_json::Value =
-        serde_json::from_str(&text).map_err(|e| format!("{}: {e}", meta_path.display()))?;
+        serde_json::from_str(&text).map_err(Error::unreadable(meta_path))?;
     let mut seen: Vec<String> = meta["firmware"]
         .as_array()
         .map(|a| {
@@ -327,60 +322,59 @@ fn note_firmware(meta_path: &Path, hash: &str, quiet: bool) -> Result<(), String
     }
     seen.push(hash.to_string());
     meta["firmware"] = serde_json::json!(seen);
-    let text = serde_json::to_string_pretty(&meta).map_err(|e| e.to_string())?;
-    std::fs::write(meta_path, text + "\n").map_err(io_error("cannot write", meta_path))
+    let text = serde_json::to_string_pretty(&meta)?;
+    std::fs::write(meta_path, text + "\n").map_err(Error::io("cannot write", meta_path))
 }
 
 /// Merges the `runs.csv` of several output directories of one sweep (its shards, or partial
 /// runs) into `out`, and writes the reports there. Returns the report and the spec.
-pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<(Report, Spec, usize), String> {
+pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<(Report, Spec, usize), Error> {
     let first = dirs
         .first()
-        .ok_or("which directories? (hil merge DIR...)")?;
+        .ok_or(Error::Size("which directories? (hil merge DIR...)".into()))?;
     let mut identity: Option<(String, serde_json::Value)> = None;
     let mut spec: Option<Spec> = None;
     let mut rows: Vec<measure::RunRow> = Vec::new();
     for d in dirs {
         let meta_path = d.join("sweep.json");
         let text =
-            std::fs::read_to_string(&meta_path).map_err(io_error("cannot read", &meta_path))?;
+            std::fs::read_to_string(&meta_path).map_err(Error::io("cannot read", &meta_path))?;
         let meta: serde_json::Value =
-            serde_json::from_str(&text).map_err(|e| format!("{}: {e}", meta_path.display()))?;
+            serde_json::from_str(&text).map_err(Error::unreadable(&meta_path))?;
         let id = meta["identity"].as_str().unwrap_or_default().to_string();
         match &identity {
             None => identity = Some((id, meta.clone())),
             Some((i, _)) if *i != id => {
-                return Err(format!(
+                return Err(Error::Mismatch(format!(
                     "{} is another sweep (identity {id}, not {i} as {}): not merged",
                     d.display(),
                     first.display()
-                ))
+                )))
             }
             Some(_) => {}
         }
         if spec.is_none() {
             let path = d.join("spec.toml");
-            let text = std::fs::read_to_string(&path).map_err(io_error("cannot read", &path))?;
+            let text = std::fs::read_to_string(&path).map_err(Error::io("cannot read", &path))?;
             let name = meta["spec_file"].as_str().unwrap_or("spec.toml");
-            spec = Some(spec::parse(&text, name).map_err(|e| e.to_string())?);
+            spec = Some(spec::parse(&text, name)?);
         }
         let Some(sp) = spec.as_ref() else { continue };
         let total = meta["total_runs"].as_u64().unwrap_or(0) as usize;
         let path = d.join("runs.csv");
-        let text = std::fs::read_to_string(&path).map_err(io_error("cannot read", &path))?;
-        let (mut r, _) =
-            csv::read(sp, &text, total).map_err(|e| format!("{}: {e}", path.display()))?;
+        let text = std::fs::read_to_string(&path).map_err(Error::io("cannot read", &path))?;
+        let (mut r, _) = csv::read(sp, &text, total).map_err(Error::unreadable(&path))?;
         rows.append(&mut r);
     }
-    let (identity, meta) = identity.ok_or("nothing to merge")?;
-    let spec = spec.ok_or("nothing to merge")?;
+    let (identity, meta) = identity.ok_or(Error::Size("nothing to merge".into()))?;
+    let spec = spec.ok_or(Error::Size("nothing to merge".into()))?;
     rows.sort_by_key(|r| r.run);
     for w in rows.windows(2) {
         if w[0].run == w[1].run && w[0] != w[1] {
-            return Err(format!(
+            return Err(Error::Mismatch(format!(
                 "run {} is in two directories with different results (not the same firmware?)",
                 w[0].run
-            ));
+            )));
         }
     }
     rows.dedup_by_key(|r| r.run);
@@ -393,17 +387,17 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<(Report, Spec, usize), Stri
                 .collect()
         })
         .unwrap_or_default();
-    std::fs::create_dir_all(out).map_err(io_error("cannot create", out))?;
+    std::fs::create_dir_all(out).map_err(Error::io("cannot create", out))?;
     let mut merged = meta.clone();
     merged["shard"] = serde_json::Value::Null;
     merged["merged_from"] = serde_json::json!(dirs
         .iter()
         .map(|d| d.display().to_string())
         .collect::<Vec<_>>());
-    let text = serde_json::to_string_pretty(&merged).map_err(|e| e.to_string())?;
+    let text = serde_json::to_string_pretty(&merged)?;
     let w = |name: &str, body: &str| {
         let p = out.join(name);
-        std::fs::write(&p, body).map_err(io_error("cannot write", &p))
+        std::fs::write(&p, body).map_err(Error::io("cannot write", &p))
     };
     w("sweep.json", &(text + "\n"))?;
     w("spec.toml", &spec.text)?;
@@ -416,6 +410,6 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<(Report, Spec, usize), Stri
         date: report::today(),
     };
     let report =
-        report::write(out, &spec, &rows, &ctx).map_err(io_error("cannot write to", out))?;
+        report::write(out, &spec, &rows, &ctx).map_err(Error::io("cannot write to", out))?;
     Ok((report, spec, total))
 }
