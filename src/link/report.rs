@@ -263,6 +263,12 @@ pub struct TelemetryCounters {
     /// Requests dropped without an answer: the request queue and the ring of owed replies were
     /// both full (more requests between two periods than `REQUESTS_PER_PERIOD`).
     pub requests_unanswered: u32,
+    /// Frames whose wrong bytes the forward error correction repaired (version 7, row 37; they
+    /// passed their CRC after it).
+    pub rx_fec_corrected: u32,
+    /// Frames with more wrong bytes than the forward error correction repairs, refused
+    /// (version 7, row 38).
+    pub rx_fec_uncorrectable: u32,
 }
 
 /// Number of counters in [`TelemetryCounters`]'s first block (rows 2 ..= 17); the guard's, the
@@ -317,6 +323,8 @@ impl TelemetryCounters {
             frozen_nav_holds: 0,
             requests_busy: 0,
             requests_unanswered: 0,
+            rx_fec_corrected: 0,
+            rx_fec_uncorrectable: 0,
         }
     }
 
@@ -328,12 +336,15 @@ impl TelemetryCounters {
         self.rx_framing_errors = rx.framing;
         self.rx_unknown = rx.version.saturating_add(rx.unknown_type);
         self.rx_bad_payload = rx.bad_payload;
+        self.rx_fec_corrected = rx.corrected;
+        self.rx_fec_uncorrectable = rx.uncorrectable;
     }
 }
 
-/// `Telemetry` payload length: 98 bytes, the mission progress block (rows 28 ..= 30, 6 bytes)
-/// and the Ping360 block (rows 31 ..= 36).
-pub const TELEMETRY_LEN: usize = 104 + 4 * Ping360Counters::COUNT;
+/// `Telemetry` payload length: 98 bytes, the mission progress block (rows 28 ..= 30, 6 bytes),
+/// the Ping360 block (rows 31 ..= 36) and the forward error correction's two counters (rows
+/// 37, 38).
+pub const TELEMETRY_LEN: usize = 104 + 4 * Ping360Counters::COUNT + 8;
 /// The row of the first mission-progress field.
 pub const TELEMETRY_MISSION_ROW: u8 = 28;
 /// Row of the first Ping360 counter in `Telemetry`.
@@ -341,7 +352,7 @@ pub const TELEMETRY_PING360_ROW: u8 = 31;
 
 /// `Telemetry` (0x82): health and counters, sent periodically.
 ///
-/// Layout (128 bytes): 0 `time_ms` u64 · 1 `step_cost` u32 · 2..=17 the sixteen u32 counters
+/// Layout (136 bytes): 0 `time_ms` u64 · 1 `step_cost` u32 · 2..=17 the sixteen u32 counters
 /// of [`TelemetryCounters`] in declaration order · 18 `mode` u8 · 19 `hold_reason` u8 ·
 /// 20 `obstacles` u8 (table fill, ≤ `MAX_OBSTACLES`) · 21 `agents` u8 (≤ `MAX_AGENTS`) ·
 /// 22 `ghost_depth` u8 (≤ `MAX_GHOSTS`) · 23 `cost_unit` u8 ([`CostUnit`]) ·
@@ -350,7 +361,8 @@ pub const TELEMETRY_PING360_ROW: u8 = 31;
 /// 28 `mission_waypoint` u8 (the waypoint flown to, 0-based; = count once complete) ·
 /// 29 `mission_waypoints` u8 (count, ≤ `MAX_WAYPOINTS`; 0: no mission) · 30 `mission_to_go_m`
 /// f32 (m along the remaining waypoints, finite, ≥ 0) · 31..=36 the Ping360 port's six u32
-/// counters of [`Ping360Counters`] in declaration order (all 0 where no Ping360 is driven).
+/// counters of [`Ping360Counters`] in declaration order (all 0 where no Ping360 is driven) ·
+/// 37 `rx_fec_corrected` u32 · 38 `rx_fec_uncorrectable` u32 (version 7).
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct TelemetryRepr {
@@ -430,6 +442,8 @@ impl<'a> Payload<'a> for TelemetryRepr {
         for c in ping360.iter_mut() {
             *c = r.u32()?;
         }
+        let rx_fec_corrected = r.u32()?;
+        let rx_fec_uncorrectable = r.u32()?;
         r.finish()?;
         let t = TelemetryRepr {
             time_ms,
@@ -444,6 +458,8 @@ impl<'a> Payload<'a> for TelemetryRepr {
                 frozen_nav_holds,
                 requests_busy,
                 requests_unanswered,
+                rx_fec_corrected,
+                rx_fec_uncorrectable,
                 ..TelemetryCounters::from_array(counters)
             },
             mission,
@@ -486,6 +502,9 @@ impl<'a> Payload<'a> for TelemetryRepr {
         w.u8(self.mission.count)?;
         w.f32(self.mission.to_go_m)?;
         self.ping360.to_array().iter().try_for_each(|&c| w.u32(c))?;
+        // Version 7: the forward error correction's counters (rows 37, 38).
+        w.u32(self.counters.rx_fec_corrected)?;
+        w.u32(self.counters.rx_fec_uncorrectable)?;
         Ok(w.len())
     }
 }
@@ -879,6 +898,8 @@ pub(crate) mod tests {
                 frozen_nav_holds: 18,
                 requests_busy: 19,
                 requests_unanswered: 20,
+                rx_fec_corrected: 37,
+                rx_fec_uncorrectable: 38,
                 ..TelemetryCounters::from_array(core::array::from_fn(|i| i as u32 + 1))
             },
             mission: MissionProgress {
@@ -906,8 +927,10 @@ pub(crate) mod tests {
         for i in 21..=26u8 {
             want.extend([i, 0, 0, 0]);
         }
+        // Rows 37, 38: frames corrected 37, uncorrectable 38.
+        want.extend([37, 0, 0, 0, 38, 0, 0, 0]);
         assert_eq!(want.len(), TELEMETRY_LEN);
-        assert_eq!(TELEMETRY_LEN, 128);
+        assert_eq!(TELEMETRY_LEN, 136);
         let mut out = [0u8; TELEMETRY_LEN];
         assert_eq!(t.emit(&mut out), Ok(TELEMETRY_LEN));
         assert_eq!(&out[..], &want[..]);
@@ -958,10 +981,13 @@ pub(crate) mod tests {
             version: 4,
             unknown_type: 5,
             bad_payload: 6,
+            uncorrectable: 7,
+            corrected: 8,
         };
         let mut c = TelemetryCounters::default();
         c.set_rx(&rx);
         assert_eq!(&c.to_array()[..6], &[10, 2, 1, 3, 9, 6]);
+        assert_eq!((c.rx_fec_corrected, c.rx_fec_uncorrectable), (8, 7));
     }
 
     #[test]
@@ -1208,7 +1234,7 @@ pub(crate) mod tests {
             r in arb_reply(),
             (level, text) in arb_log(),
         ) {
-            let mut out = [0u8; 128];
+            let mut out = [0u8; 136];
             let n = c.emit(&mut out).unwrap();
             prop_assert_eq!(n, c.payload_len());
             prop_assert_eq!(CommandRepr::parse(&out[..n]), Ok(c));
