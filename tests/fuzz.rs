@@ -252,11 +252,11 @@ fn rs_parity(data: &[u8]) -> [u8; 16] {
     };
     // g(x), highest power first.
     let mut g = vec![1u8];
-    for i in 0..16 {
+    for &root in &exp[..16] {
         let mut next = g.clone();
         next.push(0);
         for (k, &c) in g.iter().enumerate() {
-            next[k + 1] ^= mul(c, exp[i]);
+            next[k + 1] ^= mul(c, root);
         }
         g = next;
     }
@@ -265,8 +265,8 @@ fn rs_parity(data: &[u8]) -> [u8; 16] {
         let f = d ^ rem[0];
         rem.copy_within(1.., 0);
         rem[15] = 0;
-        for k in 0..16 {
-            rem[k] ^= mul(g[k + 1], f);
+        for (r, &gk) in rem.iter_mut().zip(&g[1..]) {
+            *r ^= mul(gk, f);
         }
     }
     rem

@@ -26,8 +26,9 @@
 //! The wire length gives the codeword length, which gives L and B: no length field is needed,
 //! and a length the encoder cannot produce is a framing error.
 //!
-//! Nothing here allocates or panics; the decoder's side runs byte by byte
-//! ([`Unsubstituter`]) and corrects the blocks in place once the frame has ended ([`correct`]).
+//! Nothing here allocates or panics; the decoder undoes the substitution and whitening
+//! ([`unsubstitute_in_place`]) and corrects the blocks ([`correct`]) in place once the frame has
+//! ended.
 
 use super::reed_solomon::{self, Block, Uncorrectable, MAX_DATA, PARITY};
 use super::Error;
@@ -96,39 +97,31 @@ impl Pn9 {
     }
 }
 
-/// Undoes zero substitution and whitening, one wire byte at a time (the delimiter is the
-/// caller's).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct Unsubstituter {
-    /// Codeword bytes taken in the current chunk; `None`: the next byte is a key.
-    taken: Option<u8>,
-    key: u8,
-    white: Pn9,
-}
-
-impl Unsubstituter {
-    /// At the start of a frame.
-    pub const fn new() -> Self {
-        Unsubstituter {
-            taken: None,
-            key: 0,
-            white: Pn9::new(),
+/// Undoes zero substitution and whitening in place: `wire` is a coded frame's bytes without
+/// the delimiter (no 0x00 among them); the codeword is then `wire[.. n]`. Returns `n`, or
+/// [`Error::CodedLength`] if the wire length is not one the encoder produces (a last chunk
+/// with its key alone). A few operations a byte, in one pass.
+pub fn unsubstitute_in_place(wire: &mut [u8]) -> Result<usize, Error> {
+    let mut white = Pn9::new();
+    let mut n = 0usize;
+    let mut at = 0usize;
+    while let Some(&key) = wire.get(at) {
+        let len = (wire.len() - at - 1).min(CHUNK);
+        // The chunk's bytes move over its key (and the keys before it): n < at + 1 + k.
+        for k in at + 1..at + 1 + len {
+            let b = wire.get(k).copied().unwrap_or(0);
+            let c = if b == key { 0 } else { b };
+            if let Some(out) = wire.get_mut(n) {
+                *out = c ^ white.next_byte();
+            }
+            n += 1;
         }
+        at += 1 + len;
     }
-
-    /// Takes the next wire byte (not 0x00); the codeword byte it stands for, or `None` for a
-    /// key.
-    pub fn push(&mut self, byte: u8) -> Option<u8> {
-        let Some(taken) = self.taken else {
-            self.key = byte;
-            self.taken = Some(0);
-            return None;
-        };
-        let taken = taken.saturating_add(1);
-        self.taken = (usize::from(taken) < CHUNK).then_some(taken);
-        let whitened = if byte == self.key { 0 } else { byte };
-        Some(whitened ^ self.white.next_byte())
+    if wire_len(n) != wire.len() {
+        return Err(Error::CodedLength);
     }
+    Ok(n)
 }
 
 /// Block `index` of a codeword laid out as the encoder does: its data bytes every `blocks`
@@ -152,7 +145,7 @@ impl Interleaved<'_> {
 }
 
 impl Block for Interleaved<'_> {
-    fn len(&self) -> usize {
+    fn size(&self) -> usize {
         self.data + PARITY
     }
     fn byte(&self, i: usize) -> u8 {
@@ -177,7 +170,10 @@ const fn block_data(raw_len: usize, blocks: usize, index: usize) -> usize {
 
 /// Corrects a codeword (whitening and substitution already undone) in place; its raw frame is
 /// then `codeword[.. raw_len]`. Returns the bytes corrected, or [`Uncorrectable`] if a block
-/// had too many errors (blocks before it may have been corrected already).
+/// had too many errors (blocks before it may have been corrected already). Not inlined: its
+/// workspace (syndromes, locator, error positions: about 150 bytes) stays off the stack frames
+/// of the callers, which run the sonar extraction after it.
+#[inline(never)]
 pub fn correct(codeword: &mut [u8], raw_len: usize) -> Result<usize, Uncorrectable> {
     let blocks = blocks(raw_len);
     if codeword.len() != codeword_len(raw_len) {
@@ -201,7 +197,9 @@ pub fn correct(codeword: &mut [u8], raw_len: usize) -> Result<usize, Uncorrectab
 /// zero substitution; no delimiter) and returns the wire length. The parity is appended after
 /// the raw frame first, so `buf` needs `start + codeword_len(raw_len)` bytes, and `start` must
 /// be at least the number of chunks (1 + ⌊n / 254⌋ always is), else
-/// [`Error::BufferTooSmall`].
+/// [`Error::BufferTooSmall`]. Not inlined, so that the firmware's periodic task, which sends
+/// only frames to the host, does not carry its workspace in its stack frame.
+#[inline(never)]
 pub(crate) fn encode_in_place(
     buf: &mut [u8],
     start: usize,
@@ -272,22 +270,10 @@ fn key_for(chunk: &[u8]) -> u8 {
 /// [`Error::Cobs`] for a 0x00 inside, [`Error::CodedLength`] for a length the encoder cannot
 /// produce, [`Error::Uncorrectable`] for too many errors.
 pub fn decode_in_place(wire: &mut [u8]) -> Result<(usize, usize), Error> {
-    let mut u = Unsubstituter::new();
-    let mut n = 0usize;
-    for i in 0..wire.len() {
-        let b = wire.get(i).copied().ok_or(Error::Cobs)?;
-        if b == 0 {
-            return Err(Error::Cobs);
-        }
-        if let Some(c) = u.push(b) {
-            // n < i: every chunk's key comes before its bytes.
-            *wire.get_mut(n).ok_or(Error::Cobs)? = c;
-            n += 1;
-        }
+    if wire.contains(&0) {
+        return Err(Error::Cobs);
     }
-    if wire_len(n) != wire.len() {
-        return Err(Error::CodedLength);
-    }
+    let n = unsubstitute_in_place(wire)?;
     let raw_len = raw_len_of(n).ok_or(Error::CodedLength)?;
     let codeword = wire.get_mut(..n).ok_or(Error::CodedLength)?;
     let fixed = correct(codeword, raw_len).map_err(|_| Error::Uncorrectable)?;
@@ -321,11 +307,9 @@ mod tests {
 
     /// Wire bytes to the corrected raw frame, as the stream decoder does it.
     fn dec(wire: &[u8]) -> Result<(Vec<u8>, usize), Uncorrectable> {
-        let mut u = Unsubstituter::new();
-        let mut cw: Vec<u8> = wire.iter().filter_map(|&b| u.push(b)).collect();
-        if wire_len(cw.len()) != wire.len() {
-            return Err(Uncorrectable);
-        }
+        let mut cw = wire.to_vec();
+        let n = unsubstitute_in_place(&mut cw).map_err(|_| Uncorrectable)?;
+        cw.truncate(n);
         let raw_len = raw_len_of(cw.len()).ok_or(Uncorrectable)?;
         let fixed = correct(&mut cw, raw_len)?;
         cw.truncate(raw_len);
@@ -417,7 +401,7 @@ mod tests {
             let mut wire = enc(&raw);
             for (pos, e) in hits {
                 let i = pos % wire.len();
-                if i % (CHUNK + 1) == 0 {
+                if i.is_multiple_of(CHUNK + 1) {
                     continue;
                 }
                 // A byte that becomes 0x00 would end the frame: that is the delimiter's business.

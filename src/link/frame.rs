@@ -231,18 +231,24 @@ where
 /// version or type: length ([`Error::Truncated`]), CRC ([`Error::Crc`]), version
 /// ([`Error::Version`]), type ([`Error::UnknownType`]).
 pub fn split_frame(raw: &[u8]) -> Result<(Header, &[u8]), Error> {
-    let body_len = raw
-        .len()
-        .checked_sub(CRC_LEN)
-        .filter(|&n| n >= HEADER_LEN)
-        .ok_or(Error::Truncated)?;
-    let (body, crc) = raw.split_at_checked(body_len).ok_or(Error::Truncated)?;
-    let Some(&crc) = crc.first_chunk::<CRC_LEN>() else {
+    split_body(check_crc(raw)?)
+}
+
+/// Checks a decoded frame's length and CRC; its body (header ‖ payload).
+pub(crate) fn check_crc(raw: &[u8]) -> Result<&[u8], Error> {
+    if raw.len() < HEADER_LEN + CRC_LEN {
         return Err(Error::Truncated);
-    };
-    if Crc16::new().update(body).value() != u16::from_le_bytes(crc) {
+    }
+    let (body, crc) = raw.split_last_chunk::<CRC_LEN>().ok_or(Error::Truncated)?;
+    if Crc16::new().update(body).value() != u16::from_le_bytes(*crc) {
         return Err(Error::Crc);
     }
+    Ok(body)
+}
+
+/// Splits a frame's body whose CRC has been checked into its header (version and type
+/// checked) and payload.
+pub(crate) fn split_body(body: &[u8]) -> Result<(Header, &[u8]), Error> {
     let header = Header::parse(body)?;
     let payload = body.get(HEADER_LEN..).ok_or(Error::Truncated)?;
     Ok((header, payload))

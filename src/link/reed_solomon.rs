@@ -18,8 +18,7 @@
 //! received parity is r(x) mod g(x), whose values at the roots of g are the syndromes. A clean
 //! block costs one encoding (16 table look-ups a byte), and nothing else.
 //!
-//! No table index can leave its table (indices are masked, or are bytes into 256 entries), and
-//! nothing here allocates or panics.
+//! Every table look-up is checked (`get`), and nothing here allocates or panics.
 
 /// Parity bytes per block (2t).
 pub const PARITY: usize = 16;
@@ -34,15 +33,22 @@ pub const MAX_DATA: usize = MAX_BLOCK - PARITY;
 const PRIMITIVE: u16 = 0x11D;
 
 /// Powers and logarithms of α. `exp` repeats after 255 entries, so that a sum of two logarithms
-/// indexes it without a reduction.
+/// indexes it without a reduction; then zeros, for [`ZERO_LOG`].
 struct Tables {
-    exp: [u8; 512],
+    exp: [u8; 768],
     log: [u8; 256],
 }
 
+/// Stands for log(0) in sums that index `exp`: any such sum (512 ..= 512 + 254) lands on a
+/// zero.
+const ZERO_LOG: usize = 512;
+
+// Evaluated only at compile time (the initializers of `GF` and `GENERATOR_LOGS`): an index out
+// of bounds here fails the build, never the firmware.
+#[allow(clippy::indexing_slicing)]
 const fn tables() -> Tables {
     let mut t = Tables {
-        exp: [0; 512],
+        exp: [0; 768],
         log: [0; 256],
     };
     let mut x: u16 = 1;
@@ -65,9 +71,9 @@ const fn tables() -> Tables {
 
 static GF: Tables = tables();
 
-/// αⁱ for any i < 512.
+/// αⁱ for any i < 512; 0 for 512 ≤ i < 768.
 fn exp(i: usize) -> u8 {
-    GF.exp.get(i & 511).copied().unwrap_or(0)
+    GF.exp.get(i).copied().unwrap_or(0)
 }
 
 /// log_α(a) for a ≠ 0 (0 for a = 0, which callers test first).
@@ -99,6 +105,9 @@ fn inv(a: u8) -> u8 {
 
 /// The generator polynomial's coefficients after the leading 1, highest power first:
 /// g(x) = x¹⁶ + g[0] x¹⁵ + … + g[15].
+// Evaluated only at compile time (the initializers of `GF` and `GENERATOR_LOGS`): an index out
+// of bounds here fails the build, never the firmware.
+#[allow(clippy::indexing_slicing)]
 const fn generator() -> [u8; PARITY] {
     let t = tables();
     // g starts as 1 and is multiplied by (x + αⁱ) for i = 0 .. 15; coefficients lowest power
@@ -137,6 +146,9 @@ const fn generator() -> [u8; PARITY] {
 }
 
 /// The logarithms of the generator's coefficients (all are non-zero; tested).
+// Evaluated only at compile time (the initializers of `GF` and `GENERATOR_LOGS`): an index out
+// of bounds here fails the build, never the firmware.
+#[allow(clippy::indexing_slicing)]
 const fn generator_logs() -> [u8; PARITY] {
     let t = tables();
     let g = generator();
@@ -149,32 +161,40 @@ const fn generator_logs() -> [u8; PARITY] {
     out
 }
 
-static GENERATOR_LOGS: [u8; PARITY] = generator_logs();
+const GENERATOR_LOGS: [u8; PARITY] = generator_logs();
 
 /// The parity of `data` (the remainder of data(x)·x¹⁶ divided by g(x)), highest power first:
 /// the 16 bytes that follow the data in a block.
 pub fn parity(data: impl IntoIterator<Item = u8>) -> [u8; PARITY] {
-    let mut reg = [0u8; PARITY];
+    // The division's register, byte k (the coefficient of x^(15 − k)) in bits 8k .. 8k + 8.
+    let mut reg = 0u128;
     for d in data {
-        let feedback = d ^ reg[0];
-        reg.copy_within(1.., 0);
-        reg[PARITY - 1] = 0;
-        if feedback != 0 {
-            let f = log(feedback);
-            for (r, &g) in reg.iter_mut().zip(GENERATOR_LOGS.iter()) {
-                *r ^= exp(f + usize::from(g));
-            }
+        let feedback = d ^ reg as u8;
+        // A zero feedback adds nothing: its "logarithm" indexes the table's zero half.
+        let f = if feedback == 0 {
+            ZERO_LOG
+        } else {
+            log(feedback)
+        };
+        let Some(row) = GF.exp.get(f..).and_then(|r| r.first_chunk::<256>()) else {
+            continue;
+        };
+        // Shift by one byte, then add feedback · g(x).
+        let mut next = (reg >> 8).to_le_bytes();
+        for (n, &g) in next.iter_mut().zip(GENERATOR_LOGS.iter()) {
+            *n ^= row.get(usize::from(g)).copied().unwrap_or(0);
         }
+        reg = u128::from_le_bytes(next);
     }
-    reg
+    reg.to_le_bytes()
 }
 
 /// A received block, as the frame decoder lays it out (data bytes interleaved with other
-/// blocks', parity at the end): `len` bytes, read and corrected by position in the block.
+/// blocks', parity at the end): `size` bytes, read and corrected by position in the block.
 pub trait Block {
     /// Bytes in the block, parity included (≤ [`MAX_BLOCK`]).
-    fn len(&self) -> usize;
-    /// Byte `i` of the block (`i < len`).
+    fn size(&self) -> usize;
+    /// Byte `i` of the block (`i < size`).
     fn byte(&self, i: usize) -> u8;
     /// XORs `error` into byte `i`.
     fn correct(&mut self, i: usize, error: u8);
@@ -187,7 +207,7 @@ pub struct Uncorrectable;
 /// Corrects `block` in place; the number of bytes corrected (0: it was clean), or
 /// [`Uncorrectable`] (the block is then unchanged).
 pub fn correct(block: &mut impl Block) -> Result<usize, Uncorrectable> {
-    let n = block.len();
+    let n = block.size();
     if !(PARITY + 1..=MAX_BLOCK).contains(&n) {
         return Err(Uncorrectable);
     }
@@ -213,15 +233,33 @@ pub fn correct(block: &mut impl Block) -> Result<usize, Uncorrectable> {
         }
     }
     // Chien search over the block's positions: byte i is the coefficient of x^(n−1−i), so its
-    // locator is X = α^(n−1−i); it is wrong where Λ(X⁻¹) = 0.
+    // locator is X = α^(n−1−i); it is wrong where Λ(X⁻¹) = 0. Each term Λ_k X^(−k) is kept as
+    // its logarithm, which grows by k from one position to the next (X⁻¹ gains a factor α).
+    let mut terms = [None::<usize>; CORRECTABLE + 1];
+    let first = 255 - (n - 1); // log of X⁻¹ at i = 0, n ≤ 255
+    for (k, (t, &l)) in terms.iter_mut().zip(lambda.iter()).enumerate() {
+        if l != 0 {
+            *t = Some((log(l) + k * first) % 255);
+        }
+    }
     let mut found = [(0u8, 0u8); CORRECTABLE];
     let mut roots = 0;
     for i in 0..n {
-        let p = n - 1 - i;
-        let x_inv = exp(255 - p);
-        if eval(&lambda, x_inv) != 0 {
+        let mut sum = 0u8;
+        for (k, t) in terms.iter_mut().enumerate() {
+            if let Some(e) = t {
+                sum ^= exp(*e);
+                *e += k;
+                if *e >= 255 {
+                    *e -= 255;
+                }
+            }
+        }
+        if sum != 0 {
             continue;
         }
+        let p = n - 1 - i;
+        let x_inv = exp(255 - p);
         // Forney, first root α⁰: e = X · Ω(X⁻¹) / Λ'(X⁻¹).
         let denominator = derivative_at(&lambda, x_inv);
         if denominator == 0 {
@@ -312,7 +350,7 @@ mod tests {
     struct Plain<'a>(&'a mut [u8]);
 
     impl Block for Plain<'_> {
-        fn len(&self) -> usize {
+        fn size(&self) -> usize {
             self.0.len()
         }
         fn byte(&self, i: usize) -> u8 {
@@ -448,7 +486,7 @@ mod tests {
         #[test]
         fn arbitrary_blocks_never_panic(bytes in proptest::collection::vec(any::<u8>(), 0..300)) {
             let mut b = bytes.clone();
-            if let Ok(_) = correct(&mut Plain(&mut b)) {
+            if correct(&mut Plain(&mut b)).is_ok() {
                 prop_assert_eq!(correct(&mut Plain(&mut b)), Ok(0));
             } else {
                 prop_assert_eq!(b, bytes);
