@@ -1,5 +1,5 @@
 //! Waypoint missions over the link, host → firmware: `MissionCount`, `MissionItem` and `Survey`
-//! (protocol version 6). Each is a request, answered with a [`ReplyRepr`](super::ReplyRepr).
+//! (since protocol version 6). Each is a request, answered with a [`ReplyRepr`](super::ReplyRepr).
 //!
 //! A waypoint mission goes up in small messages, as MAVLink's mission protocol does
 //! (`MISSION_COUNT`, then one `MISSION_ITEM_INT` per waypoint): a queued request is a slot of

@@ -218,9 +218,10 @@ pub struct TelemetryCounters {
     pub rx_frames: u32,
     /// Frames refused for a CRC mismatch.
     pub rx_crc_errors: u32,
-    /// Frames dropped for exceeding `MAX_FRAME`.
+    /// Frames dropped for exceeding the longest frame of their framing.
     pub rx_oversize: u32,
-    /// Frames refused for bad COBS or being shorter than header and CRC.
+    /// Frames refused for bad COBS, a coded frame's impossible length, or being shorter than
+    /// header and CRC.
     pub rx_framing_errors: u32,
     /// Frames refused for an unknown version, type or direction.
     pub rx_unknown: u32,
