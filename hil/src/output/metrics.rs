@@ -716,7 +716,7 @@ mod tests {
         let json = serde_json::to_value(&m).unwrap();
         assert_eq!(json["counters"]["rx_frames"], 7);
         assert_eq!(json["counters"]["deadline_overruns"], 2);
-        assert_eq!(json["counters"].as_object().unwrap().len(), 20);
+        assert_eq!(json["counters"].as_object().unwrap().len(), 22);
         assert!(m.to_string().contains("deadline_overruns 2"));
     }
 
