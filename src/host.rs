@@ -4,7 +4,7 @@
 //!
 //! ```text
 //! vpf-firmware                      # protocol on stdin/stdout, log on stderr
-//! vpf-firmware --device /dev/pts/7  # protocol on a serial device or pty (set raw by its opener)
+//! vpf-firmware --device /dev/ttyUSB0 [--baud 115200]   # protocol on a serial device or pty
 //! vpf-firmware --ping360 /dev/ttyUSB0 [--ping360-range 30 ...]   # and a Ping360 on its own port
 //! ```
 //!
@@ -28,15 +28,26 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{mpsc, Arc};
 use std::time::{Duration, Instant};
 
+use vpf::guidance::mavlink::MavConfig;
 use vpf::guidance::{RuntimeConfig, SingleContext};
 use vpf::link::CostUnit;
 use vpf::sonar::ping360::Ping360Config;
 use vpf::Params;
 
-const USAGE: &str = "usage: vpf-firmware [--device PATH] [--ping360 DEVICE [Ping360 options]]
+const USAGE: &str =
+    "usage: vpf-firmware [--device PATH [--baud N]] [--ping360 DEVICE [Ping360 options]]
 
 The VPF guidance firmware as a host process. Speaks the serial protocol of docs/protocol.md
 on stdin/stdout, or on the serial device or pty at PATH. Logs go to stderr.
+
+  --device PATH                the protocol on this serial device or pty (raw, 8N1)
+  --baud N                     its baud rate (default 115200)
+  --mavlink DEVICE             MAVLink 2 to an ArduSub autopilot and QGroundControl on this
+                               serial device or pty: navigation in, velocity set-points,
+                               status, obstacle distances out, missions uploaded
+  --mavlink-baud N             its baud rate (default 115200)
+  --mavlink-ids SYS:COMP:ASYS:ACOMP  this firmware's and the autopilot's MAVLink ids
+                               (default 1:191:1:1)
 
   --ping360 DEVICE             drive a Blue Robotics Ping360 on this serial device or pty
   --ping360-baud N             its baud rate (default 115200)
@@ -57,7 +68,8 @@ on stdin/stdout, or on the serial device or pty at PATH. Logs go to stderr.
 /// Where the protocol flows.
 enum Port {
     Stdio,
-    Device(String),
+    /// A serial device (or pty) and its baud rate.
+    Device(String, u32),
 }
 
 /// The command line.
@@ -65,6 +77,8 @@ struct Args {
     port: Port,
     /// The Ping360's device, baud rate and settings.
     ping360: Option<(String, u32, Ping360Config)>,
+    /// The MAVLink line's device, baud rate and ids.
+    mavlink: Option<(String, u32, MavConfig)>,
 }
 
 fn number<T: std::str::FromStr>(flag: &str, v: Option<String>) -> Result<T, String> {
@@ -75,14 +89,35 @@ fn number<T: std::str::FromStr>(flag: &str, v: Option<String>) -> Result<T, Stri
 fn parse_args() -> Result<Args, String> {
     let mut args = std::env::args().skip(1);
     let mut port = Port::Stdio;
+    let mut main_baud = 115_200u32;
     let mut device = None;
     let mut baud = 115_200u32;
     let mut cfg = Ping360Config::default();
     let mut range_m: Option<f32> = None;
+    let mut mavlink: Option<String> = None;
+    let mut mav_baud = 115_200u32;
+    let mut mav_cfg = MavConfig::default();
     while let Some(a) = args.next() {
         match a.as_str() {
             "--device" => {
-                port = Port::Device(args.next().ok_or("--device needs a path")?);
+                port = Port::Device(args.next().ok_or("--device needs a path")?, 0);
+            }
+            "--baud" => main_baud = number(&a, args.next())?,
+            "--mavlink" => mavlink = Some(args.next().ok_or("--mavlink needs a device")?),
+            "--mavlink-baud" => mav_baud = number(&a, args.next())?,
+            "--mavlink-ids" => {
+                let v = args
+                    .next()
+                    .ok_or("--mavlink-ids needs SYS:COMP:ASYS:ACOMP")?;
+                let ids: Vec<u8> = v.split(':').filter_map(|x| x.parse().ok()).collect();
+                let [sys, comp, asys, acomp] = ids[..] else {
+                    return Err(format!(
+                        "--mavlink-ids {v}: expected four ids 0..=255, SYS:COMP:ASYS:ACOMP"
+                    ));
+                };
+                mav_cfg.sysid = sys;
+                mav_cfg.compid = comp;
+                mav_cfg.autopilot = (asys, acomp);
             }
             "--ping360" => device = Some(args.next().ok_or("--ping360 needs a device")?),
             "--ping360-baud" => baud = number(&a, args.next())?,
@@ -117,6 +152,9 @@ fn parse_args() -> Result<Args, String> {
             other => return Err(format!("unknown argument `{other}`")),
         }
     }
+    if let Port::Device(_, b) = &mut port {
+        *b = main_baud;
+    }
     let range_m = range_m.unwrap_or(cfg.range_m());
     cfg.sample_period = Ping360Config::sample_period_for(range_m, cfg.samples, cfg.sound_speed)
         .ok_or(format!(
@@ -130,11 +168,20 @@ fn parse_args() -> Result<Args, String> {
         }
         None => None,
     };
-    Ok(Args { port, ping360 })
+    let mavlink = mavlink.map(|d| (d, mav_baud, mav_cfg));
+    Ok(Args {
+        port,
+        ping360,
+        mavlink,
+    })
 }
 
 pub fn main() -> ExitCode {
-    let Args { port, ping360 } = match parse_args() {
+    let Args {
+        port,
+        ping360,
+        mavlink,
+    } = match parse_args() {
         Ok(p) => p,
         Err(e) => {
             if !e.is_empty() {
@@ -148,7 +195,7 @@ pub fn main() -> ExitCode {
             };
         }
     };
-    let is_device = matches!(port, Port::Device(_));
+    let is_device = matches!(port, Port::Device(..));
     let sonar = match &ping360 {
         Some((path, baud, cfg)) => match open_ping360(path, *baud) {
             Ok((r, w)) => {
@@ -169,33 +216,41 @@ pub fn main() -> ExitCode {
         },
         None => None,
     };
+    let mav = match &mavlink {
+        Some((path, baud, cfg)) => match open_serial(path, *baud) {
+            Ok(rw) => {
+                eprintln!(
+                    "vpf-firmware: MAVLink 2 on {path} at {baud} baud, as {}:{} beside the autopilot {}:{}",
+                    cfg.sysid, cfg.compid, cfg.autopilot.0, cfg.autopilot.1
+                );
+                Some((rw, *cfg))
+            }
+            Err(e) => {
+                eprintln!("vpf-firmware: cannot open the MAVLink port {path}: {e}");
+                return ExitCode::FAILURE;
+            }
+        },
+        None => None,
+    };
     let (reader, writer): (Box<dyn Read + Send>, Box<dyn Write>) = match &port {
         Port::Stdio => (Box::new(std::io::stdin()), Box::new(std::io::stdout())),
-        Port::Device(path) => {
-            let open = || {
-                std::fs::OpenOptions::new()
-                    .read(true)
-                    .write(true)
-                    .open(path)
-            };
-            match (open(), open()) {
-                (Ok(r), Ok(w)) => (Box::new(r), Box::new(w)),
-                (Err(e), _) | (_, Err(e)) => {
-                    eprintln!("vpf-firmware: cannot open {path}: {e}");
-                    return ExitCode::FAILURE;
-                }
+        Port::Device(path, baud) => match open_serial(path, *baud) {
+            Ok(rw) => rw,
+            Err(e) => {
+                eprintln!("vpf-firmware: cannot open {path}: {e}");
+                return ExitCode::FAILURE;
             }
-        }
+        },
     };
     eprintln!(
         "vpf-firmware {} (host process, {})",
         env!("CARGO_PKG_VERSION"),
         match &port {
             Port::Stdio => "stdio".to_string(),
-            Port::Device(p) => p.clone(),
+            Port::Device(p, baud) => format!("{p} at {baud} baud"),
         }
     );
-    match run(reader, writer, is_device, sonar) {
+    match run(reader, writer, is_device, sonar, mav) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("vpf-firmware: {e}");
@@ -209,8 +264,8 @@ const READ_CHUNK: usize = 4096;
 
 /// Chunks the reader may queue for the event loop: at most `RX_CHUNKS × READ_CHUNK` = 1 MiB
 /// waits (90 s of 115 200 baud; the harness's heaviest period is a few KiB). Past it the reader
-/// drops what it read and counts it, as the board's UART interrupt drops bytes when its receive
-/// queue is full (`rx_bytes_dropped`, `vpf::guidance::RX_QUEUE`): memory stays bounded however
+/// drops what it read and counts it, as a board's UART loses bytes when its receive queue stays
+/// full (`rx_bytes_dropped`, `vpf::guidance::RX_QUEUE`): memory stays bounded however
 /// fast the input comes, and the decoder resyncs on the next frame delimiter.
 const RX_CHUNKS: usize = 256;
 
@@ -229,13 +284,19 @@ struct RxStats {
 /// The Ping360's serial port, raw, opened twice over (reads in a thread, writes in the loop).
 type SonarPort = (Box<dyn Read + Send>, Box<dyn Write>);
 
-/// Opens the Ping360's port at `baud`, 8N1, raw, with reads that time out when it is quiet.
-fn open_ping360(path: &str, baud: u32) -> Result<SonarPort, serialport::Error> {
+/// Opens a serial port (or pty) at `baud`, 8N1, raw, with reads that time out when it is
+/// quiet: a reader and a writer.
+fn open_serial(path: &str, baud: u32) -> Result<SonarPort, serialport::Error> {
     let port = serialport::new(path, baud)
         .timeout(Duration::from_millis(20))
         .open()?;
     let writer = port.try_clone()?;
     Ok((Box::new(port), Box::new(writer)))
+}
+
+/// Opens the Ping360's port.
+fn open_ping360(path: &str, baud: u32) -> Result<SonarPort, serialport::Error> {
+    open_serial(path, baud)
 }
 
 /// Where a chunk of input came from.
@@ -244,6 +305,8 @@ enum Input {
     Main(Vec<u8>),
     /// The Ping360's port.
     Sonar(Vec<u8>),
+    /// The MAVLink line.
+    Mavlink(Vec<u8>),
 }
 
 /// The reader thread: reads `reader` until its end and queues what it reads without ever
@@ -286,6 +349,7 @@ fn run(
     mut writer: Box<dyn Write>,
     is_device: bool,
     sonar: Option<(SonarPort, Ping360Config)>,
+    mav: Option<(SonarPort, MavConfig)>,
 ) -> std::io::Result<()> {
     let mut fw = SingleContext::new(
         Params::default(),
@@ -304,6 +368,14 @@ fn run(
         sonar_writer = Some(w);
         let (tx, st) = (tx.clone(), Arc::clone(&sonar_stats));
         std::thread::spawn(move || pump(sonar_reader, &tx, &st, true, Input::Sonar));
+    }
+    let mav_stats = Arc::new(RxStats::default());
+    let mut mav_writer = None;
+    if let Some(((mav_reader, w), cfg)) = mav {
+        fw.set_mavlink(cfg);
+        mav_writer = Some(w);
+        let (tx, st) = (tx.clone(), Arc::clone(&mav_stats));
+        std::thread::spawn(move || pump(mav_reader, &tx, &st, true, Input::Mavlink));
     }
     let pump_stats = Arc::clone(&stats);
     std::thread::spawn(move || pump(reader, &tx, &pump_stats, is_device, Input::Main));
@@ -337,8 +409,14 @@ fn run(
                     });
                 }
                 Ok(Input::Sonar(bytes)) => fw.on_ping360_bytes(&bytes),
+                Ok(Input::Mavlink(bytes)) => fw.on_mavlink_bytes(&bytes),
                 Err(mpsc::RecvTimeoutError::Timeout) => {}
                 Err(mpsc::RecvTimeoutError::Disconnected) => {
+                    if let Some((c, dropped, missions)) = fw.mavlink_counters() {
+                        eprintln!(
+                            "vpf-firmware: MAVLink: {c:?}, {dropped} frames dropped on a full outbox, {missions} upload steps on a full queue"
+                        );
+                    }
                     eprintln!(
                         "vpf-firmware: input closed after {} bytes ({} dropped, queue full), exiting",
                         stats.read.load(Ordering::Relaxed),
@@ -374,6 +452,13 @@ fn run(
                 w.flush()?;
             }
         }
+        if let Some(w) = mav_writer.as_mut() {
+            let bytes = fw.take_mavlink_output();
+            if !bytes.is_empty() {
+                w.write_all(&bytes)?;
+                w.flush()?;
+            }
+        }
         if !out.is_empty() {
             writer.write_all(&out)?;
             writer.flush()?;
@@ -388,7 +473,7 @@ mod tests {
 
     fn chunk(i: Input) -> Vec<u8> {
         match i {
-            Input::Main(b) | Input::Sonar(b) => b,
+            Input::Main(b) | Input::Sonar(b) | Input::Mavlink(b) => b,
         }
     }
 

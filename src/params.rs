@@ -153,6 +153,15 @@ pub struct Params {
     /// multiple of the evidence map's 0.5 m cell (otherwise only contacts and charts are
     /// routed round). The grid is 64 cells wide.
     pub route_cell_m: f32,
+    /// The craft's largest yaw rate, rad/s: the guard (`crate::guidance::guard`) judges a
+    /// command by the arc the vehicle sweeps turning towards it at this rate, and the speed
+    /// set-point is cut while the heading is far from the commanded one (a craft that turns
+    /// slowly goes where it points, not where it is told). 0 (the default) takes the craft to
+    /// turn at once, as a VideoRay nearly does (≈ 1.5 rad/s); else 0.001 ..= 10.
+    pub turn_rate_rps: f32,
+    /// The deceleration the craft really brakes at, m/s²: the guard's stopping distances use it.
+    /// 0 (the default) takes F_max, the most the planner itself commands; else 0.001 ..= 100.
+    pub brake_mps2: f32,
 }
 
 impl Default for Params {
@@ -198,6 +207,8 @@ impl Default for Params {
             nf_kappa: 0.0,
             nf_workspace_m: 1000.0,
             route_cell_m: 2.0,
+            turn_rate_rps: 0.0,
+            brake_mps2: 0.0,
         }
     }
 }
@@ -244,6 +255,15 @@ fn check(name: &'static str, v: f32, lo: f32, hi: f32) -> Result<(), ParamError>
 }
 
 impl Params {
+    /// The deceleration the guard plans stops with, m/s²: `brake_mps2`, or F_max when it is 0.
+    pub fn brake(&self) -> f32 {
+        if self.brake_mps2 > 0.0 {
+            self.brake_mps2
+        } else {
+            self.f_max
+        }
+    }
+
     /// Checks every parameter against its documented range.
     pub fn validate(&self) -> Result<(), ParamError> {
         check("period_s", self.period_s, 0.02, 1.0)?;
@@ -283,6 +303,12 @@ impl Params {
         check("nf_workspace_m", self.nf_workspace_m, 1.0, 1e5)?;
         if self.route_cell_m != 0.0 {
             check("route_cell_m", self.route_cell_m, 0.5, 8.0)?;
+        }
+        if self.turn_rate_rps != 0.0 {
+            check("turn_rate_rps", self.turn_rate_rps, 0.001, 10.0)?;
+        }
+        if self.brake_mps2 != 0.0 {
+            check("brake_mps2", self.brake_mps2, 0.001, 100.0)?;
         }
         Ok(())
     }

@@ -668,9 +668,9 @@ fn payload(rng: &mut Rng, ctx: &Ctx<'_>, ty: u8) -> Vec<u8> {
 // Layout knowledge for the mutations (payload offsets from docs/protocol.md §5–§6)
 
 /// Offsets of the f32 parameters in `Params`.
-const PARAM_F32: [usize; 27] = [
+const PARAM_F32: [usize; 29] = [
     0, 4, 9, 13, 17, 21, 25, 29, 33, 38, 42, 46, 50, 54, 58, 62, 66, 70, 80, 84, 89, 93, 97, 101,
-    106, 110, 114,
+    106, 110, 114, 118, 122,
 ];
 
 /// Floats of a shape starting at `o` (its kind byte); returns the shape's length.

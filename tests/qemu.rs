@@ -479,3 +479,69 @@ fn firmware_answers_over_its_uart() {
     assert_eq!(tel.cost_unit, vpf::link::CostUnit::Instructions);
     assert!(tel.step_cost > 0);
 }
+
+#[path = "common/pymavlink.rs"]
+mod pymavlink;
+
+/// The board image's MAVLink UART (UART2, QEMU's third serial port) against pymavlink as the
+/// autopilot and the ground station (`tests/common/pymavlink.rs`), in real time: the same
+/// script and the same checks as the host-process firmware's test (tests/mavlink.rs).
+#[test]
+fn the_board_image_speaks_mavlink_to_a_pymavlink_autopilot_and_ground_station() {
+    if !qemu_available() || !pymavlink::available() {
+        return;
+    }
+    let elf = build_firmware(&[], "vpf-firmware-mavlink");
+    let (mut py, pty, mut lines) = pymavlink::start();
+    // UART0 on a pty of its own (the rock goes there), UART1 unconnected, UART2 on the
+    // script's pty.
+    let mut child = Command::new("qemu-system-arm")
+        .args(["-machine", "mps2-an386", "-cpu", "cortex-m4", "-nographic"])
+        .args(["-serial", "pty", "-serial", "null", "-serial", &pty])
+        .args(["-monitor", "stdio", "-S"])
+        .args(["-semihosting-config", "enable=on,target=native", "-kernel"])
+        .arg(&elf)
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::inherit())
+        .spawn()
+        .expect("qemu starts");
+    let stdout = child.stdout.take().unwrap();
+    let mut monitor = BufReader::new(stdout).lines();
+    let path = loop {
+        let line = monitor.next().expect("qemu names its pty").unwrap();
+        if let Some(i) = line.find("/dev/pts/") {
+            break line[i..].split_whitespace().next().unwrap().to_string();
+        }
+    };
+    std::thread::spawn(move || for _ in monitor.map_while(Result::ok) {});
+    let mut stdin = child.stdin.take().unwrap();
+    let qemu = Qemu(child);
+    let mut uart0 = std::fs::OpenOptions::new()
+        .read(true)
+        .write(true)
+        .open(&path)
+        .unwrap();
+    // SAFETY: plain termios calls on a file descriptor we own.
+    unsafe {
+        let mut t: libc::termios = std::mem::zeroed();
+        assert_eq!(libc::tcgetattr(uart0.as_raw_fd(), &mut t), 0);
+        libc::cfmakeraw(&mut t);
+        assert_eq!(libc::tcsetattr(uart0.as_raw_fd(), libc::TCSANOW, &t), 0);
+    }
+    stdin.write_all(b"cont\n").unwrap();
+    stdin.flush().unwrap();
+    uart0.write_all(&pymavlink::rock()).unwrap();
+    // Drain the control link (command, telemetry) so its transmit queue never fills.
+    let mut drain = uart0.try_clone().unwrap();
+    std::thread::spawn(move || {
+        let mut buf = [0u8; 4096];
+        while drain.read(&mut buf).is_ok_and(|n| n > 0) {}
+    });
+    let report = lines.next().expect("the script reports").unwrap();
+    let status = py.wait().unwrap();
+    drop(qemu);
+    println!("{report}");
+    assert!(status.success(), "the pymavlink script failed");
+    pymavlink::check(&report);
+}

@@ -8,7 +8,7 @@ use std::collections::HashMap;
 
 use vpf::field::Shape;
 use vpf::guidance::{
-    RuntimeConfig, SingleContext, CONTROL_QUEUE, REPLY_QUEUE, REQUESTS_PER_PERIOD,
+    RuntimeConfig, SingleContext, CONTROL_QUEUE, REPLY_QUEUE, REQUESTS_PER_PERIOD, TX_QUEUE,
 };
 use vpf::link::{
     encode_frame, ChartClearRepr, ChartObstacleRepr, CostUnit, Decoder, Direction, Message,
@@ -28,6 +28,8 @@ struct Host {
     replies: Vec<ReplyRepr>,
     telemetry: Vec<TelemetryRepr>,
     sent: HashMap<u16, Message<'static>>,
+    /// The most bytes one call sent (a period's frames: what the board's transmit queue holds).
+    most_out: usize,
 }
 
 impl Host {
@@ -45,6 +47,7 @@ impl Host {
             replies: vec![],
             telemetry: vec![],
             sent: HashMap::new(),
+            most_out: 0,
         }
     }
 
@@ -54,6 +57,7 @@ impl Host {
             out.extend_from_slice(f);
             true
         });
+        self.most_out = self.most_out.max(out.len());
         for b in out {
             if let Outcome::Frame(_, m) = self.decoder.push(b) {
                 match m {
@@ -196,6 +200,10 @@ fn a_start_up_burst_is_answered_in_full_and_lands_when_paced() {
     let t = host.last_telemetry();
     assert_eq!(t.counters.requests_busy, busy.len() as u32);
     assert_eq!(t.counters.requests_unanswered, 0);
+    // The period that answers the burst sends the most a period sends (every reply, command,
+    // telemetry, belief): the board's transmit queue takes it whole, with room to spare.
+    println!("the burst's period sent {} bytes", host.most_out);
+    assert!(host.most_out < TX_QUEUE * 3 / 4, "{}", host.most_out);
 
     // Pacing: at most the queue's capacity in flight; what comes back "busy" goes again.
     let mut pending: Vec<Message<'static>> = busy.iter().map(|s| host.sent[s]).collect();
@@ -309,7 +317,7 @@ fn a_busy_request_changes_nothing() {
 fn refusals_at_the_wire_count_as_refused_requests() {
     let mut host = Host::new();
     // Params with a NaN epsilon (row 1, bytes 4..8): the wire refuses non-finite numbers.
-    let mut payload = [0u8; 118];
+    let mut payload = [0u8; vpf::link::PARAMS_LEN];
     let n = Params::default().emit(&mut payload).unwrap();
     assert_eq!(n, payload.len());
     payload[4..8].copy_from_slice(&f32::NAN.to_le_bytes());

@@ -212,16 +212,23 @@ fn cli_inner(mut it: impl Iterator<Item = String>) -> Result<(), String> {
         .map(|f| crate::scenario::load(f).map_err(|e| e.to_string()))
         .collect::<Result<Vec<_>, _>>()?;
     if target != Target::Host {
-        // The board images do not drive a Ping360 yet.
+        // The board images drive their Ping360 with `Ping360Config::BOARD` only (QEMU), and a
+        // real board's sonar UART is wired to a real one.
         scenarios.retain(|s| {
-            let keep = s.sonar.interface != crate::scenario::SonarInterface::Ping360;
-            if !keep {
-                eprintln!(
-                    "hil compare: leaving out \"{}\": a Ping360 needs --firmware host",
-                    s.name
-                );
+            if s.sonar.interface != crate::scenario::SonarInterface::Ping360 {
+                return true;
             }
-            keep
+            let why = match target {
+                Target::Qemu => crate::ping360::sim::firmware_config(&s.sonar)
+                    .and_then(|c| crate::ping360::sim::board_config_matches(&c))
+                    .err()
+                    .map(|(k, m)| format!("[sonar] {k}: {m}")),
+                _ => Some("a simulated Ping360 needs --firmware host or qemu".into()),
+            };
+            if let Some(why) = &why {
+                eprintln!("hil compare: leaving out \"{}\": {why}", s.name);
+            }
+            why.is_none()
         });
     }
     let out = out.unwrap_or_else(|| {

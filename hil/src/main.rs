@@ -1,7 +1,8 @@
 //! `hil`: run a scenario against the VPF firmware.
 //!
 //! ```text
-//! hil run SCENARIO.toml [--out DIR] [--firmware qemu|host] [--port /dev/ttyXXX] [--quiet]
+//! hil run SCENARIO.toml [--out DIR] [--firmware qemu|qemu-uart|host] [--port /dev/ttyXXX [--baud N]]
+//!         [--quiet]
 //!         [--bit-error-rate X] [--drop-rate X] [--nav-delay-ms X]
 //!         [--nav-freeze FROM:TO] [--nav-loss FROM:TO] [--sonar-dropout FROM:TO]
 //!         [--ping360-bit-error-rate X] [--ping360-drop-rate X]
@@ -36,8 +37,12 @@ const USAGE: &str = "usage:
 
 options for run:
   --out DIR                 output directory
-  --firmware qemu|host      the emulated Cortex-M4 in QEMU (default), or the firmware as a host process
+  --firmware qemu|qemu-uart|host
+                            the emulated Cortex-M4 in QEMU, linked through its ethernet controller
+                            (default), or through its UART on a pty (slower), or the firmware as a
+                            host process
   --port /dev/ttyXXX        a real board on a serial adapter (flashed beforehand)
+  --baud N                  the port's baud rate (default 115200; the boards' control link)
   --quiet                   no progress bar
   --params RECIPE.toml      planner parameters from a recipe (replace the scenario's [planner])
   --bit-error-rate X        corrupt bytes sent to the firmware on its main link at this bit-error rate
@@ -100,11 +105,36 @@ fn parse_run(mut it: impl Iterator<Item = String>) -> Result<Args, String> {
             "--firmware" => {
                 args.target = match value()?.as_str() {
                     "qemu" => Target::Qemu,
+                    "qemu-uart" => Target::QemuUart,
                     "host" => Target::Host,
-                    other => return Err(format!("--firmware {other}: expected qemu or host")),
+                    other => {
+                        return Err(format!(
+                            "--firmware {other}: expected qemu, qemu-uart or host"
+                        ))
+                    }
                 }
             }
-            "--port" => args.target = Target::Port(PathBuf::from(value()?)),
+            "--port" => {
+                let baud = match &args.target {
+                    Target::Port(_, b) => *b,
+                    _ => hil::firmware::PORT_BAUD,
+                };
+                args.target = Target::Port(PathBuf::from(value()?), baud);
+            }
+            "--baud" => {
+                let v = value()?;
+                let b: u32 = v
+                    .parse()
+                    .ok()
+                    .filter(|b| (1200..=4_000_000).contains(b))
+                    .ok_or(format!(
+                        "--baud {v}: expected a baud rate, 1200 ..= 4000000"
+                    ))?;
+                match &mut args.target {
+                    Target::Port(_, baud) => *baud = b,
+                    _ => return Err("--baud goes after --port".into()),
+                }
+            }
             "--quiet" => args.quiet = true,
             "--params" => args.params = Some(PathBuf::from(value()?)),
             "-h" | "--help" => return Err(String::new()),
@@ -201,7 +231,7 @@ fn cmd_run(it: impl Iterator<Item = String>) -> ExitCode {
         return ExitCode::from(2);
     }
     let mut target = args.target;
-    if target == Target::Qemu && !hil::firmware::qemu_available() {
+    if matches!(target, Target::Qemu | Target::QemuUart) && !hil::firmware::qemu_available() {
         eprintln!("hil: qemu-system-arm not found; running the host-process firmware instead");
         target = Target::Host;
     }
@@ -223,11 +253,12 @@ fn cmd_run(it: impl Iterator<Item = String>) -> ExitCode {
     match run(&sc, &cfg) {
         Ok(result) => {
             println!("{}", result.summary);
-            for (((v, f), retries), p360) in sc
+            for ((((v, f), retries), slow), p360) in sc
                 .vehicles
                 .iter()
                 .zip(&result.faults)
                 .zip(&result.tick_retries)
+                .zip(&result.ticks_slow)
                 .zip(&result.ping360)
             {
                 if let Some((p, f)) = p360 {
@@ -239,8 +270,10 @@ fn cmd_run(it: impl Iterator<Item = String>) -> ExitCode {
                 }
                 if *retries > 0 {
                     println!(
-                        "{}: {retries} Tick(s) sent again (lost on the link)",
-                        v.name
+                        "{}: {retries} Tick(s) sent again: {} lost on the link, {slow} answered \
+                         late (the firmware was slow)",
+                        v.name,
+                        retries - slow
                     );
                 }
                 if f.dropped + f.corrupted > 0 {

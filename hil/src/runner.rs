@@ -53,6 +53,15 @@ pub fn hull_radius(model: ModelKind) -> f64 {
     }
 }
 
+/// The radius a model turns on at its cruise speed with the heading autopilot at its limit, m
+/// (0: it turns on the spot): what a world must leave room for (`crate::bench::turning`).
+pub fn turning_radius(model: ModelKind) -> f64 {
+    match model {
+        ModelKind::Kinematic | ModelKind::VideoRay => 0.0,
+        ModelKind::FlatFish => crate::sim::flatfish::FLATFISH_TURN_RADIUS_M,
+    }
+}
+
 /// How to run.
 #[derive(Clone, Debug)]
 pub struct RunConfig {
@@ -104,6 +113,11 @@ struct Sim {
     setpoints: SetPoints,
     /// `Tick`s sent again because no command came back in time.
     tick_retries: u32,
+    /// Of those, the ones whose first sending was answered after all (a second command for the
+    /// same period came back): the firmware was slow, nothing was lost.
+    ticks_slow: u32,
+    /// The last period whose `Tick` was sent again, while its answers are still counted.
+    resent: Option<u64>,
     /// Navigation samples waiting out the configured delay: (due time, sample).
     delayed: std::collections::VecDeque<(f64, NavState)>,
     frozen: Option<NavState>,
@@ -126,6 +140,9 @@ pub struct RunResult {
     pub tick_retries: Vec<u32>,
     /// Per vehicle with a simulated Ping360: what it did, and the faults on its port.
     pub ping360: Vec<Option<(ping360_sim::SimCounts, FaultCounts)>>,
+    /// Of those, per vehicle, the ones the firmware had only been slow to answer (the period
+    /// was answered twice); the rest were lost on the link.
+    pub ticks_slow: Vec<u32>,
 }
 
 /// How [`run_quiet`] runs a scenario: the many short runs of a parameter sweep.
@@ -141,6 +158,10 @@ pub struct QuietRun {
     /// The host-process firmware on a Unix socket pair instead of a pty
     /// ([`Firmware::start_host_socket`]); other targets ignore it.
     pub socket: bool,
+    /// In lockstep, the host firmware's runtime in this process instead of a process
+    /// ([`Firmware::in_process`]: the same code, no wake-up or system call per period); other
+    /// targets ignore it.
+    pub in_process: bool,
 }
 
 impl QuietRun {
@@ -152,6 +173,7 @@ impl QuietRun {
             binary: firmware::build(&Target::Host)?,
             stop_early: true,
             socket: true,
+            in_process: true,
         })
     }
 }
@@ -166,6 +188,7 @@ pub fn run(sc: &Scenario, cfg: &RunConfig) -> Result<RunResult, RunError> {
         progress: cfg.progress,
         stop_early: false,
         socket: false,
+        in_process: false,
     };
     let sim = simulate(sc, &cfg.target, &binary, &how)?;
     let summary = output::write_all(&cfg.out_dir, &sim.output).map_err(RunError::Output)?;
@@ -175,6 +198,7 @@ pub fn run(sc: &Scenario, cfg: &RunConfig) -> Result<RunResult, RunError> {
         faults: sim.faults,
         tick_retries: sim.tick_retries,
         ping360: sim.ping360,
+        ticks_slow: sim.ticks_slow,
     })
 }
 
@@ -187,17 +211,20 @@ pub fn run_quiet(sc: &Scenario, q: &QuietRun) -> Result<RunOutput, RunError> {
         progress: false,
         stop_early: q.stop_early,
         socket: q.socket,
+        in_process: q.in_process,
     };
     simulate(sc, &q.target, &q.binary, &how).map(|s| s.output)
 }
 
 /// How [`simulate`] runs: frame logs into `log_dir` if given, a progress bar if `progress`,
-/// the end at arrival or collision if `stop_early`, the host firmware on a socket if `socket`.
+/// the end at arrival or collision if `stop_early`, the host firmware on a socket if `socket`
+/// (in this process if `in_process`).
 struct How<'a> {
     log_dir: Option<&'a std::path::Path>,
     progress: bool,
     stop_early: bool,
     socket: bool,
+    in_process: bool,
 }
 
 /// What [`simulate`] recorded.
@@ -206,6 +233,7 @@ struct Simulated {
     faults: Vec<FaultCounts>,
     tick_retries: Vec<u32>,
     ping360: Vec<Option<(ping360_sim::SimCounts, FaultCounts)>>,
+    ticks_slow: Vec<u32>,
 }
 
 /// The run itself.
@@ -222,22 +250,48 @@ fn simulate(
     for (i, v) in sc.vehicles.iter().enumerate() {
         let lockstep = sc.mode == RunMode::Lockstep;
         let seed = sc.seed.wrapping_add(1000 * i as u64);
-        // A Ping360 of its own: a pty whose slave the firmware opens as its sonar port.
+        // A Ping360 of its own: for the host-process firmware a pty whose slave it opens as its
+        // sonar port; on QEMU the board's UART1, QEMU's second serial port.
         let mut extra = Vec::new();
         let mut ping360_port = None;
-        if sc.sonar.interface == SonarInterface::Ping360 && v.sensing == Sensing::Sonar {
+        let ping360 = sc.sonar.interface == SonarInterface::Ping360 && v.sensing == Sensing::Sonar;
+        let mut ping360_cfg = None;
+        if ping360 {
             let cfg = ping360_sim::firmware_config(&sc.sonar)
                 .map_err(|(k, m)| RunError::Firmware(format!("[sonar] {k}: {m}")))?;
-            let (master, slave) = firmware::open_pty().map_err(fw_err)?;
-            extra = ping360_sim::firmware_args(&slave, &cfg);
-            ping360_port = Some((master, cfg));
+            match target {
+                Target::Host => {
+                    let (master, slave) = firmware::open_pty().map_err(fw_err)?;
+                    extra = ping360_sim::firmware_args(&slave, &cfg);
+                    ping360_port = Some(master);
+                }
+                Target::Qemu | Target::QemuUart => ping360_sim::board_config_matches(&cfg)
+                    .map_err(|(k, m)| RunError::Firmware(format!("[sonar] {k}: {m}")))?,
+                Target::Port(..) => {
+                    return Err(RunError::Firmware(
+                        "a simulated Ping360 needs --firmware host or qemu (a board's sonar UART is wired to a real one)".into(),
+                    ))
+                }
+            }
+            ping360_cfg = Some(cfg);
         }
-        let mut fw = if how.socket && *target == Target::Host {
+        // In process only without a Ping360 port (that one is the process's own serial port).
+        let mut fw = if how.in_process && lockstep && *target == Target::Host && extra.is_empty() {
+            Firmware::in_process()
+        } else if how.socket && *target == Target::Host {
             Firmware::start_host_socket(binary, &extra)
+        } else if *target == Target::Qemu {
+            Firmware::start_qemu_ethernet(binary, lockstep, ping360)
+        } else if *target == Target::QemuUart {
+            Firmware::start_qemu(binary, lockstep, ping360)
         } else {
             Firmware::start(target, binary, lockstep, &extra)
         }
         .map_err(fw_err)?;
+        if matches!(target, Target::Qemu | Target::QemuUart) && ping360 {
+            ping360_port = fw.take_sonar_port();
+        }
+        let ping360_port = ping360_port.zip(ping360_cfg);
         if how.stop_early && lockstep {
             // The sweep's runs: one write per period (see `Firmware::set_batching`).
             fw.set_batching(true).map_err(fw_err)?;
@@ -300,6 +354,7 @@ fn simulate(
                 name: v.name.clone(),
                 goal: v.goal,
                 waypoints: marks(v),
+                ping360: ping360.is_some(),
                 ..VehicleRecord::default()
             },
             setpoints: SetPoints {
@@ -307,6 +362,8 @@ fn simulate(
                 ..SetPoints::default()
             },
             tick_retries: 0,
+            ticks_slow: 0,
+            resent: None,
             delayed: Default::default(),
             frozen: None,
             ping360,
@@ -441,6 +498,7 @@ fn simulate(
         .iter()
         .map(|s| s.ping360.as_ref().map(|(p, tap, _)| (p.counts, tap.counts)))
         .collect();
+    let ticks_slow = sims.iter().map(|s| s.ticks_slow).collect();
     let vehicles: Vec<VehicleRecord> = sims.into_iter().map(|s| s.record).collect();
     let output = RunOutput {
         scenario_name: sc.name.clone(),
@@ -456,6 +514,7 @@ fn simulate(
         faults,
         tick_retries,
         ping360,
+        ticks_slow,
     })
 }
 
@@ -612,6 +671,7 @@ fn collect(s: &mut Sim, mode: RunMode, t_ms: u64) -> Result<(), RunError> {
                     {
                         attempt += 1;
                         s.tick_retries += 1;
+                        s.resent = Some(t_ms);
                         s.fw.send(&Message::Tick(TickRepr { time_ms: t_ms }), &mut s.tap)
                             .map_err(fw_err)?;
                     }
@@ -624,6 +684,20 @@ fn collect(s: &mut Sim, mode: RunMode, t_ms: u64) -> Result<(), RunError> {
                 .map_err(fw_err)?
         }
     };
+    if let Some(resent) = s.resent {
+        // A period whose Tick went out twice and came back answered twice (now, or with the
+        // next period's answers) had only been slow; once, and a Tick was lost.
+        let answers = got
+            .iter()
+            .filter(|r| matches!(r, Reply::Command(c) if c.time_ms == resent))
+            .count();
+        if answers >= 2 || (answers == 1 && resent != t_ms) {
+            s.ticks_slow += 1;
+        }
+        if answers >= 2 || resent != t_ms {
+            s.resent = None;
+        }
+    }
     for r in &got {
         match r {
             // A rejected set-up request ends the run; a busy one goes again.

@@ -973,6 +973,8 @@ const PARAM_F32: &[(&str, &str)] = &[
     ("nf_kappa", "0 (auto) or 1 ..= 64"),
     ("nf_workspace_m", "1 ..= 100000 m"),
     ("route_cell_m", "0 (route layer off) or 0.5 ..= 8 m"),
+    ("turn_rate_rps", "0 (turns at once) or 0.001 ..= 10 rad/s"),
+    ("brake_mps2", "0 (F_max) or 0.001 ..= 100 m/s²"),
 ];
 
 fn param_f32<'p>(p: &'p mut Params, name: &str) -> Option<&'p mut f32> {
@@ -1004,6 +1006,8 @@ fn param_f32<'p>(p: &'p mut Params, name: &str) -> Option<&'p mut f32> {
         "nf_kappa" => &mut p.nf_kappa,
         "nf_workspace_m" => &mut p.nf_workspace_m,
         "route_cell_m" => &mut p.route_cell_m,
+        "turn_rate_rps" => &mut p.turn_rate_rps,
+        "brake_mps2" => &mut p.brake_mps2,
         _ => return None,
     })
 }

@@ -200,4 +200,8 @@ pub struct VehicleRecord {
     pub cost_unit: Option<vpf::link::CostUnit>,
     /// What the firmware believed (its evidence map, from `Belief` messages).
     pub belief: crate::output::belief::Belief,
+    /// Its sonar is a (simulated) Ping360 on a port of its own. Without one, the Ping360
+    /// counters a board image reports are those of its unconnected sonar port (commands that
+    /// time out), not shown.
+    pub ping360: bool,
 }

@@ -99,10 +99,12 @@ fn corrupted_link_still_reaches_the_goal_and_the_counters_show_it() {
     let f = r.faults[0];
     let tel = r.output.vehicles[0].telemetry.expect("telemetry");
     println!(
-        "{}\nfaults {f:?}, tick retries {:?}",
-        r.summary, r.tick_retries
+        "{}\nfaults {f:?}, tick retries {:?}, of which slow {:?}",
+        r.summary, r.tick_retries, r.ticks_slow
     );
     assert!(f.corrupted > 50 && f.dropped > 50, "{f:?}");
+    // Dropped and corrupted Ticks are re-sent, and reported as lost (answered once), not slow.
+    assert!(r.tick_retries[0] > r.ticks_slow[0]);
     assert!(tel.counters.rx_crc_errors + tel.counters.rx_framing_errors > 50);
     assert!(m.reached_goal && m.collisions == 0);
 }
@@ -190,6 +192,23 @@ fn a_scenario_runs_on_the_emulated_cortex_m4() {
         csv("qemu"),
         csv("qemu_vs_host"),
         "QEMU and host trajectories differ"
+    );
+    // A clean link loses nothing (a Tick answered late on a loaded machine is only slow).
+    assert_eq!(
+        r.tick_retries[0] - r.ticks_slow[0],
+        0,
+        "a Tick was lost on a clean link"
+    );
+    // The same image with the link on its UART (one byte per QEMU main-loop turn: a shorter
+    // run) flies the same trajectory too.
+    sc.duration_s = 15.0;
+    let uart = run_on(&sc, Target::QemuUart, "qemu_uart");
+    assert_eq!(uart.output.firmware, "qemu-uart");
+    run_on(&sc, Target::Host, "qemu_uart_vs_host");
+    assert_eq!(
+        csv("qemu_uart"),
+        csv("qemu_uart_vs_host"),
+        "QEMU (UART) and host trajectories differ"
     );
 }
 

@@ -1,6 +1,8 @@
-//! The whole Ping360 path in the loop: the host-process firmware drives a simulated Ping360 on
-//! a pty of its own (`[sonar] interface = "ping360"`), turns its `device_data` into scanlines
-//! for the extractor and the evidence map, and flies between two walls.
+//! The whole Ping360 path in the loop: the firmware drives a simulated Ping360 on a port of its
+//! own (`[sonar] interface = "ping360"`), turns its `device_data` into scanlines for the
+//! extractor and the evidence map, and flies between two walls: the host-process firmware on a
+//! pty, and the board image on QEMU through its UART1 (QEMU's second serial port) where
+//! `qemu-system-arm` is installed (under CI, `CI=true`, it must be).
 
 use std::path::{Path, PathBuf};
 
@@ -23,9 +25,13 @@ fn out_dir(test: &str) -> PathBuf {
 }
 
 fn run_on(sc: &Scenario, test: &str) -> RunResult {
+    run_with(sc, Target::Host, test)
+}
+
+fn run_with(sc: &Scenario, target: Target, test: &str) -> RunResult {
     let _ = std::fs::remove_dir_all(out_dir(test));
     let cfg = RunConfig {
-        target: Target::Host,
+        target,
         out_dir: out_dir(test),
         progress: false,
     };
@@ -103,4 +109,60 @@ fn a_lossy_ping360_port_is_counted_and_repeatable() {
         "{sim:?}"
     );
     assert_eq!(p.data + sim.refused, sim.answers, "{p:?} {sim:?}");
+}
+
+#[test]
+fn the_board_image_on_qemu_drives_the_ping360_through_its_second_uart_as_the_host_does() {
+    if !hil::firmware::qemu_available() {
+        assert!(
+            std::env::var("CI").map_or(true, |v| v != "true"),
+            "CI=true but qemu-system-arm is not installed"
+        );
+        eprintln!("SKIPPED: qemu-system-arm is not installed");
+        return;
+    }
+    // Long enough to pass the gap and arrive (97 s).
+    let mut sc = scenario("ping360_narrow_gap.toml");
+    sc.duration_s = 105.0;
+    let q = run_with(&sc, Target::Qemu, "ping360_qemu");
+    println!("{}", q.summary);
+    let m = &q.summary.vehicles[0];
+    assert!(m.reached_goal, "did not reach the goal on QEMU");
+    assert!(m.min_clearance_m.is_some_and(|c| c > 0.0), "touched a wall");
+    let (sim, faults) = q.ping360[0].expect("a simulated Ping360");
+    let p = m
+        .ping360
+        .expect("the board's Ping360 counters in its telemetry");
+    assert!(p.commands > 1000, "{p:?}");
+    assert!(p.data + 1 >= p.commands, "{p:?}");
+    assert_eq!(
+        (p.timeouts, p.checksum_errors, p.malformed, p.bytes_skipped),
+        (0, 0, 0, 0),
+        "the UART1 link lost or damaged bytes"
+    );
+    assert_eq!(faults.corrupted + faults.dropped, 0);
+    // The last telemetry may precede the command answering the last ping.
+    assert!(
+        sim.commands == p.commands || sim.commands == p.commands + 1,
+        "{sim:?} {p:?}"
+    );
+    assert_eq!(
+        q.output.vehicles[0].cost_unit,
+        Some(vpf::link::CostUnit::Instructions),
+        "not the board image"
+    );
+    // The same run on the host-process firmware: the same pings, the same flight, bit for bit.
+    let h = run_with(&sc, Target::Host, "ping360_qemu_host");
+    let read = |run: &str, f: &str| std::fs::read(out_dir(run).join(f)).expect("output written");
+    assert!(
+        read("ping360_qemu", "trajectory_videoray.csv")
+            == read("ping360_qemu_host", "trajectory_videoray.csv"),
+        "QEMU's trajectory differs from the host-process firmware's"
+    );
+    assert!(
+        read("ping360_qemu", "ping360_videoray.bin")
+            == read("ping360_qemu_host", "ping360_videoray.bin"),
+        "the Ping360 was asked for different pings"
+    );
+    assert_eq!(q.ping360, h.ping360);
 }

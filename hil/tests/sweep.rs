@@ -331,8 +331,17 @@ fn a_sweep_batch_takes_the_benchmarks_worlds() {
     }
     // The same world the benchmark flies (same obstacles).
     let b = batch.iter().find(|b| b.id == "bench:harbour:1").unwrap();
-    let w = hil::bench::worlds::generate(hil::bench::worlds::Family::Harbour, 1, 0);
+    let w = hil::bench::worlds::generate(hil::bench::worlds::Family::Harbour, 1, 0, 0.2);
     assert_eq!(b.scenario.obstacles.len(), w.obstacles.len());
+    // Other seeds: `bench_first_seed`.
+    let later = spec::parse(
+        &text.replace("bench_count = 2", "bench_count = 2\nbench_first_seed = 100"),
+        "bench.toml",
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    let batch = generate::batch(&later, Path::new(".")).unwrap_or_else(|e| panic!("{e}"));
+    assert!(batch.iter().any(|b| b.id == "bench:harbour:101"));
+    assert!(!batch.iter().any(|b| b.id == "bench:harbour:1"));
     let bad = refusal(&GOOD.replace(
         "clutter = 1",
         "clutter = 1\nbench_families = [\"reef\"]\nbench_count = 1",

@@ -12,6 +12,12 @@
 //!   the ST-LINK's virtual COM port (solder bridges SB13/SB14 closed, as shipped). The HAL sets
 //!   it up; one interrupt (USART2) moves bytes both ways: RX-not-empty fills the receive queue,
 //!   TX-empty drains the transmit queue and is on only while bytes remain.
+//! - **Ping360 UART**: USART1 at 115 200 baud (the Ping360's default), 8N1, on PA9 (TX) / PA10
+//!   (RX): Arduino D8 / D2, morpho CN10 pins 21 / 33. Its interrupt (USART1) moves the sonar
+//!   link's bytes the same way; on a full receive queue it turns RX-not-empty off until the
+//!   background has taken bytes (the next byte then overruns: lost, as a drop would lose it).
+//! - **MAVLink UART**: USART6 at 115 200 baud, 8N1, on PC6 (TX) / PC7 (RX): morpho CN10 pins 4 /
+//!   19 (PC7 is also Arduino D9). Its interrupt (USART6) moves the MAVLink line's bytes.
 //! - **Period timer**: SysTick on the 180 MHz core clock, as on the emulated board: the
 //!   firmware owns the SysTick exception, reads its pending bit for overruns and pends it for
 //!   lockstep ticks. A period longer than SysTick's 24 bits reach (93 ms) is split into `k`
@@ -34,10 +40,10 @@
 )]
 
 use cortex_m::peripheral::{DCB, DWT, SCB, SYST};
-use stm32f4xx_hal::pac::{self, USART2};
+use stm32f4xx_hal::pac::{self, USART1, USART2, USART6};
 use stm32f4xx_hal::prelude::*;
 use stm32f4xx_hal::rcc::Config as ClockConfig;
-use stm32f4xx_hal::serial::{Event, Flag, Serial};
+use stm32f4xx_hal::serial::{Event, Flag, Instance, Serial};
 use vpf::link::CostUnit;
 
 use super::systick::PeriodTimer;
@@ -75,6 +81,10 @@ pub struct Parts {
     pub watchdog: Watchdog,
     /// USART2, the control link (both directions in one interrupt).
     pub control: Usart2,
+    /// USART1, the Ping360 (both directions in one interrupt).
+    pub sonar: Usart1,
+    /// USART6, MAVLink (both directions in one interrupt).
+    pub mavlink: Usart6,
 }
 
 /// Sets up the clocks, USART2 (receive interrupt on), the cycle counter and the watchdog.
@@ -107,6 +117,17 @@ pub fn init(syst: SYST, mut dcb: DCB, mut dwt: DWT) -> Option<Parts> {
         .serial::<u8>((gpioa.pa2, gpioa.pa3), BAUD.bps(), &mut rcc)
         .ok()?;
     serial.listen(Event::RxNotEmpty);
+    let mut sonar = dp
+        .USART1
+        .serial::<u8>((gpioa.pa9, gpioa.pa10), BAUD.bps(), &mut rcc)
+        .ok()?;
+    sonar.listen(Event::RxNotEmpty);
+    let gpioc = dp.GPIOC.split(&mut rcc);
+    let mut mavlink = dp
+        .USART6
+        .serial::<u8>((gpioc.pc6, gpioc.pc7), BAUD.bps(), &mut rcc)
+        .ok()?;
+    mavlink.listen(Event::RxNotEmpty);
 
     dcb.enable_trace();
     dwt.enable_cycle_counter();
@@ -119,7 +140,9 @@ pub fn init(syst: SYST, mut dcb: DCB, mut dwt: DWT) -> Option<Parts> {
     Some(Parts {
         timer: PeriodTimer::new(syst, hclk),
         watchdog,
-        control: Usart2 { serial },
+        control: Usart { serial },
+        sonar: Usart { serial: sonar },
+        mavlink: Usart { serial: mavlink },
     })
 }
 
@@ -229,6 +252,31 @@ pub fn kick_tx() {
     rtic::pend(pac::Interrupt::USART2);
 }
 
+/// The background has taken received bytes out of the control link's queue (the USART moves
+/// one byte at a time and never waits for room: nothing to do).
+pub fn received_bytes_taken() {}
+
+/// Runs the control link's interrupt again (it held a byte back on a full queue).
+pub fn resume_control_rx() {
+    rtic::pend(pac::Interrupt::USART2);
+}
+
+/// Starts transmission of bytes queued for the Ping360 (the USART1 interrupt does the rest).
+pub fn kick_sonar_tx() {
+    rtic::pend(pac::Interrupt::USART1);
+}
+
+/// Runs the Ping360's interrupt again (it held a byte back on a full queue).
+pub fn resume_sonar_rx() {
+    rtic::pend(pac::Interrupt::USART1);
+}
+
+/// Starts transmission of bytes queued for the MAVLink line (the USART6 interrupt does the
+/// rest).
+pub fn kick_mavlink_tx() {
+    rtic::pend(pac::Interrupt::USART6);
+}
+
 /// The independent watchdog (IWDG, on the ~32 kHz LSI), owned by the periodic task: started at
 /// start-up, fed every period, given its longest timeout once lockstep begins.
 pub struct Watchdog {
@@ -317,12 +365,19 @@ pub fn exit(success: bool) -> ! {
     }
 }
 
-/// USART2 as an `embedded-io` byte stream (the HAL implements `Write` only, and blocking):
+/// A USART as an `embedded-io` byte stream (the HAL implements `Write` only, and blocking):
 /// reading takes the received byte, or reports the error flag it cleared; writing sends one byte
 /// when the data register is empty.
-pub struct Usart2 {
-    serial: Serial<USART2>,
+pub struct Usart<U: Instance> {
+    serial: Serial<U>,
 }
+
+/// USART2, the control link.
+pub type Usart2 = Usart<USART2>;
+/// USART1, the Ping360.
+pub type Usart1 = Usart<USART1>;
+/// USART6, MAVLink.
+pub type Usart6 = Usart<USART6>;
 
 /// A byte lost on the line (framing, noise, parity or overrun); the link's CRC catches the
 /// damaged frame.
@@ -335,7 +390,16 @@ impl embedded_io::Error for LineError {
     }
 }
 
-impl Usart2 {
+impl<U: Instance> Usart<U> {
+    /// Turns the receive interrupt on or off (off while the link's queue is full).
+    pub fn listen(&mut self, on: bool) {
+        if on {
+            self.serial.listen(Event::RxNotEmpty);
+        } else {
+            self.serial.unlisten(Event::RxNotEmpty);
+        }
+    }
+
     /// Turns the transmit-empty interrupt on (bytes remain to send) or off.
     pub fn interrupt_when_ready(&mut self, on: bool) {
         if on {
@@ -346,11 +410,11 @@ impl Usart2 {
     }
 }
 
-impl embedded_io::ErrorType for Usart2 {
+impl<U: Instance> embedded_io::ErrorType for Usart<U> {
     type Error = LineError;
 }
 
-impl embedded_io::ReadReady for Usart2 {
+impl<U: Instance> embedded_io::ReadReady for Usart<U> {
     /// A byte, or an error flag that the next read clears (an overrun raises the interrupt
     /// too, and only a read of the data register clears it).
     fn read_ready(&mut self) -> Result<bool, LineError> {
@@ -361,7 +425,7 @@ impl embedded_io::ReadReady for Usart2 {
     }
 }
 
-impl embedded_io::Read for Usart2 {
+impl<U: Instance> embedded_io::Read for Usart<U> {
     fn read(&mut self, buf: &mut [u8]) -> Result<usize, LineError> {
         let Some(slot) = buf.first_mut() else {
             return Ok(0);
@@ -379,13 +443,13 @@ impl embedded_io::Read for Usart2 {
     }
 }
 
-impl embedded_io::WriteReady for Usart2 {
+impl<U: Instance> embedded_io::WriteReady for Usart<U> {
     fn write_ready(&mut self) -> Result<bool, LineError> {
         Ok(self.serial.is_tx_empty())
     }
 }
 
-impl embedded_io::Write for Usart2 {
+impl<U: Instance> embedded_io::Write for Usart<U> {
     fn write(&mut self, buf: &[u8]) -> Result<usize, LineError> {
         let Some(&b) = buf.first() else {
             return Ok(0);

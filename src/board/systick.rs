@@ -41,10 +41,35 @@ impl PeriodTimer {
         k as u32
     }
 
-    /// Lockstep: the timer stops raising periods (it keeps counting, for the cost counter);
-    /// periods then run only when the background pends SysTick for the host's `Tick`.
+    /// Lockstep: the timer stops raising periods; periods then run only when the background
+    /// pends SysTick for the host's `Tick`. It counts only while a period runs (the cost
+    /// counter, [`PeriodTimer::count`]): a counter left running between periods is a timer
+    /// that QEMU's `-icount sleep=off` jumps its virtual clock to whenever the firmware waits
+    /// for the host, over and over, keeping a host core busy while the bytes wait for it.
     pub fn enter_lockstep(&mut self) {
         self.syst.disable_interrupt();
+        self.syst.disable_counter();
+    }
+
+    /// Lockstep: resumes (`true`) or pauses (`false`) the count where it stood, so the cost
+    /// counter's differences within a period are as when it runs freely. A count resumed in
+    /// the lower half of its interval starts again from the reload value instead (then a
+    /// period, far shorter than half an interval, never straddles a reload): the counter loads
+    /// it on its next clock, which is waited for, boundedly (under QEMU without `-icount` the
+    /// load can come late, and that one period's cost then reads low).
+    pub fn count(&mut self, on: bool) {
+        let s = &mut self.syst;
+        s.disable_counter();
+        if !on {
+            return;
+        }
+        if SYST::get_current() < SYST::get_reload() / 2 {
+            s.clear_current();
+            s.enable_counter();
+            let _ = (0..1024).any(|_| SYST::get_current() != 0);
+        } else {
+            s.enable_counter();
+        }
     }
 
     /// Whether the timer has fired again since the current period began (a missed deadline).

@@ -8,7 +8,9 @@ use vpf::guidance::{Background, Control, NavSample, Sighting, Sink};
 use vpf::link::ReplyRepr;
 use vpf::route::{Route, Router};
 
+use super::mavlink::MavPort;
 use super::queues::Producers;
+use super::sonar::SonarPort;
 use super::{GoalFlown, LinkCounters, Lockstep, Stats, CONTROL_RX_SLOTS, EVIDENCE, ROUTE};
 
 /// What the background shares with the periodic task: RTIC's shared resources seen from idle,
@@ -25,8 +27,8 @@ pub trait Exchange {
     fn goal(&mut self) -> GoalFlown;
     /// Lockstep: asks for a period at the host's time `time_ms`.
     fn request_period(&mut self, time_ms: u64);
-    /// Whether a requested period has not run yet.
-    fn period_pending(&mut self) -> bool;
+    /// The host time of the requested period that has not run yet, if any.
+    fn period_pending(&mut self) -> Option<u64>;
     /// What the periodic task has done so far.
     #[cfg(feature = "selftest")]
     fn stats(&mut self) -> Stats;
@@ -80,8 +82,8 @@ where
             l.pending = Some(time_ms);
         });
     }
-    fn period_pending(&mut self) -> bool {
-        self.lockstep.lock(|l| l.pending.is_some())
+    fn period_pending(&mut self) -> Option<u64> {
+        self.lockstep.lock(|l| l.pending)
     }
     #[cfg(feature = "selftest")]
     fn stats(&mut self) -> Stats {
@@ -103,7 +105,10 @@ pub fn run(task: &mut BackgroundTask, shared: &mut impl Exchange) -> ! {
     super::selftest::run(task, shared, vpf::params::Params::default());
     #[cfg(not(feature = "selftest"))]
     loop {
-        if !task.poll(shared) {
+        let control = task.poll(shared);
+        let sonar = task.poll_sonar(shared);
+        let mavlink = task.poll_mavlink(shared);
+        if !control && !sonar && !mavlink {
             cortex_m::asm::wfi();
         }
     }
@@ -114,7 +119,11 @@ pub struct BackgroundTask {
     background: Background,
     router: &'static mut Router,
     inbox: Consumer<'static, u8, CONTROL_RX_SLOTS>,
+    /// The control link's receive task held a byte back (its queue was full).
+    held: &'static core::sync::atomic::AtomicBool,
     queues: Producers,
+    sonar: SonarPort,
+    mav: MavPort,
 }
 
 /// The background's [`Sink`]: its queue ends and the shared resources.
@@ -152,14 +161,22 @@ impl BackgroundTask {
     pub fn new(
         background: Background,
         router: &'static mut Router,
-        inbox: Consumer<'static, u8, CONTROL_RX_SLOTS>,
+        (inbox, held): (
+            Consumer<'static, u8, CONTROL_RX_SLOTS>,
+            &'static core::sync::atomic::AtomicBool,
+        ),
         queues: Producers,
+        sonar: SonarPort,
+        mav: MavPort,
     ) -> Self {
         BackgroundTask {
             background,
             router,
             inbox,
+            held,
             queues,
+            sonar,
+            mav,
         }
     }
 
@@ -176,9 +193,15 @@ impl BackgroundTask {
                 None => break,
             }
         }
+        if n > 0 && super::link::take_held(self.held) {
+            crate::board::active::resume_control_rx();
+        }
         let Some(mut rest) = buf.get(..n) else {
             return false;
         };
+        if n > 0 {
+            crate::board::active::received_bytes_taken();
+        }
         while !rest.is_empty() {
             let now = exchange.now_ms();
             rest = self.background.on_bytes(
@@ -191,17 +214,143 @@ impl BackgroundTask {
                 Some(&EVIDENCE),
                 Some(self.router),
             );
-            if exchange.period_pending() {
+            if let Some(time_ms) = exchange.period_pending() {
+                // The sonar's side first: what it sent so far, then its poll at the period's
+                // time, so that this period's telemetry counts the command it sends.
+                while self.sonar_bytes(exchange) {}
+                self.sonar.poll(time_ms);
+                self.publish_counters(exchange);
                 // Run the requested period now, before later bytes are decoded: SysTick
                 // preempts at once.
                 cortex_m::peripheral::SCB::set_pendst();
-                while exchange.period_pending() {
+                while exchange.period_pending().is_some() {
                     cortex_m::asm::nop();
                 }
             }
         }
-        exchange.publish_counters((*self.background.rx_counters(), self.background.counters));
+        self.publish_counters(exchange);
         n > 0
+    }
+
+    /// The decoder's, the background's and the sonar driver's counters, for telemetry.
+    fn publish_counters(&mut self, exchange: &mut impl Exchange) {
+        exchange.publish_counters((
+            *self.background.rx_counters(),
+            self.background.counters,
+            self.sonar.counters(),
+        ));
+    }
+
+    /// The Ping360's side: what it sent, and in real time the driver's poll once per period;
+    /// `true` if there were bytes.
+    #[cfg_attr(feature = "selftest", allow(dead_code))]
+    pub fn poll_sonar(&mut self, exchange: &mut impl Exchange) -> bool {
+        let busy = self.sonar_bytes(exchange);
+        if !self.background.lockstep() && vpf::guidance::single::ping360_started(&self.background) {
+            let now = exchange.now_ms();
+            self.sonar.poll(now);
+        }
+        self.publish_counters(exchange);
+        busy
+    }
+
+    /// The MAVLink line: up to 64 received bytes (navigation, mission uploads); `true` if
+    /// there were any.
+    #[cfg_attr(feature = "selftest", allow(dead_code))]
+    pub fn poll_mavlink(&mut self, exchange: &mut impl Exchange) -> bool {
+        let now = exchange.now_ms();
+        let BackgroundTask {
+            background,
+            router,
+            queues,
+            mav,
+            ..
+        } = self;
+        let mut outlet = Outlet {
+            queues,
+            exchange: &mut *exchange,
+        };
+        mav.poll(
+            now,
+            background,
+            &mut outlet,
+            Some(&EVIDENCE),
+            Some(&mut **router),
+        )
+    }
+
+    /// Feeds up to 64 bytes from the sonar to its driver; `true` if there were any.
+    fn sonar_bytes(&mut self, exchange: &mut impl Exchange) -> bool {
+        let mut buf = [0u8; 64];
+        let n = self.sonar.take(&mut buf);
+        let Some(bytes) = buf.get(..n).filter(|b| !b.is_empty()) else {
+            return false;
+        };
+        self.feed_ping360(bytes, exchange);
+        true
+    }
+
+    /// The Ping360 driver's counters (for the self-test).
+    #[cfg(feature = "selftest")]
+    pub fn ping360_counters(&self) -> vpf::sonar::ping360::Ping360Counters {
+        self.sonar.counters()
+    }
+
+    /// Bytes from the sonar into its driver: each ping into the extractor and the evidence
+    /// map, placed with the pose the background had when its data began to come; commands out.
+    pub fn feed_ping360(&mut self, bytes: &[u8], exchange: &mut impl Exchange) {
+        let now = exchange.now_ms();
+        let pose = self.background.pose();
+        let BackgroundTask {
+            background,
+            queues,
+            sonar,
+            ..
+        } = self;
+        let outbox = &mut sonar.outbox;
+        let mut outlet = Outlet {
+            queues,
+            exchange: &mut *exchange,
+        };
+        sonar.driver.on_bytes(
+            bytes,
+            now,
+            pose,
+            &mut |f| outbox.send(f),
+            &mut |scan, pose| background.on_scanline(scan, pose, &mut outlet, Some(&EVIDENCE)),
+        );
+        crate::board::active::kick_sonar_tx();
+    }
+
+    /// The MAVLink line's decoder counters (for the self-test).
+    #[cfg(feature = "selftest")]
+    pub fn mavlink_counters(&self) -> vpf::link::mavlink::MavCounters {
+        self.mav.counters().0
+    }
+
+    /// Feeds MAVLink bytes as if received on its UART (for the self-test).
+    #[cfg(feature = "selftest")]
+    pub fn feed_mavlink(&mut self, bytes: &[u8], exchange: &mut impl Exchange) {
+        let now = exchange.now_ms();
+        let BackgroundTask {
+            background,
+            router,
+            queues,
+            mav,
+            ..
+        } = self;
+        let mut outlet = Outlet {
+            queues,
+            exchange: &mut *exchange,
+        };
+        mav.feed(
+            bytes,
+            now,
+            background,
+            &mut outlet,
+            Some(&EVIDENCE),
+            Some(&mut **router),
+        );
     }
 
     /// Queues a sighting as the background would (for the self-test).

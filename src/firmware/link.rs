@@ -7,7 +7,7 @@
 //! capacities, its own interrupt task(s) calling [`Receiver::receive`] and
 //! [`Transmitter::transmit`], and its own consumer in the task that decodes it.
 
-use core::sync::atomic::{AtomicU32, Ordering};
+use core::sync::atomic::{AtomicBool, AtomicU32, Ordering};
 
 use embedded_io::{Read, ReadReady, Write, WriteReady};
 use heapless::spsc::{Consumer, Producer, Queue};
@@ -18,6 +18,7 @@ pub struct ByteLink<const RX: usize, const TX: usize> {
     received: Queue<u8, RX>,
     to_send: Queue<u8, TX>,
     dropped: AtomicU32,
+    held: AtomicBool,
 }
 
 /// What a link hands out, once: each end to the one context that uses it.
@@ -32,6 +33,9 @@ pub struct LinkEnds<const RX: usize, const TX: usize> {
     pub outbox: Outbox<TX>,
     /// Received bytes dropped on a full queue (read and reset by the task that reports them).
     pub dropped: &'static AtomicU32,
+    /// Set by [`Receiver::receive_or_hold`] when it left a byte in the UART (the queue was
+    /// full); the task that decodes takes it ([`take_held`]) and pends the receive interrupt.
+    pub held: &'static AtomicBool,
 }
 
 impl<const RX: usize, const TX: usize> ByteLink<RX, TX> {
@@ -41,6 +45,7 @@ impl<const RX: usize, const TX: usize> ByteLink<RX, TX> {
             received: Queue::new(),
             to_send: Queue::new(),
             dropped: AtomicU32::new(0),
+            held: AtomicBool::new(false),
         }
     }
 
@@ -48,16 +53,18 @@ impl<const RX: usize, const TX: usize> ByteLink<RX, TX> {
     pub fn split(&'static mut self) -> LinkEnds<RX, TX> {
         let (rx_p, rx_c) = self.received.split();
         let (tx_p, tx_c) = self.to_send.split();
-        let dropped = &self.dropped;
+        let (dropped, held) = (&self.dropped, &self.held);
         LinkEnds {
             receiver: Receiver {
                 queue: rx_p,
                 dropped,
+                held,
             },
             transmitter: Transmitter { queue: tx_c },
             inbox: rx_c,
             outbox: Outbox { queue: tx_p },
             dropped,
+            held,
         }
     }
 }
@@ -72,6 +79,7 @@ impl<const RX: usize, const TX: usize> Default for ByteLink<RX, TX> {
 pub struct Receiver<const RX: usize> {
     queue: Producer<'static, u8, RX>,
     dropped: &'static AtomicU32,
+    held: &'static AtomicBool,
 }
 
 impl<const RX: usize> Receiver<RX> {
@@ -92,6 +100,56 @@ impl<const RX: usize> Receiver<RX> {
             }
         }
     }
+
+    /// Bytes the queue has room for (a link that moves bytes in blocks takes no more).
+    #[cfg_attr(not(feature = "mps2-an386"), allow(dead_code))] // the ethernet link
+    pub fn room(&self) -> usize {
+        self.queue.capacity() - self.queue.len()
+    }
+
+    /// Queues one received byte; dropped and counted if the queue is full.
+    #[cfg_attr(not(feature = "mps2-an386"), allow(dead_code))] // the ethernet link
+    pub fn push(&mut self, byte: u8) {
+        if self.queue.enqueue(byte).is_err() {
+            self.dropped.fetch_add(1, Ordering::Relaxed);
+        }
+    }
+}
+
+impl<const RX: usize> Receiver<RX> {
+    /// Moves bytes from the UART into the queue while it has room; when it is full, leaves the
+    /// byte in the UART and returns `true`: the caller turns its receive interrupt off, and the
+    /// decoding task pends it again once it has taken bytes ([`take_held`]). Nothing is
+    /// dropped here. On QEMU the emulated UART then holds the rest of the input back (a lossless
+    /// link, whatever the emulator's pace); on a real UART the next byte overruns the one
+    /// waiting after one byte time, and the line error loses it (counted by the protocol's
+    /// checksum), as a drop would.
+    pub fn receive_or_hold<U: Read + ReadReady>(&mut self, uart: &mut U) -> bool {
+        while let Ok(true) = uart.read_ready() {
+            if !self.queue.ready() {
+                self.held.store(true, Ordering::Release);
+                return true;
+            }
+            let mut byte = [0u8; 1];
+            match uart.read(&mut byte) {
+                Ok(1) => {
+                    let _ = self.queue.enqueue(byte[0]);
+                }
+                Ok(_) => break,
+                // A byte lost on the line (an overrun after a hold, noise, framing): counted.
+                Err(_) => {
+                    self.dropped.fetch_add(1, Ordering::Relaxed);
+                }
+            }
+        }
+        false
+    }
+}
+
+/// Whether a receiver held a byte back since the last call (clears it): the decoding task
+/// then pends the receive interrupt, which takes the byte now that there is room.
+pub fn take_held(held: &AtomicBool) -> bool {
+    held.swap(false, Ordering::AcqRel)
 }
 
 /// The transmit interrupt's end.
@@ -115,6 +173,24 @@ impl<const TX: usize> Transmitter<TX> {
             }
         }
         self.queue.ready()
+    }
+
+    /// Bytes waiting to be sent.
+    #[cfg_attr(not(feature = "mps2-an386"), allow(dead_code))] // the ethernet link
+    pub fn len(&self) -> usize {
+        self.queue.len()
+    }
+
+    /// Whether no bytes wait.
+    #[cfg_attr(not(feature = "mps2-an386"), allow(dead_code))] // the ethernet link
+    pub fn is_empty(&self) -> bool {
+        !self.queue.ready()
+    }
+
+    /// Takes the next byte to send (a link that moves bytes in blocks).
+    #[cfg_attr(not(feature = "mps2-an386"), allow(dead_code))] // the ethernet link
+    pub fn pop(&mut self) -> Option<u8> {
+        self.queue.dequeue()
     }
 }
 

@@ -3,7 +3,8 @@
 //!
 //! Contexts, highest priority first (RTIC priorities; the hardware's are the reverse):
 //! 1. **UART interrupts** (priority 3, hardware tasks) — O(1) per byte: move bytes between the
-//!    UART and the control link's SPSC byte queues ([`link`]). At 115 200 baud that is under 1 %
+//!    UARTs and their SPSC byte queues ([`link`]): the control link's, and the Ping360's
+//!    ([`sonar`]). At 115 200 baud that is under 1 %
 //!    of the CPU, so they cannot make the periodic task miss its deadline, and no received byte
 //!    waits behind a planner step. They share nothing with a lower priority that needs a lock,
 //!    so nothing ever masks them.
@@ -15,8 +16,8 @@
 //!    mode (the host sent a `Tick`) the timer runs no periods: each `Tick` does, at the host's
 //!    time ([`periodic`]).
 //! 3. **Idle, the background** (priority 0, thread mode) — everything slow and preemptible:
-//!    frame decoding, sonar feature extraction, the evidence map and the route layer
-//!    ([`background`]).
+//!    frame decoding, the Ping360 driver, sonar feature extraction, the evidence map and the
+//!    route layer ([`background`]).
 //!
 //! What they share: the byte queues and the background→periodic queues (sightings, requests,
 //! owed replies; [`queues`]), whose ends are RTIC `#[local]`s of the one task that uses each;
@@ -29,10 +30,12 @@
 pub mod background;
 pub mod fault;
 pub mod link;
+pub mod mavlink;
 pub mod periodic;
 pub mod queues;
 #[cfg(feature = "selftest")]
 pub mod selftest;
+pub mod sonar;
 
 use core::mem::MaybeUninit;
 
@@ -40,14 +43,17 @@ use vpf::guidance::{Background, BackgroundCounters, Periodic, RuntimeConfig, RX_
 use vpf::link::RxCounters;
 use vpf::params::Params;
 use vpf::route::{RouteSlot, Router};
+use vpf::sonar::ping360::{Ping360, Ping360Config, Ping360Counters};
 use vpf::sonar::{EvidenceMap, ExtractorConfig};
 
 use crate::board::active as board;
 use crate::board::systick::PeriodTimer;
 use background::BackgroundTask;
 use link::{Receiver, Transmitter};
+use mavlink::{MavLink, MavOut, MavPort, MissionQueue, MAV_RX_SLOTS, MAV_TX_SLOTS};
 use periodic::PeriodicTask;
 use queues::Queues;
+use sonar::{SonarLink, SonarPort, SONAR_RX_SLOTS, SONAR_TX_SLOTS};
 
 /// Slots of the control link's receive queue.
 pub const CONTROL_RX_SLOTS: usize = queues::slots(RX_QUEUE);
@@ -59,8 +65,9 @@ pub type ControlLink = link::ByteLink<CONTROL_RX_SLOTS, CONTROL_TX_SLOTS>;
 /// The periodic task's end of the control link.
 pub type ControlOutbox = link::Outbox<CONTROL_TX_SLOTS>;
 
-/// The decoder's and the background's counters, as the telemetry reports them.
-pub type LinkCounters = (RxCounters, BackgroundCounters);
+/// The decoder's, the background's and the Ping360 driver's counters, as the telemetry reports
+/// them.
+pub type LinkCounters = (RxCounters, BackgroundCounters, Ping360Counters);
 
 /// The waypoint the periodic task flies to and its generation (`Periodic::goal`), for the
 /// background's route layer.
@@ -103,6 +110,9 @@ static ROUTE: RouteSlot = RouteSlot::new();
 /// The statics the firmware is built in (an RTIC `init` local: `.bss`, never on the stack).
 pub struct Memory {
     control: ControlLink,
+    sonar: SonarLink,
+    mavlink: MavLink,
+    missions: MissionQueue,
     queues: Queues,
     runtime: MaybeUninit<Periodic>,
 }
@@ -112,6 +122,9 @@ impl Memory {
     pub const fn new() -> Self {
         Memory {
             control: ControlLink::new(),
+            sonar: SonarLink::new(),
+            mavlink: MavLink::new(),
+            missions: MissionQueue::new(),
             queues: Queues::new(),
             runtime: MaybeUninit::uninit(),
         }
@@ -134,6 +147,14 @@ pub struct Started {
     pub receiver: Receiver<CONTROL_RX_SLOTS>,
     /// The control link's transmit-interrupt end.
     pub transmitter: Transmitter<CONTROL_TX_SLOTS>,
+    /// The sonar link's receive-interrupt end.
+    pub sonar_receiver: Receiver<SONAR_RX_SLOTS>,
+    /// The sonar link's transmit-interrupt end.
+    pub sonar_transmitter: Transmitter<SONAR_TX_SLOTS>,
+    /// The MAVLink link's receive-interrupt end.
+    pub mav_receiver: Receiver<MAV_RX_SLOTS>,
+    /// The MAVLink link's transmit-interrupt end.
+    pub mav_transmitter: Transmitter<MAV_TX_SLOTS>,
 }
 
 /// Builds the runtime with `params` in `memory` and `router`, splits the queues into their
@@ -151,6 +172,11 @@ pub fn start(
     // Contacts get the planner's A_s⁺ when the periodic task admits them.
     let background = Background::new(ExtractorConfig::default(), params.a_plus).ok()?;
     router.set_cell(params.route_cell_m);
+    let ping360 = Ping360::new(Ping360Config::BOARD).ok()?;
+    let sonar = memory.sonar.split();
+    let mav = memory.mavlink.split();
+    let (missions_in, missions_out) = memory.missions.split();
+    let mav_cfg = vpf::guidance::mavlink::MavConfig::default();
     let link = memory.control.split();
     let (producers, consumers) = memory.queues.split();
     let mut periodic = PeriodicTask::new(
@@ -160,12 +186,24 @@ pub fn start(
         consumers,
         timer,
         watchdog,
+        MavOut::new(mav_cfg, mav.outbox, missions_out),
     );
     periodic.start();
     Some(Started {
         periodic,
-        background: BackgroundTask::new(background, router, link.inbox, producers),
+        background: BackgroundTask::new(
+            background,
+            router,
+            (link.inbox, link.held),
+            producers,
+            SonarPort::new(ping360, sonar.inbox, sonar.outbox, sonar.held),
+            MavPort::new(mav_cfg, mav.inbox, missions_in, mav.dropped),
+        ),
         receiver: link.receiver,
         transmitter: link.transmitter,
+        sonar_receiver: sonar.receiver,
+        sonar_transmitter: sonar.transmitter,
+        mav_receiver: mav.receiver,
+        mav_transmitter: mav.transmitter,
     })
 }

@@ -7,6 +7,7 @@ use vpf::guidance::{Control, Inputs, NavSample, Periodic, Sighting};
 use vpf::link::ReplyRepr;
 use vpf::route::Route;
 
+use super::mavlink::MavOut;
 use super::queues::Consumers;
 use super::{ControlOutbox, GoalFlown, LinkCounters, Lockstep, Stats, EVIDENCE, ROUTE};
 use crate::board::active as board;
@@ -27,6 +28,8 @@ pub struct PeriodicTask {
     pub timer: PeriodTimer,
     /// Fed every period.
     pub watchdog: board::Watchdog,
+    /// The MAVLink line's sending half.
+    pub mav: MavOut,
     /// SysTick interrupts per period, and how many have passed in this one.
     ticks_per_period: u32,
     tick: u32,
@@ -74,8 +77,11 @@ impl Inputs for PeriodInputs<'_> {
     fn reply(&mut self) -> Option<ReplyRepr> {
         self.queues.replies.dequeue()
     }
-    fn link_counters(&mut self) -> LinkCounters {
-        self.link_counters
+    fn link_counters(&mut self) -> (vpf::link::RxCounters, vpf::guidance::BackgroundCounters) {
+        (self.link_counters.0, self.link_counters.1)
+    }
+    fn ping360_counters(&mut self) -> vpf::sonar::ping360::Ping360Counters {
+        self.link_counters.2
     }
     fn route(&mut self) -> Option<Route> {
         ROUTE.latest()
@@ -91,6 +97,7 @@ impl PeriodicTask {
         queues: Consumers,
         timer: PeriodTimer,
         watchdog: board::Watchdog,
+        mav: MavOut,
     ) -> Self {
         PeriodicTask {
             runtime,
@@ -99,6 +106,7 @@ impl PeriodicTask {
             queues,
             timer,
             watchdog,
+            mav,
             ticks_per_period: 1,
             tick: 0,
             timer_period_ms: 0,
@@ -144,6 +152,10 @@ impl PeriodicTask {
             self.timer.enter_lockstep();
             self.watchdog.enter_lockstep();
         }
+        if lockstep {
+            // The cost counter runs while the period runs (`PeriodTimer::count`).
+            self.timer.count(true);
+        }
         *shared.now_ms = now;
         let dropped = self.rx_dropped.swap(0, Ordering::Relaxed);
         self.runtime.count_rx_dropped(dropped);
@@ -157,15 +169,19 @@ impl PeriodicTask {
         // Whole frames only: a frame that does not fit is dropped (and counted by the runtime).
         let mut send = |frame: &[u8]| outbox.send(frame);
         let period_start = board::cost_now();
-        self.runtime.on_tick(
+        let cmd = self.runtime.on_tick(
             now,
             &mut inputs,
             Some(&EVIDENCE),
             &mut board::cost_now,
             &mut send,
         );
+        self.mav.on_period(now, &cmd, self.runtime);
         let period_cost = board::cost_now().wrapping_sub(period_start);
         *shared.goal = self.runtime.goal();
+        if lockstep {
+            self.timer.count(false);
+        }
         board::kick_tx();
         self.watchdog.feed();
 

@@ -10,7 +10,10 @@
 //!    planner step cost (max and mean), the whole period's worst cost (map snapshot and guard
 //!    included), deadline overruns, scanlines processed and the background's cost per scanline
 //!    and per navigation frame (the route layer replans on those); then the
-//!    stack high-water mark. It exits successfully only if no strategy overran and every worst
+//!    stack high-water mark. A fourth flood (VPF) brings its pings as Ping360 `device_data`
+//!    through the Ping360 driver and its navigation as MAVLink (ATTITUDE, LOCAL_POSITION_NED)
+//!    through the MAVLink line's decoder, so their paths are measured and in the stack's
+//!    high-water mark; every period also sends the MAVLink set-point and what else is due. It exits successfully only if no strategy overran and every worst
 //!    step was within [`STEP_BUDGET`]. Half the obstacles move, so the prediction of moving
 //!    obstacles is in the measured path.
 
@@ -22,6 +25,7 @@ use vpf::world::{Agent, Obstacle, Origin, MAX_AGENTS, MAX_OBSTACLES};
 use vpf::{Mission, NavState, Params, Strategy, Vec2};
 
 use super::background::{BackgroundTask, Exchange};
+use super::Stats;
 use crate::board::active as board;
 
 /// Periods to run.
@@ -36,22 +40,21 @@ pub fn run(idle: &mut BackgroundTask, x: &mut impl Exchange, params: Params) -> 
     link_costs(idle, x);
     let mut ok = true;
     for strategy in [Strategy::Vpf, Strategy::Multipoint, Strategy::Navfn] {
-        let p = Params { strategy, ..params };
-        let mut frame = [0u8; vpf::link::MAX_FRAME];
-        if let Ok(n) = Message::Params(p).emit_frame(0, &mut frame) {
-            if let Some(f) = frame.get(..n) {
-                idle.feed(f, x);
-            }
-        }
+        set_strategy(idle, x, Params { strategy, ..params });
         let _ = x.take_stats();
-        let flood = flood(idle, x);
+        let flood = flood(idle, x, None);
         ok &= report(strategy, &flood, x);
     }
-    let mut line = Line::new();
-    line.push(b"selftest: stack high-water ");
-    line.num(stack_high_water() as u64);
-    line.push(b" bytes\n");
-    board::log(line.bytes());
+    // The Ping360's path: the same flood, its pings as `device_data` through the driver.
+    set_strategy(idle, x, params);
+    let _ = x.take_stats();
+    let mut sonar = PingStats::default();
+    flood(idle, x, Some(&mut sonar));
+    let s = x.take_stats();
+    report_ping360(idle, params.strategy, &s, &sonar);
+    ok &= s.overruns == 0 && s.periods >= PERIODS && s.max_cost <= STEP_BUDGET;
+    report_object_costs();
+    report_stack();
     board::log(if ok {
         b"selftest: PASS\n"
     } else {
@@ -60,11 +63,47 @@ pub fn run(idle: &mut BackgroundTask, x: &mut impl Exchange, params: Params) -> 
     board::exit(ok)
 }
 
+/// The Ping360 flood's line. Not inlined, like the other reports: their line buffers stay out
+/// of [`run`]'s frame, under every measurement's stack.
+#[inline(never)]
+fn report_ping360(idle: &BackgroundTask, strategy: Strategy, s: &Stats, sonar: &PingStats) {
+    let mut line = Line::new();
+    line.push(b"selftest: Ping360 flood (");
+    line.push(strategy.name().as_bytes());
+    line.push(b") periods ");
+    line.num(u64::from(s.periods));
+    line.push(b", overruns ");
+    line.num(u64::from(s.overruns));
+    line.push(b", device_data of 300 samples fed ");
+    line.num(u64::from(sonar.fed));
+    line.push(b", scanlines ");
+    line.num(u64::from(idle.ping360_counters().data));
+    line.push(b" (background per ping max ");
+    line.num(u64::from(sonar.max_cost));
+    line.push(b" mean ");
+    line.num(sonar.sum_cost / u64::from(sonar.measured.max(1)));
+    line.push(b"), MAVLink frames ");
+    line.num(u64::from(idle.mavlink_counters().frames));
+    line.push(b"\n");
+    board::log(line.bytes());
+}
+
+#[inline(never)]
+fn report_stack() {
+    let mut line = Line::new();
+    line.push(b"selftest: stack high-water ");
+    line.num(stack_high_water() as u64);
+    line.push(b" bytes\n");
+    board::log(line.bytes());
+}
+
 /// The link's own cost, in the background: a scanline frame of 400 bins (428 raw bytes, two
 /// Reed–Solomon blocks, 465 bytes on the wire) decoded as it arrived clean, and with 16 wrong
 /// bytes (8 in each block, the most the code corrects) repaired. The frame is refused once
 /// decoded (its range is 0 m: `rx_bad_payload`), so no extraction is in the measurement; the
-/// least of eight tries, so that a period preempting one does not count.
+/// least of eight tries, so that a period preempting one does not count. Not inlined: its
+/// frame buffer would otherwise sit under every later measurement's stack.
+#[inline(never)]
 fn link_costs(idle: &mut BackgroundTask, x: &mut impl Exchange) {
     let bins = [7u8; 400];
     let scan = Scanline {
@@ -134,7 +173,70 @@ struct Flood {
     max_nav_cost: u32,
 }
 
-fn flood(idle: &mut BackgroundTask, x: &mut impl Exchange) -> Flood {
+/// What the Ping360's path cost during the floods.
+#[derive(Default)]
+struct PingStats {
+    fed: u32,
+    max_cost: u32,
+    sum_cost: u64,
+    measured: u32,
+}
+
+/// One `device_data` of the board's settings (300 samples, one echo at 4–5.5 m) through the Ping360 driver, the extractor and the evidence map, as the sonar UART
+/// would bring it; its buffers in a frame of its own, so the flood's does not grow.
+#[inline(never)]
+fn feed_ping360(idle: &mut BackgroundTask, x: &mut impl Exchange, ping: u32, st: &mut PingStats) {
+    let cfg = vpf::sonar::ping360::Ping360Config::BOARD;
+    let mut data = [0u8; 300];
+    for (i, d) in data.iter_mut().enumerate() {
+        let r = (i as u32).wrapping_mul(2_654_435_761).wrapping_add(ping) >> 28;
+        // The flood's wall (0.1 m a sample, as its scanlines' bins): echoes at 4–5.5 m.
+        *d = if (40..43).contains(&(i as u32).wrapping_sub(ping % 15)) {
+            220
+        } else {
+            (r * 4) as u8
+        };
+    }
+    let m = vpf::link::ping::Message::DeviceData(vpf::link::ping::DeviceDataRepr {
+        settings: cfg.settings(((ping * 2) % 400) as u16),
+        data: &data,
+    });
+    let mut frame = [0u8; 8 + 14 + 300 + 2];
+    let Ok(n) = vpf::link::ping::emit_frame(&m, 2, 0, &mut frame) else {
+        return;
+    };
+    let Some(bytes) = frame.get(..n) else {
+        return;
+    };
+    let periods = x.stats().periods;
+    let start = board::cost_now();
+    idle.feed_ping360(bytes, x);
+    let cost = board::cost_now().wrapping_sub(start);
+    st.fed += 1;
+    if x.stats().periods == periods {
+        st.max_cost = st.max_cost.max(cost);
+        st.sum_cost += u64::from(cost);
+        st.measured += 1;
+    }
+}
+
+/// Switches the planner's parameters by a `Params` message, as a host would.
+fn set_strategy(idle: &mut BackgroundTask, x: &mut impl Exchange, p: Params) {
+    let mut frame = [0u8; vpf::link::MAX_FRAME];
+    if let Ok(n) = Message::Params(p).emit_frame(0, &mut frame) {
+        if let Some(f) = frame.get(..n) {
+            idle.feed(f, x);
+        }
+    }
+}
+
+/// [`PERIODS`] periods of sonar flood: scanline messages on the control link, or with `sonar`
+/// Ping360 `device_data` through its driver.
+fn flood(
+    idle: &mut BackgroundTask,
+    x: &mut impl Exchange,
+    mut sonar: Option<&mut PingStats>,
+) -> Flood {
     let mut bins = [0u8; 400];
     let mut ping = 0u32;
     let mut f = Flood {
@@ -150,13 +252,22 @@ fn flood(idle: &mut BackgroundTask, x: &mut impl Exchange) -> Flood {
         if ping.is_multiple_of(8) {
             let periods = x.stats().periods;
             let start = board::cost_now();
-            send_nav(idle, x);
+            if sonar.is_some() {
+                send_nav_mavlink(idle, x);
+            } else {
+                send_nav(idle, x);
+            }
             let cost = board::cost_now().wrapping_sub(start);
             if x.stats().periods == periods {
                 f.max_nav_cost = f.max_nav_cost.max(cost);
             }
         }
         idle.poll(x);
+        if let Some(st) = sonar.as_deref_mut() {
+            feed_ping360(idle, x, ping, st);
+            ping = ping.wrapping_add(1);
+            continue;
+        }
         // One synthetic ping: a wall of echoes at a bearing-dependent range, with speckle.
         for (i, b) in bins.iter_mut().enumerate() {
             let r = (i as u32).wrapping_mul(2_654_435_761).wrapping_add(ping) >> 28;
@@ -216,7 +327,67 @@ fn send_nav(idle: &mut BackgroundTask, x: &mut impl Exchange) {
     }
 }
 
+/// The same navigation as [`send_nav`], as an autopilot's ATTITUDE and LOCAL_POSITION_NED on
+/// the MAVLink line (NED: north is the firmware's y, yaw = π/2 − heading).
+#[inline(never)]
+fn send_nav_mavlink(idle: &mut BackgroundTask, x: &mut impl Exchange) {
+    use mavlink::dialects::common::{ATTITUDE_DATA, LOCAL_POSITION_NED_DATA};
+    use mavlink::{MavlinkVersion, MessageData};
+    let now = x.now_ms();
+    let att = ATTITUDE_DATA {
+        time_boot_ms: now as u32,
+        yaw: core::f32::consts::FRAC_PI_2,
+        ..ATTITUDE_DATA::default()
+    };
+    let pos = LOCAL_POSITION_NED_DATA {
+        time_boot_ms: now as u32,
+        x: 0.0,
+        y: (now % 1000) as f32 * 1e-5,
+        vx: 0.1,
+        vy: 0.8,
+        ..LOCAL_POSITION_NED_DATA::default()
+    };
+    let mut payload = [0u8; 255];
+    let mut frame = [0u8; 64];
+    let n = att.ser(MavlinkVersion::V2, &mut payload);
+    if let Some(f) = payload.get(..n).and_then(|p| {
+        vpf::link::mavlink::emit_frame(
+            0,
+            (1, 1),
+            (ATTITUDE_DATA::ID, ATTITUDE_DATA::EXTRA_CRC),
+            p,
+            &mut frame,
+        )
+    }) {
+        if let Some(bytes) = frame.get(..f) {
+            idle.feed_mavlink(bytes, x);
+        }
+    }
+    let n = pos.ser(MavlinkVersion::V2, &mut payload);
+    if let Some(f) = payload.get(..n).and_then(|p| {
+        vpf::link::mavlink::emit_frame(
+            1,
+            (1, 1),
+            (
+                LOCAL_POSITION_NED_DATA::ID,
+                LOCAL_POSITION_NED_DATA::EXTRA_CRC,
+            ),
+            p,
+            &mut frame,
+        )
+    }) {
+        if let Some(bytes) = frame.get(..f) {
+            idle.feed_mavlink(bytes, x);
+        }
+    }
+}
+
 /// Full tables, through the same request and sighting queues as the UART path.
+///
+/// Note (measured): the sighting queue holds 16 and nothing runs a period while these are
+/// pushed, so the table receives the first 16 obstacles and no agent (the rest are dropped).
+/// Loaded in full (waiting for a period whenever the queue is full), the VPF step measured
+/// 113 680 instructions max, over [`STEP_BUDGET`].
 fn load_world(idle: &mut BackgroundTask, x: &mut impl Exchange) {
     let mission = Mission {
         goal: Vec2::new(80.0, 0.0),
@@ -295,6 +466,96 @@ fn report(strategy: Strategy, flood: &Flood, x: &mut impl Exchange) -> bool {
     line.push(b")\n");
     board::log(line.bytes());
     s.overruns == 0 && s.max_cost <= STEP_BUDGET && s.periods >= PERIODS
+}
+
+/// Copies of an object in a measured field: the cost per object is the field's cost less the
+/// empty field's, divided by this.
+const COPIES: usize = 8;
+
+/// What one object costs in a VPF step: the sampled field (`Field::sampled_forces`, the
+/// vehicle's point and n_γ samples) with [`COPIES`] of it, less the field without it, per
+/// copy; each the least of a few runs, so that a period preempting one does not count.
+fn report_object_costs() {
+    use vpf::field::{GoalPdf, Stator};
+    use vpf::planner::gradient::Field;
+    use vpf::planner::SampleCircle;
+    let params = Params::default();
+    let circle = SampleCircle::new(params.epsilon_m, params.n_gamma);
+    let stator = Stator::new(params.a_plus);
+    let shapes: [(&[u8], Option<Shape>); 5] = [
+        (b"circle", Shape::circle(Vec2::new(12.0, 5.0), 1.5).ok()),
+        (
+            b"rectangle",
+            Shape::rectangle(Vec2::new(12.0, 5.0), Vec2::new(2.0, 1.0), 0.3).ok(),
+        ),
+        (
+            b"ellipse",
+            Shape::ellipse(Vec2::new(12.0, 5.0), Vec2::new(2.0, 1.0), -0.4).ok(),
+        ),
+        (b"hexagon", {
+            let mut hex = [Vec2::ZERO; 6];
+            for (k, v) in hex.iter_mut().enumerate() {
+                *v = Vec2::new(12.0, 5.0) + Vec2::from_angle(k as f32 * 1.047) * 1.5;
+            }
+            Shape::polygon(&hex).ok()
+        }),
+        (b"none", None),
+    ];
+    let cells = [Vec2::new(4.0, 1.0); COPIES];
+    let mut agents: heapless::Vec<Agent, COPIES> = heapless::Vec::new();
+    for i in 0..COPIES {
+        if let Ok(a) = Agent::new(i as u16, Vec2::new(-5.0, 4.0), Vec2::ZERO, 0) {
+            let _ = agents.push(a);
+        }
+    }
+    let shifts = [Vec2::ZERO; COPIES];
+    let field = |obstacles: &[Obstacle], agents: &[Agent], map: &[Vec2]| {
+        let f = Field {
+            obstacles,
+            shifts: &shifts,
+            agents,
+            agent_radius: params.agent_radius_m,
+            agent_stator: stator,
+            goal: GoalPdf::new(Vec2::new(80.0, 0.0), params.a_minus, params.sigma_m),
+            leader: None,
+            rotor_gradient: Vec2::ZERO,
+            origin: Vec2::new(0.1, 0.2),
+            map,
+            map_radius: 0.25,
+            map_stator: stator,
+            leave_to_map: false,
+        };
+        (0..5)
+            .map(|_| {
+                let start = board::cost_now();
+                core::hint::black_box(f.sampled_forces(core::hint::black_box(&circle)));
+                board::cost_now().wrapping_sub(start)
+            })
+            .min()
+            .unwrap_or(0)
+    };
+    let empty = field(&[], &[], &[]);
+    let per = |cost: u32| u64::from(cost.saturating_sub(empty)) / COPIES as u64;
+    let mut line = Line::new();
+    line.push(b"selftest: vpf field cost per object (n_gamma + 1 samples): ");
+    for (name, shape) in shapes {
+        let Some(shape) = shape else { continue };
+        let Ok(o) = Obstacle::new(0, shape, params.a_plus, Origin::Sensed, 0) else {
+            continue;
+        };
+        line.push(name);
+        line.push(b" ");
+        line.num(per(field(&[o; COPIES], &[], &[])));
+        line.push(b", ");
+    }
+    line.push(b"agent ");
+    line.num(per(field(&[], &agents, &[])));
+    line.push(b", map cell ");
+    line.num(per(field(&[], &[], &cells)));
+    line.push(b"; goal-point alone ");
+    line.num(u64::from(empty));
+    line.push(b"\n");
+    board::log(line.bytes());
 }
 
 /// Bytes of stack ever used: cortex-m-rt paints the stack with 0xCCCC_CCCC at boot

@@ -12,6 +12,7 @@ use crate::route::{Route, Router};
 use crate::sonar::{ConfigError, EvidenceMap, Extractor, ExtractorConfig, Pose, Scanline};
 
 use super::{Control, NavSample, Sighting};
+use crate::planner::NavState;
 
 /// Where the background's results go. Each `false` means "full": the item is dropped and
 /// counted.
@@ -136,6 +137,20 @@ impl Background {
             sink,
             map,
         );
+    }
+
+    /// A navigation fix from another source (the autopilot's MAVLink stream), arrived at
+    /// firmware time `now_ms`: taken exactly as a `Nav` message's (pose, periodic task, route
+    /// layer). The caller checked it.
+    pub fn on_nav(
+        &mut self,
+        nav: NavState,
+        now_ms: u64,
+        sink: &mut impl Sink,
+        map: Option<&EvidenceMap>,
+        router: Option<&mut Router>,
+    ) {
+        navigation(nav, now_ms, &mut self.pose, sink, map, router);
     }
 
     /// The decoder's counters.
@@ -297,6 +312,32 @@ fn scanline(
     counters.sightings_dropped = counters.sightings_dropped.saturating_add(dropped);
 }
 
+/// A navigation fix at `time_ms`: the pose for scanlines, the newest navigation for the
+/// periodic task, and the route layer's turn.
+fn navigation(
+    nav: NavState,
+    time_ms: u64,
+    pose: &mut Option<Pose>,
+    sink: &mut impl Sink,
+    map: Option<&EvidenceMap>,
+    router: Option<&mut Router>,
+) {
+    *pose = Some(Pose {
+        position: nav.position,
+        heading: nav.heading,
+    });
+    sink.nav(NavSample { nav, time_ms });
+    // The slow part of the route layer runs here, at most once per `replan_ms`, to the
+    // waypoint the periodic task flies to.
+    if let Some(r) = router {
+        let (generation, goal) = sink.goal();
+        r.follow(generation, goal);
+        if let Some(route) = r.on_nav(nav.position, time_ms, map) {
+            sink.route(route);
+        }
+    }
+}
+
 #[allow(clippy::too_many_arguments)]
 fn dispatch(
     header: crate::link::Header,
@@ -313,24 +354,8 @@ fn dispatch(
 ) {
     match msg {
         Message::Nav(n) => {
-            *pose = Some(Pose {
-                position: n.nav.position,
-                heading: n.nav.heading,
-            });
             let time_ms = if lockstep { n.time_ms } else { now_ms };
-            sink.nav(NavSample {
-                nav: n.nav,
-                time_ms,
-            });
-            // The slow part of the route layer runs here, at most once per `replan_ms`, to the
-            // waypoint the periodic task flies to.
-            if let Some(r) = router {
-                let (generation, goal) = sink.goal();
-                r.follow(generation, goal);
-                if let Some(route) = r.on_nav(n.nav.position, time_ms, map) {
-                    sink.route(route);
-                }
-            }
+            navigation(n.nav, time_ms, pose, sink, map, router);
         }
         Message::Scanline(scan) => {
             scanline(extractor, last_bearing, counters, &scan, *pose, sink, map);

@@ -8,9 +8,10 @@
 //! perception and the tuning.
 //!
 //! **The check.** A motion along heading θ at speed v sweeps the segment from the vehicle's
-//! position p to p + L·(cos θ, sin θ), L = v·T + v²/2F_max + `margin_m`: what the vehicle
+//! position p to p + L·(cos θ, sin θ), L = v·T + v²/2b + `margin_m`: what the vehicle
 //! covers during the reaction time T (one period: the command takes effect next period), then
-//! braking at F_max (the most the planner itself commands), plus a margin. The motion is
+//! braking at b (`Params::brake`: `brake_mps2`, by default F_max, the most the planner itself
+//! commands), plus a margin. The motion is
 //! *blocked* when, somewhere along the segment, the clearance (signed distance to the nearest
 //! believed surface) falls below the hull radius (`Params::agent_radius_m`) **and** below the
 //! clearance the vehicle has now — so a vehicle already closer than its hull to a wall may still
@@ -25,6 +26,17 @@
 //!    `turn_step_rad`, is clear at the commanded speed → **turn** to it;
 //! 4. a lower speed (halving down to `min_speed`) is clear on the commanded heading → **slow**;
 //! 5. otherwise → **stop**.
+//!
+//! **A craft that turns slowly** (`Params::turn_rate_rps` > 0, e.g. the flat-fish AUV of seed 003
+//! at ≈ 0.046 rad/s, a 22 m turning radius at 1 m/s) does not go where it is told but where it
+//! points: it keeps its heading ψ and turns towards θ at most at that rate while it covers the
+//! same reaction and braking distance, at the larger of the commanded and the present speed
+//! (it cannot slow at once either). The segment is then the arc it sweeps, as a polyline of
+//! [`ARC_SEGMENTS`] chords (each sampled at its time's midpoint) and the margin straight on, and
+//! stopping (step 1 below) is braking along the arc it turns on meanwhile. Headings beyond the
+//! turn it can make before it stops all sweep the same, hardest, arc: for such a craft the
+//! guard's choices are the turns it can make, slower, or a stop. With the rate 0 (the default)
+//! the check is the straight segment above, unchanged.
 //!
 //! **Movers** (obstacles and other vehicles with a velocity) are judged by their closest point
 //! of approach instead: each is carried from its last sighting to now on its velocity, and a
@@ -51,6 +63,9 @@ pub const SAMPLE_M: f32 = 0.25;
 /// How long a motion is held when it is judged against movers, s: about a sonar sweep (9 s for
 /// a Micron at 30 m), the longest a mover goes unseen.
 pub const CPA_HORIZON_S: f32 = 10.0;
+/// Chords of the arc a slow-turning craft sweeps (module notes): enough to follow a turn of up
+/// to a few tenths of a radian within a braking distance.
+pub const ARC_SEGMENTS: usize = 4;
 
 /// The guard's settings.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -181,6 +196,16 @@ impl Believed<'_> {
         false
     }
 
+    /// [`Believed::blocked_still`] along a polyline: each chord is a segment of its own.
+    fn blocked_path(&self, pts: &[Vec2]) -> bool {
+        pts.windows(2).any(|w| match w {
+            [a, b] => (*b - *a)
+                .normalized(1e-4)
+                .is_some_and(|u| self.blocked_still(*a, u, (*b - *a).norm())),
+            _ => false,
+        })
+    }
+
     /// Whether holding velocity `v` from `p` for [`CPA_HORIZON_S`] brings a mover within the
     /// hull, and nearer than it is now (so moving away from one already close is allowed).
     fn meets_mover(&self, p: Vec2, v: Vec2) -> bool {
@@ -212,9 +237,99 @@ fn ahead(c: Vec2, p: Vec2, u: Vec2) -> bool {
     (c - p).dot(u) > 0.0
 }
 
-/// Braking distance from `v` at `f_max`, plus what one period covers and the margin, m.
+/// Braking distance from `v` at [`Params::brake`], plus what one period covers and the
+/// margin, m.
 fn reach(v: f32, prm: &Params, cfg: &GuardConfig) -> f32 {
-    v * prm.period_s + v * v / (2.0 * prm.f_max) + cfg.margin_m
+    v * prm.period_s + v * v / (2.0 * prm.brake()) + cfg.margin_m
+}
+
+/// The polyline a slow-turning craft sweeps (module notes): from `p` on heading `heading`,
+/// turning towards `psi` at most at `turn_rate`, at `speed` for `hold_s`, then braking at
+/// `brake` to a stop, then `margin` straight on; [`ARC_SEGMENTS`] chords and the margin.
+#[allow(clippy::too_many_arguments)]
+fn arc(
+    p: Vec2,
+    heading: f32,
+    psi: f32,
+    speed: f32,
+    hold_s: f32,
+    brake: f32,
+    turn_rate: f32,
+    margin: f32,
+) -> [Vec2; ARC_SEGMENTS + 2] {
+    let turn = wrap_angle(psi - heading);
+    let total = hold_s + speed / brake;
+    let dt = total / ARC_SEGMENTS as f32;
+    let heading_at = |t: f32| heading + max(-turn_rate * t, min(turn, turn_rate * t));
+    let mut pts = [p; ARC_SEGMENTS + 2];
+    let mut at = p;
+    for (k, pt) in pts.iter_mut().enumerate().skip(1).take(ARC_SEGMENTS) {
+        let t = (k as f32 - 0.5) * dt;
+        let v = if t <= hold_s {
+            speed
+        } else {
+            max(0.0, speed - brake * (t - hold_s))
+        };
+        at += Vec2::from_angle(heading_at(t)) * (v * dt);
+        *pt = at;
+    }
+    if let Some(last) = pts.last_mut() {
+        *last = at + Vec2::from_angle(heading_at(total)) * margin;
+    }
+    pts
+}
+
+/// How the vehicle would move under a command: the straight segment of a craft that turns at
+/// once, or the arc of one that turns slowly (module notes).
+struct Helm<'a> {
+    cfg: &'a GuardConfig,
+    prm: &'a Params,
+    p: Vec2,
+    /// Heading now, rad.
+    heading: f32,
+    /// Speed over ground now, m/s.
+    speed: f32,
+}
+
+impl Helm<'_> {
+    fn turns_slowly(&self) -> bool {
+        self.prm.turn_rate_rps > 0.0
+    }
+
+    /// The arc swept by the command (`psi`, `v`), reaction time included.
+    fn commanded(&self, psi: f32, v: f32) -> [Vec2; ARC_SEGMENTS + 2] {
+        let (prm, cfg) = (self.prm, self.cfg);
+        let s = max(v, self.speed);
+        let brake = prm.brake();
+        let rate = prm.turn_rate_rps;
+        arc(
+            self.p,
+            self.heading,
+            psi,
+            s,
+            prm.period_s,
+            brake,
+            rate,
+            cfg.margin_m,
+        )
+    }
+
+    /// Whether the command (`psi`, `v`) is blocked ([`Believed::blocked`]).
+    fn blocked(&self, b: &Believed, psi: f32, v: f32) -> bool {
+        let u = Vec2::from_angle(psi);
+        if !self.turns_slowly() {
+            return b.blocked(self.p, u, reach(v, self.prm, self.cfg), v);
+        }
+        b.blocked_path(&self.commanded(psi, v)) || b.meets_mover(self.p, u * v)
+    }
+
+    /// Whether the command (`psi`, `v`) is blocked by what stands still.
+    fn blocked_still(&self, b: &Believed, psi: f32, v: f32) -> bool {
+        if !self.turns_slowly() {
+            return b.blocked_still(self.p, Vec2::from_angle(psi), reach(v, self.prm, self.cfg));
+        }
+        b.blocked_path(&self.commanded(psi, v))
+    }
 }
 
 fn with_motion(mut cmd: Command, heading: f32, speed: f32, verdict: Verdict) -> Command {
@@ -228,6 +343,8 @@ fn with_motion(mut cmd: Command, heading: f32, speed: f32, verdict: Verdict) -> 
     cmd.setpoints.alpha_c = 0.0;
     cmd.setpoints.omega_c = 0.0;
     if verdict != Verdict::Clear {
+        // Not the plan: no integral push (the planner restarts it, `restart_integral`).
+        cmd.setpoints.i_surge = 0.0;
         cmd.mode = Mode::Guarded;
     }
     cmd
@@ -298,14 +415,36 @@ pub fn check(
                 .map_or(f32::INFINITY, |(_, d)| d - r_map),
         ),
     };
-    let dir = |a: f32| Vec2::new(cos(a), sin(a));
+    let helm = Helm {
+        cfg,
+        prm,
+        p,
+        heading: nav.heading,
+        speed,
+    };
     // A mover may run into a vehicle that stops: then stopping is no way out.
     let can_stop = !b.meets_mover(p, Vec2::ZERO);
     let evasion = min(speed_cap, min(prm.v_max, speed + prm.f_max * prm.period_s));
-    // 1. Where the vehicle is going now, within its braking distance.
+    // 1. Where the vehicle is going now, within its braking distance (a slow-turning craft
+    //    turning towards the commanded heading as it brakes).
     if let Some(u) = nav.velocity.normalized(1e-3) {
-        let braking = speed * speed / (2.0 * prm.f_max) + cfg.margin_m;
-        if can_stop && b.blocked_still(p, u, braking) {
+        let braking = speed * speed / (2.0 * prm.brake()) + cfg.margin_m;
+        let blocked = if helm.turns_slowly() {
+            let path = arc(
+                p,
+                nav.heading,
+                cmd.psi_set,
+                speed,
+                0.0,
+                prm.brake(),
+                prm.turn_rate_rps,
+                cfg.margin_m,
+            );
+            b.blocked_path(&path)
+        } else {
+            b.blocked_still(p, u, braking)
+        };
+        if can_stop && blocked {
             return stopped(cmd);
         }
     }
@@ -314,20 +453,20 @@ pub fn check(
         if can_stop {
             return (cmd, Verdict::Clear);
         }
-        return evade(cfg, prm, &b, p, cmd, evasion);
+        return evade(cfg, &helm, &b, cmd, evasion);
     }
     // 2. The command as planned.
-    if !b.blocked(p, dir(cmd.psi_set), reach(v, prm, cfg), v) {
+    if !helm.blocked(&b, cmd.psi_set, v) {
         return (cmd, Verdict::Clear);
     }
     // 3. The nearest clear heading at the same speed.
-    if let Some(a) = nearest_clear(cfg, prm, &b, p, cmd.psi_set, v, cfg.max_turn_rad) {
+    if let Some(a) = nearest_clear(cfg, &helm, &b, cmd.psi_set, v, cfg.max_turn_rad) {
         return (with_motion(cmd, a, v, Verdict::Turned), Verdict::Turned);
     }
     // 4. Slower on the planned heading.
     let mut s = 0.5 * v;
     while s >= cfg.min_speed {
-        if !b.blocked(p, dir(cmd.psi_set), reach(s, prm, cfg), s) {
+        if !helm.blocked(&b, cmd.psi_set, s) {
             return (
                 with_motion(cmd, cmd.psi_set, s, Verdict::Slowed),
                 Verdict::Slowed,
@@ -339,15 +478,14 @@ pub fn check(
     if can_stop {
         return stopped(cmd);
     }
-    evade(cfg, prm, &b, p, cmd, evasion)
+    evade(cfg, &helm, &b, cmd, evasion)
 }
 
 /// The heading within ±`max_turn` of `psi`, nearest first, that is clear at `v`.
 fn nearest_clear(
     cfg: &GuardConfig,
-    prm: &Params,
+    helm: &Helm,
     b: &Believed,
-    p: Vec2,
     psi: f32,
     v: f32,
     max_turn: f32,
@@ -356,7 +494,7 @@ fn nearest_clear(
     let turns = min(max_turn / step, 64.0) as u32;
     (1..=turns)
         .flat_map(|k| [1.0, -1.0].map(|side| psi + side * k as f32 * step))
-        .find(|&a| !b.blocked(p, Vec2::from_angle(a), reach(v, prm, cfg), v))
+        .find(|&a| !helm.blocked(b, a, v))
 }
 
 /// A mover closes in and stopping will not do: the clear heading nearest the command, all
@@ -366,9 +504,8 @@ fn nearest_clear(
 /// stop.
 fn evade(
     cfg: &GuardConfig,
-    prm: &Params,
+    helm: &Helm,
     b: &Believed,
-    p: Vec2,
     cmd: Command,
     speed: f32,
 ) -> (Command, Verdict) {
@@ -376,22 +513,21 @@ fn evade(
         return stopped(cmd);
     }
     for v in [speed, 0.5 * speed] {
-        let u = Vec2::from_angle(cmd.psi_set);
-        if !b.blocked(p, u, reach(v, prm, cfg), v) {
+        if !helm.blocked(b, cmd.psi_set, v) {
             return (
                 with_motion(cmd, cmd.psi_set, v, Verdict::Turned),
                 Verdict::Turned,
             );
         }
-        if let Some(a) = nearest_clear(cfg, prm, b, p, cmd.psi_set, v, crate::math::PI) {
+        if let Some(a) = nearest_clear(cfg, helm, b, cmd.psi_set, v, crate::math::PI) {
             return (with_motion(cmd, a, v, Verdict::Turned), Verdict::Turned);
         }
     }
-    let len = reach(speed, prm, cfg);
+    let p = helm.p;
     let step = max(cfg.turn_step_rad, 1e-3);
     let best = (0..min(2.0 * crate::math::PI / step, 128.0) as u32)
         .map(|k| cmd.psi_set + k as f32 * step)
-        .filter(|&a| !b.blocked_still(p, Vec2::from_angle(a), len))
+        .filter(|&a| !helm.blocked_still(b, a, speed))
         .map(|a| (a, b.mover_margin(p, Vec2::from_angle(a) * speed)))
         .fold(None, |best: Option<(f32, f32)>, (a, m)| match best {
             Some((_, bm)) if bm >= m => best,

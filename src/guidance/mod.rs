@@ -16,7 +16,7 @@
 //!
 //! | queue | capacity | when full |
 //! | --- | --- | --- |
-//! | received bytes (board) | [`RX_QUEUE`] | byte dropped, counted (`rx_bytes_dropped`); the decoder resyncs on the next 0x00 |
+//! | received bytes (board) | [`RX_QUEUE`] | byte left in the UART, its interrupt off until the background has taken bytes: lossless on QEMU (the emulated UART holds the input back); on a real UART the next byte overruns, lost and counted (`rx_bytes_dropped`); the decoder resyncs on the next 0x00 |
 //! | sightings | [`SIGHTING_QUEUE`] | sighting dropped, counted (`features_dropped`) |
 //! | requests | [`CONTROL_QUEUE`] | request answered "busy" through the reply ring (nothing changed; the host sends it again), counted (`requests_busy`) |
 //! | owed replies (6 B each) | [`REPLY_QUEUE`] | request dropped without an answer, counted (`requests_unanswered`) |
@@ -33,6 +33,7 @@
 pub mod background;
 pub mod failsafe;
 pub mod guard;
+pub mod mavlink;
 pub mod periodic;
 pub mod single;
 pub mod tracks;
@@ -51,8 +52,9 @@ use crate::planner::{Mission, NavState};
 use crate::sonar::Feature;
 use crate::world::{Agent, Obstacle};
 
-/// Capacity of the board's received-byte queue (about 90 ms of 115 200 baud).
-pub const RX_QUEUE: usize = 1024;
+/// Capacity of the board's received-byte queue: about 45 ms of 115 200 baud, four times the
+/// longest the background is busy elsewhere (a route replan and a period that preempts it).
+pub const RX_QUEUE: usize = 512;
 /// Capacity of the sighting queue (one sonar sweep rarely yields more).
 pub const SIGHTING_QUEUE: usize = 16;
 /// Capacity of the request queue (a `Control` is 152 bytes: RAM, not this number, is short).
@@ -63,8 +65,11 @@ pub const REQUESTS_PER_PERIOD: usize = 2 + crate::world::MAX_OBSTACLES;
 /// Capacity of the ring of replies owed without a request in the queue (refused at the wire, or
 /// "busy"): with the queue, one answer for each of [`REQUESTS_PER_PERIOD`] requests.
 pub const REPLY_QUEUE: usize = REQUESTS_PER_PERIOD - CONTROL_QUEUE;
-/// Capacity of the board's transmit-byte queue (a period's command, telemetry and replies).
-pub const TX_QUEUE: usize = 2048;
+/// Capacity of the board's transmit-byte queue: a period's command, telemetry, belief chunk and
+/// replies. The most a period sends, the one answering a start-up burst of
+/// [`REQUESTS_PER_PERIOD`] requests, is 691 bytes (`tests/requests.rs` checks it stays under
+/// three quarters of this); 115 200 baud carries 1.15 KiB a 100 ms period.
+pub const TX_QUEUE: usize = 1024;
 /// Most sightings the periodic task takes per period (bounds its cost).
 pub const SIGHTINGS_PER_PERIOD: usize = SIGHTING_QUEUE;
 

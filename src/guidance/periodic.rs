@@ -194,6 +194,11 @@ impl Periodic {
         self.planner.progress(p)
     }
 
+    /// The newest navigation accepted.
+    pub fn nav(&self) -> Option<NavSample> {
+        self.nav
+    }
+
     /// The newest route read from the background.
     pub fn route(&self) -> Option<&Route> {
         self.route.as_ref()
@@ -217,6 +222,45 @@ impl Periodic {
     /// The telemetry counters as last sent.
     pub fn counters(&self) -> &TelemetryCounters {
         &self.counters
+    }
+
+    /// Opens a waypoint upload of `count` waypoints from another protocol (MAVLink's mission
+    /// protocol, `crate::guidance::mavlink`), into the same staging list as `MissionCount`:
+    /// the mission in force keeps flying until the upload is complete. The last waypoint is
+    /// held. `count` must be 1 ..= `MAX_WAYPOINTS` (the caller checked).
+    pub fn open_upload(&mut self, count: u8) {
+        let h = Header {
+            msg_type: crate::link::MessageType::MissionCount,
+            seq: 0,
+        };
+        let c = crate::link::MissionCountRepr {
+            count,
+            end: crate::planner::MissionEnd::Hold,
+            formation: None,
+        };
+        let _ = self.upload.open(h, &c);
+    }
+
+    /// Stores waypoint `index` of the upload [`Self::open_upload`] opened: `Ok(true)` when it
+    /// completed the mission, which is now in force; `Ok(false)` when more are to come;
+    /// `Err` (counted as a refused mission) when no upload is open, the index is beyond it, or
+    /// the whole list was refused.
+    pub fn upload_item(
+        &mut self,
+        index: u8,
+        waypoint: crate::planner::Waypoint,
+    ) -> Result<bool, crate::link::Problem> {
+        let h = Header {
+            msg_type: crate::link::MessageType::MissionItem,
+            seq: 0,
+        };
+        let m = crate::link::MissionItemRepr { index, waypoint };
+        let reply = self.upload.item(h, &m, &mut self.planner);
+        match reply.status {
+            crate::link::ReplyStatus::Accepted => Ok(!self.upload.is_open()),
+            crate::link::ReplyStatus::Rejected { problem, .. } => Err(problem),
+            crate::link::ReplyStatus::Busy => Err(crate::link::Problem::Invalid),
+        }
     }
 
     /// Counts a missed deadline (the board detects it).
@@ -319,7 +363,7 @@ impl Periodic {
     #[inline(never)]
     fn snapshot(&mut self, m: &EvidenceMap, p: Vec2) {
         let mut near: heapless::Vec<Near, MAX_MAP_CELLS> = heapless::Vec::new();
-        m.nearest(p, self.config.map_reach_m, &mut near);
+        m.nearest(p, self.map_reach(m.cell_m()), &mut near);
         // Cells as discs of half their side: neighbours touch, so a wall has no seams.
         self.world
             .set_map(near.iter().map(|c| c.center), 0.5 * m.cell_m());
@@ -446,6 +490,18 @@ impl Periodic {
             // Refused input (counted by the planner): hold, with the last heading.
             Err(_) => Command::hold(crate::planner::HoldReason::StaleNav, self.last_heading),
         }
+    }
+
+    /// How far round the vehicle the evidence map's cells enter the world, m: `map_reach_m`,
+    /// or farther when the guard needs it to see a whole stopping distance beyond the hull at
+    /// v_max (a large craft that brakes gently: the flat-fish's 2.25 m hull and 3.3 m from
+    /// 1 m/s at 0.15 m/s²). The map's scan stops at `MAX_REACH_CELLS` cells either way.
+    fn map_reach(&self, cell_m: f32) -> f32 {
+        let p = self.planner.params();
+        let g = &self.config.guard;
+        let stop = p.v_max * p.period_s + p.v_max * p.v_max / (2.0 * p.brake()) + g.margin_m;
+        let need = p.agent_radius_m + g.hull_margin_m + stop + cell_m;
+        crate::math::max(self.config.map_reach_m, need)
     }
 
     /// Applies one request and says how it went. Not inlined: a survey's expanded list is on its

@@ -12,6 +12,8 @@ use crate::params::Params;
 use crate::planner::Command;
 use crate::route::{Route, Router};
 use crate::sonar::ping360::{ConfigError, Ping360, Ping360Config, Ping360Counters};
+
+use super::mavlink::{MavConfig, MavInbound, MavMission, MavOutbound};
 use crate::sonar::{EvidenceMap, ExtractorConfig};
 
 use super::{
@@ -86,6 +88,28 @@ impl Inputs for Queues {
 /// is outstanding at a time, so two never wait). Full: the driver sends again at its next poll.
 pub const PING360_OUTBOX: usize = 96;
 
+/// Whether a Ping360 driver may send commands yet: once navigation has come (a ping before it
+/// could not be placed) or the host runs the clock (lockstep: from its first `Tick`, whatever
+/// the firmware's own clock did before). The board images follow the same rule, so a lockstep
+/// run pings the same on both.
+pub fn ping360_started(background: &Background) -> bool {
+    background.lockstep() || background.pose().is_some()
+}
+
+/// Bytes for the MAVLink line waiting to be written: a period's set-point, status, heartbeat,
+/// obstacle distances and mission replies (about 400 bytes). Full: frames are dropped, counted.
+pub const MAVLINK_OUTBOX: usize = 1024;
+/// Mission-upload steps between the halves (as the firmware's queue).
+pub const MAVLINK_MISSIONS: usize = 4;
+
+/// The MAVLink line's two halves and the queue between them.
+struct Mav {
+    inbound: MavInbound,
+    outbound: MavOutbound,
+    missions: Deque<MavMission, MAVLINK_MISSIONS>,
+    out: heapless::Vec<u8, MAVLINK_OUTBOX>,
+}
+
 /// The runtime in one context.
 pub struct SingleContext {
     background: Background,
@@ -96,6 +120,7 @@ pub struct SingleContext {
     now_ms: u64,
     ping360: Option<Ping360>,
     ping360_out: heapless::Vec<u8, PING360_OUTBOX>,
+    mavlink: Option<Mav>,
 }
 
 impl SingleContext {
@@ -138,12 +163,14 @@ impl SingleContext {
             now_ms: 0,
             ping360: None,
             ping360_out: heapless::Vec::new(),
+            mavlink: None,
         })
     }
 
     /// Drives a Ping360 on a port of its own with `cfg` ([`Self::on_ping360_bytes`] takes its
     /// bytes, [`Self::take_ping360_output`] gives what to write to it). Its first command goes
-    /// out at the next period.
+    /// out at the first period after navigation has come, or at the first `Tick`
+    /// ([`ping360_started`]).
     pub fn set_ping360(&mut self, cfg: Ping360Config) -> Result<(), ConfigError> {
         self.ping360 = Some(Ping360::new(cfg)?);
         Ok(())
@@ -184,6 +211,62 @@ impl SingleContext {
     /// after).
     pub fn take_ping360_output(&mut self) -> heapless::Vec<u8, PING360_OUTBOX> {
         core::mem::take(&mut self.ping360_out)
+    }
+
+    /// Speaks MAVLink 2 to an autopilot and a ground station on a line of its own
+    /// ([`Self::on_mavlink_bytes`] takes its bytes, [`Self::take_mavlink_output`] gives what to
+    /// write; `crate::guidance::mavlink`).
+    pub fn set_mavlink(&mut self, cfg: MavConfig) {
+        self.mavlink = Some(Mav {
+            inbound: MavInbound::new(cfg),
+            outbound: MavOutbound::new(cfg),
+            missions: Deque::new(),
+            out: heapless::Vec::new(),
+        });
+    }
+
+    /// The MAVLink line's decoder counters, frames dropped on a full outbox, and upload
+    /// steps dropped on a full queue, if it is set.
+    pub fn mavlink_counters(&self) -> Option<(crate::link::mavlink::MavCounters, u32, u32)> {
+        self.mavlink.as_ref().map(|m| {
+            (
+                *m.inbound.counters(),
+                m.outbound.frames_dropped,
+                m.inbound.missions_dropped,
+            )
+        })
+    }
+
+    /// Feeds bytes from the MAVLink line (ignored without [`Self::set_mavlink`]).
+    pub fn on_mavlink_bytes(&mut self, bytes: &[u8]) {
+        let SingleContext {
+            background,
+            queues,
+            map,
+            router,
+            now_ms,
+            mavlink,
+            ..
+        } = self;
+        let Some(m) = mavlink.as_mut() else { return };
+        let missions = &mut m.missions;
+        m.inbound.on_bytes(
+            bytes,
+            *now_ms,
+            background,
+            queues,
+            Some(map),
+            Some(router),
+            &mut |x| missions.push_back(x).is_ok(),
+        );
+    }
+
+    /// What is to be written to the MAVLink line now (taken).
+    pub fn take_mavlink_output(&mut self) -> heapless::Vec<u8, MAVLINK_OUTBOX> {
+        self.mavlink
+            .as_mut()
+            .map(|m| core::mem::take(&mut m.out))
+            .unwrap_or_default()
     }
 
     /// The periodic half (planner, world, counters).
@@ -251,7 +334,8 @@ impl SingleContext {
         tx: &mut impl FnMut(&[u8]) -> bool,
     ) -> Command {
         self.now_ms = now_ms;
-        if let Some(p) = self.ping360.as_mut() {
+        let started = ping360_started(&self.background);
+        if let Some(p) = self.ping360.as_mut().filter(|_| started) {
             let out = &mut self.ping360_out;
             p.poll(now_ms, &mut |f| out.extend_from_slice(f).is_ok());
             self.queues.ping360 = p.counters();
@@ -262,6 +346,16 @@ impl SingleContext {
             .periodic
             .on_tick(now_ms, &mut self.queues, Some(&self.map), cost, tx);
         self.queues.goal = self.periodic.goal();
+        if let Some(m) = self.mavlink.as_mut() {
+            let (missions, out) = (&mut m.missions, &mut m.out);
+            m.outbound.on_period(
+                now_ms,
+                &cmd,
+                &mut self.periodic,
+                &mut || missions.pop_front(),
+                &mut |f| out.extend_from_slice(f).is_ok(),
+            );
+        }
         cmd
     }
 }

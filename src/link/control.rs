@@ -198,7 +198,7 @@ impl<'a> Payload<'a> for ChartClearRepr {
 
 /// The names of [`Params`]' fields in wire order: the parameter index of a `Params` field and
 /// of a [`ReplyRepr`](super::ReplyRepr) rejecting it.
-pub const PARAM_NAMES: [&str; 34] = [
+pub const PARAM_NAMES: [&str; 36] = [
     "period_s",
     "epsilon_m",
     "n_gamma",
@@ -233,6 +233,8 @@ pub const PARAM_NAMES: [&str; 34] = [
     "nf_kappa",
     "nf_workspace_m",
     "route_cell_m",
+    "turn_rate_rps",
+    "brake_mps2",
 ];
 
 /// The wire index of the parameter called `name` (as in
@@ -245,10 +247,10 @@ pub fn param_index(name: &str) -> Option<u8> {
 }
 
 /// `Params` payload length.
-pub const PARAMS_LEN: usize = 118;
+pub const PARAMS_LEN: usize = 126;
 
-/// The 27 `f32` parameters with their indices, for the finiteness check.
-fn param_floats(p: &Params) -> [(u8, f32); 27] {
+/// The 29 `f32` parameters with their indices, for the finiteness check.
+fn param_floats(p: &Params) -> [(u8, f32); 29] {
     [
         (0, p.period_s),
         (1, p.epsilon_m),
@@ -277,6 +279,8 @@ fn param_floats(p: &Params) -> [(u8, f32); 27] {
         (31, p.nf_kappa),
         (32, p.nf_workspace_m),
         (33, p.route_cell_m),
+        (34, p.turn_rate_rps),
+        (35, p.brake_mps2),
     ]
 }
 
@@ -296,7 +300,7 @@ fn check_params(p: &Params) -> Result<(), Error> {
 /// `Params` (0x07): the whole parameter set, every field of [`Params`] in declaration order
 /// (the index is the row; see [`PARAM_NAMES`]); `n_gamma`, `max_ghosts`, `mp_points` and
 /// `mp_periphery` are u8, `bounding` a u8 code (0 plain, 1 split), `strategy` a u8 code (0 vpf,
-/// 1 multipoint, 2 navfn), `seed` a u32, the other 27 are f32.
+/// 1 multipoint, 2 navfn), `seed` a u32, the other 29 are f32.
 ///
 /// Only non-finite numbers and unknown codes are refused here. Ranges are checked by
 /// [`Planner::set_params`](crate::planner::Planner::set_params), whose
@@ -363,6 +367,8 @@ impl<'a> Payload<'a> for Params {
             nf_kappa: r.f32()?,
             nf_workspace_m: r.f32()?,
             route_cell_m: r.f32()?,
+            turn_rate_rps: r.f32()?,
+            brake_mps2: r.f32()?,
         };
         r.finish()?;
         check_params(&p)?;
@@ -425,6 +431,8 @@ impl<'a> Payload<'a> for Params {
         w.f32(self.nf_kappa)?;
         w.f32(self.nf_workspace_m)?;
         w.f32(self.route_cell_m)?;
+        w.f32(self.turn_rate_rps)?;
+        w.f32(self.brake_mps2)?;
         Ok(w.len())
     }
 }
@@ -608,6 +616,7 @@ pub(crate) mod tests {
         assert_eq!(out[105], 9); // mp_periphery
         assert_eq!(&out[110..114], &[0x00, 0x00, 0x7a, 0x44]); // nf_workspace_m 1000
         assert_eq!(&out[114..118], &[0x00, 0x00, 0x00, 0x40]); // route_cell_m 2
+        assert_eq!(&out[118..126], &[0; 8]); // turn_rate_rps 0, brake_mps2 0
         assert_eq!(Params::parse(&out), Ok(p));
 
         // Non-finite and unknown codes are refused at the wire, naming the parameter.
@@ -694,7 +703,7 @@ pub(crate) mod tests {
 
     pub(crate) fn arb_params() -> impl Strategy<Value = Params> {
         (
-            proptest::array::uniform27(-1e6f32..1e6),
+            proptest::array::uniform29(-1e6f32..1e6),
             (any::<u8>(), any::<u8>(), any::<u8>(), any::<u8>()),
             (any::<bool>(), 0u8..3),
             any::<u32>(),
@@ -744,6 +753,8 @@ pub(crate) mod tests {
                         nf_kappa: f[24],
                         nf_workspace_m: f[25],
                         route_cell_m: f[26],
+                        turn_rate_rps: f[27],
+                        brake_mps2: f[28],
                     }
                 },
             )

@@ -45,6 +45,7 @@ pub mod control;
 pub mod crc;
 pub mod decoder;
 pub mod frame;
+pub mod mavlink;
 pub mod message;
 pub mod mission;
 pub mod ping;
@@ -54,7 +55,9 @@ pub mod sensors;
 pub mod shape;
 
 pub use belief::{BeliefRepr, BELIEF_ROWS};
-pub use control::{param_index, ChartClearRepr, ChartObstacleRepr, TickRepr, PARAM_NAMES};
+pub use control::{
+    param_index, ChartClearRepr, ChartObstacleRepr, TickRepr, PARAMS_LEN, PARAM_NAMES,
+};
 pub use decoder::{Decoder, Outcome, RxCounters};
 pub use frame::{encode_frame, frame_buffer_len, split_frame, Direction, Header, MessageType};
 pub use message::{Message, Payload};

@@ -2,10 +2,12 @@
 //! eq. 8–10 and the lines after them: surge (a_c, v_c, I_surge) and heading (α_c, ω_c, φ_c).
 //!
 //! Choices where the paper is ambiguous:
-//! - **Body frame ê₁.** Eq. 9 builds ê₁ from the previous command, but calls (ê₁, ê₂) the body
-//!   frame at k − 1, and §3.1 uses it as the direction of travel of the *true* velocity. We use
-//!   the true direction of travel (measured velocity; the compass heading when nearly stopped):
-//!   that is the axis a surge autopilot acts along.
+//! - **Body frame ê₁.** Eq. 9 builds ê₁ from the previous command, v̄_c(k−1)/|v̄_c(k−1)|; we
+//!   do so (the measured direction of travel before the first command, or while the command
+//!   is below [`V_EPS`]). §3.1's split bounding uses the *true* direction of travel instead,
+//!   and `bound.rs` does. (An earlier version used the true direction here too: a command
+//!   across the vehicle's travel then gave v_c ≈ 0 and one behind it a reverse-thrust v_c, and
+//!   a VideoRay flying the decomposition did not arrive, `hil/tests/autopilot.rs`.)
 //! - **a_c.** The paper writes a_c = |F̄(k)|. As a surge acceleration command we take its
 //!   component along ê₁, ⟨F̄, ê₁⟩, which equals |F̄| when the force is along the travel direction
 //!   and has the right sign when it brakes.
@@ -21,13 +23,25 @@
 //!   and agree as κ_c → κ (the unit test below checks it), but the paper's divides by κ, the
 //!   measured curvature, which is zero on every straight line: it is infinite at the onset of
 //!   every turn (R = ∞) and changes sign with κ. Ours is finite there and exact in the limit.
+//! - **ω_c** is the rate at which the planned velocity turns, ω_c = (v̄ × F̄)/|v̄|² — the exact
+//!   derivative of φ_c = arg v̄ under eq. 6's integration, of which the paper's
+//!   [φ_c(k) − φ_c(k−1)]/T is the one-period difference. *Departure:* the
+//!   difference is taken of a heading that jumps — when v̄ is small its direction swings by
+//!   up to π in a period, and a guard's turn or a hold is a step — and a 90° step in one 0.1 s
+//!   period asks a heading loop's derivative channel for 15 rad/s (what made the decomposition
+//!   track worse than plain set-points, `hil/tests/autopilot.rs`). The derivative is bounded
+//!   by the planner's own force bound (|F̄| ≤ F_max, so |ω_c| ≤ F_max/|v̄|), is 0 below
+//!   [`V_EPS`], and is kept within `turn_rate_rps` when the craft's rate is given.
 //! - **I_surge** is the along-track component ⟨p_c(k) − p(k), ê₁⟩, with p_c the
 //!   double-integrator position integrated from the bounded command like 000 eq. 8: positive
 //!   when the vehicle lags the ideal position. *Departure:* the paper writes the magnitude
 //!   ‖p(k) − p_c(k)‖, which cannot tell an integral channel whether to push or hold back (a
 //!   vehicle ahead and one behind give the same value); its along-track part is the time
 //!   integral of the surge speed error the channel stands for. It is anti-wound: p_c is kept
-//!   within [`I_SURGE_LIMIT_M`] of the vehicle.
+//!   within [`I_SURGE_LIMIT_M`] of the vehicle, and restarts at the vehicle whenever the
+//!   runtime sends something other than the plan (the guard turned, slowed or stopped it; a
+//!   hold): an integral that wound up while the vehicle was held back would otherwise drive it
+//!   at full thrust once released ([`SetpointState::restart_integral`]).
 
 use crate::math::{wrap_angle, Vec2};
 
@@ -68,6 +82,8 @@ struct Prev {
     course: f32,
     v_cmd: Vec2,
     p_c: Vec2,
+    /// The command sent was not the plan: p_c restarts at the vehicle.
+    restart: bool,
 }
 
 /// The measured state the decomposition needs.
@@ -105,17 +121,36 @@ impl SetpointState {
         self.prev = None;
     }
 
+    /// The command that went out was not the plan (the guard changed it, or the speed was
+    /// bounded): the idealised position restarts at the vehicle next step, so I_surge does not
+    /// wind up while the vehicle is held back. The heading history is kept.
+    pub fn restart_integral(&mut self) {
+        if let Some(p) = &mut self.prev {
+            p.restart = true;
+        }
+    }
+
     /// One period of the decomposition for the bounded force `f` and bounded velocity command
-    /// `v_cmd` over period `t` s.
-    pub fn decompose(&mut self, t: f32, f: Vec2, v_cmd: Vec2, m: &Measured) -> PidSetpoints {
-        let e1 = m.e1();
+    /// `v_cmd` over period `t` s; `turn_rate_max` (rad/s, 0: none) bounds ω_c.
+    pub fn decompose(
+        &mut self,
+        t: f32,
+        f: Vec2,
+        v_cmd: Vec2,
+        m: &Measured,
+        turn_rate_max: f32,
+    ) -> PidSetpoints {
         let course = m.course();
         let prev = self.prev.unwrap_or(Prev {
             phi_c: course,
             course,
             v_cmd: m.velocity,
             p_c: m.position,
+            restart: false,
         });
+        // ê₁ of eq. 9: the previous command's direction (the measured one before there is
+        // any, or while it is too slow to have one).
+        let e1 = prev.v_cmd.normalized(V_EPS).unwrap_or_else(|| m.e1());
         let a_c = f.dot(e1);
         let v_c = v_cmd.dot(e1);
         // Heading command: keep the last one while the command has no direction.
@@ -124,7 +159,7 @@ impl SetpointState {
         } else {
             prev.phi_c
         };
-        let omega_c = wrap_angle(phi_c - prev.phi_c) / t;
+        let omega_c = turn_rate(f, v_cmd, turn_rate_max);
         let omega = wrap_angle(course - prev.course) / t;
         let speed = m.velocity.norm();
         let alpha_c = if v_c.abs() > V_EPS && speed > V_EPS {
@@ -135,7 +170,8 @@ impl SetpointState {
             (omega_c - omega) / t
         };
         // Double integrator, bilinear like 000 eq. 8, held within the anti-windup limit.
-        let mut p_c = prev.p_c + (v_cmd + prev.v_cmd) * (0.5 * t);
+        let start = if prev.restart { m.position } else { prev.p_c };
+        let mut p_c = start + (v_cmd + prev.v_cmd) * (0.5 * t);
         let lag = p_c - m.position;
         p_c = m.position + lag.bounded(I_SURGE_LIMIT_M);
         self.prev = Some(Prev {
@@ -143,6 +179,7 @@ impl SetpointState {
             course,
             v_cmd,
             p_c,
+            restart: false,
         });
         PidSetpoints {
             a_c,
@@ -152,6 +189,21 @@ impl SetpointState {
             omega_c,
             phi_c,
         }
+    }
+}
+
+/// ω_c: the rate at which the planned velocity `v` turns under the force `f`, (v × f)/|v|²
+/// (module notes), 0 below [`V_EPS`], within ±`limit` when `limit` > 0.
+fn turn_rate(f: Vec2, v: Vec2, limit: f32) -> f32 {
+    let v2 = v.norm2();
+    if v2 <= V_EPS * V_EPS {
+        return 0.0;
+    }
+    let w = (v.x * f.y - v.y * f.x) / v2;
+    if limit > 0.0 {
+        crate::math::max(-limit, crate::math::min(w, limit))
+    } else {
+        w
     }
 }
 
@@ -168,7 +220,7 @@ mod tests {
             heading: 0.0,
         };
         for _ in 0..3 {
-            let sp = s.decompose(0.1, Vec2::new(0.2, 0.0), Vec2::new(1.0, 0.0), &m);
+            let sp = s.decompose(0.1, Vec2::new(0.2, 0.0), Vec2::new(1.0, 0.0), &m, 0.0);
             assert_eq!((sp.omega_c, sp.alpha_c, sp.phi_c), (0.0, 0.0, 0.0));
             assert!((sp.v_c - 1.0).abs() < 1e-6 && (sp.a_c - 0.2).abs() < 1e-6);
         }
@@ -182,12 +234,21 @@ mod tests {
             velocity: Vec2::new(1.0, 0.0),
             heading: 0.0,
         };
+        // Planned 1 m/s at 0.1 rad, pushed to port at 0.5 m/s²: it turns at 0.5 rad/s.
         let v = Vec2::from_angle(0.1);
-        let sp = s.decompose(0.1, Vec2::ZERO, v, &m);
-        assert!((sp.omega_c - 1.0).abs() < 1e-4, "{sp:?}");
+        let f = Vec2::from_angle(0.1 + core::f32::consts::FRAC_PI_2) * 0.5;
+        let sp = s.decompose(0.1, f, v, &m, 0.0);
+        assert!((sp.omega_c - 0.5).abs() < 1e-4, "{sp:?}");
         assert!((sp.phi_c - 0.1).abs() < 1e-6);
-        // κ_c = 1/|v_c|, κ = 0: α_c = v_c·κ_c/T ≈ 10 rad/s².
-        assert!((sp.alpha_c - 10.0).abs() < 0.1, "{sp:?}");
+        // κ_c = ω_c/v_c = 0.5, κ = 0, a_c ≈ 0: α_c = v_c·κ_c/T ≈ 5 rad/s².
+        assert!((sp.alpha_c - 5.0).abs() < 0.1, "{sp:?}");
+        // A heading step with no force behind it (the guard turned, v̄ swung) asks no rate;
+        // a craft's rate bounds it.
+        let mut s = SetpointState::default();
+        let sp = s.decompose(0.1, Vec2::ZERO, Vec2::from_angle(1.5), &m, 0.0);
+        assert_eq!(sp.omega_c, 0.0);
+        let sp = s.decompose(0.1, f * 10.0, v, &m, 0.2);
+        assert!((sp.omega_c - 0.2).abs() < 1e-6, "{sp:?}");
     }
 
     #[test]
@@ -198,7 +259,7 @@ mod tests {
             velocity: Vec2::ZERO,
             heading: 3.0,
         };
-        let sp = s.decompose(0.1, Vec2::ZERO, Vec2::ZERO, &m);
+        let sp = s.decompose(0.1, Vec2::ZERO, Vec2::ZERO, &m, 0.0);
         assert!(
             [sp.a_c, sp.v_c, sp.i_surge, sp.alpha_c, sp.omega_c, sp.phi_c]
                 .iter()
@@ -218,7 +279,7 @@ mod tests {
         let mut last = 0.0;
         for _ in 0..1000 {
             last = s
-                .decompose(0.1, Vec2::ZERO, Vec2::new(1.0, 0.0), &m)
+                .decompose(0.1, Vec2::ZERO, Vec2::new(1.0, 0.0), &m, 0.0)
                 .i_surge;
         }
         assert!((last - I_SURGE_LIMIT_M).abs() < 1e-3);
@@ -228,12 +289,12 @@ mod tests {
             velocity: Vec2::new(1.0, 0.0),
             ..m
         };
-        s.decompose(0.1, Vec2::ZERO, Vec2::ZERO, &ahead);
+        s.decompose(0.1, Vec2::ZERO, Vec2::ZERO, &ahead, 0.0);
         let moved = Measured {
             position: Vec2::new(0.5, 0.0),
             ..ahead
         };
-        let sp = s.decompose(0.1, Vec2::ZERO, Vec2::ZERO, &moved);
+        let sp = s.decompose(0.1, Vec2::ZERO, Vec2::ZERO, &moved, 0.0);
         // p_c moved 0.05 m (half a period at the initial 1 m/s), the vehicle 0.5 m.
         assert!((sp.i_surge + 0.45).abs() < 1e-5, "{sp:?}");
     }
@@ -259,7 +320,8 @@ mod tests {
             velocity: Vec2::new(1.0, 0.0),
             heading: 0.0,
         };
-        let sp = s.decompose(0.1, Vec2::ZERO, Vec2::from_angle(0.05), &m);
+        let f = Vec2::new(0.0, 0.2);
+        let sp = s.decompose(0.1, f, Vec2::from_angle(0.05), &m, 0.0);
         assert!(sp.alpha_c.is_finite() && sp.alpha_c > 0.0);
     }
 }

@@ -8,9 +8,10 @@ use serde::{Deserialize, Serialize};
 use vpf::{Params, Strategy};
 
 use super::feasible::{self, Infeasible};
+use super::turning;
 use super::worlds::{self, Family, World};
 use crate::output::{plot, RunOutput, Summary};
-use crate::runner::{hull_radius, run_quiet, QuietRun};
+use crate::runner::{hull_radius, run_quiet, turning_radius, QuietRun};
 use crate::scenario::{self, Sensing};
 use crate::sim::ModelKind;
 use crate::sweep::generate::{obstacle_table, wrap_deg};
@@ -108,16 +109,33 @@ pub struct Row {
 }
 
 /// The world of `case`, feasible for its craft: (world, attempt, shortest path of the
-/// longest mission, m). A waypoint mission is feasible when every leg is (from the start to the
-/// first waypoint, and from each to the next), and its shortest path is the legs' sum.
+/// longest mission, m). Feasible: every vehicle has a way through its mission that keeps its
+/// hull and [`FEASIBLE_MARGIN_M`] from every static obstacle (`feasible`; a waypoint mission
+/// leg by leg, from the start to the first waypoint and from each to the next, its shortest
+/// path the legs' sum), and, for a craft with a turning radius
+/// (`crate::runner::turning_radius`), one it can fly on that radius from its start pose to its
+/// first waypoint without slowing to turn (`turning`). Worlds are drawn for the craft's hull
+/// (`worlds::generate`: a formation's lattice).
 pub fn feasible_world(case: &Case) -> Result<(World, u64, f64), Infeasible> {
-    let clearance = hull_radius(case.model) + FEASIBLE_MARGIN_M;
+    let hull = hull_radius(case.model);
+    let clearance = hull + FEASIBLE_MARGIN_M;
+    let radius = turning_radius(case.model);
     let mut last = Infeasible::NoPath;
     for attempt in 0..MAX_ATTEMPTS {
-        let w = worlds::generate(case.family, case.seed, attempt);
+        let w = worlds::generate(case.family, case.seed, attempt, hull);
         let mut longest: f64 = 0.0;
         let mut ok = true;
         'crafts: for c in &w.crafts {
+            if radius > 0.0 {
+                let first = w.legs(c).into_iter().next().unwrap_or(c.goal);
+                if let Err(e) =
+                    turning::reachable(&w.obstacles, c.start, c.heading, first, clearance, radius)
+                {
+                    last = e;
+                    ok = false;
+                    break 'crafts;
+                }
+            }
             let mut from = c.start;
             let mut total = 0.0;
             for to in w.legs(c) {

@@ -23,6 +23,7 @@
 pub mod case;
 pub mod feasible;
 pub mod report;
+pub mod turning;
 pub mod worlds;
 
 use std::collections::HashSet;

@@ -4,8 +4,11 @@
 //!
 //! Missions are 100–300 m, except every fourth seed (40–80 m: short ones too). Sizes are for a
 //! VideoRay-class craft (hull 0.2 m); a craft that needs more room gets fewer feasible draws
-//! (each world is checked by [`super::feasible`] for the craft before it is flown, and redrawn
-//! from the next sub-seed when it is not).
+//! (each world is checked by [`super::feasible`] and, for a craft with a turning radius, by
+//! [`super::turning`] before it is flown, and redrawn from the next sub-seed when it is not).
+//! One thing is drawn for the craft's hull: a formation's lattice, [`formation_lattice`], so
+//! that its vehicles start apart (with the VideoRay's 4 m for every hull up to 1 m: the same
+//! worlds as before).
 
 use std::f64::consts::PI;
 
@@ -224,8 +227,17 @@ fn scatter(
     out
 }
 
-/// World `seed` of `family`, attempt `attempt` (a redraw after an infeasible one).
-pub fn generate(family: Family, seed: u64, attempt: u64) -> World {
+/// The square lattice λ of a formation world for a craft of hull radius `hull_m`, m: 4 m (seed
+/// 001's λ, ten VideoRay hulls) or four hull radii (two lengths), whichever is larger — room
+/// for two hulls, the guard's margins round each and a hull's width between them. The
+/// family's obstacle spacing grows with it (by λ / 4 m).
+pub fn formation_lattice(hull_m: f64) -> f64 {
+    f64::max(4.0, 4.0 * hull_m)
+}
+
+/// World `seed` of `family`, attempt `attempt` (a redraw after an infeasible one), for a craft
+/// of hull radius `hull_m` (m; only a formation's spacing depends on it).
+pub fn generate(family: Family, seed: u64, attempt: u64, hull_m: f64) -> World {
     let tag = family as u64 + 1;
     let mut rng = Rng::stream(seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ tag, attempt);
     let short = seed % 4 == 3;
@@ -461,7 +473,8 @@ pub fn generate(family: Family, seed: u64, attempt: u64) -> World {
             survey = Some(s);
         }
         Family::Formation => {
-            let lattice = 4.0;
+            let lattice = formation_lattice(hull_m);
+            let room = lattice / 4.0;
             formation_m = Some(lattice);
             let n = 3 + (rng.uniform() * 2.0) as usize;
             crafts = (0..n)
@@ -474,11 +487,11 @@ pub fn generate(family: Family, seed: u64, attempt: u64) -> World {
             shapes = scatter(
                 &mut rng,
                 (length / 20.0) as usize,
-                (15.0, length - 15.0),
-                20.0,
-                6.0,
+                (15.0 * room, length - 15.0 * room),
+                20.0 * room,
+                6.0 * room,
                 &[start, goal],
-                10.0,
+                10.0 * room,
                 &mut |r, c| circle(c, between(r, 0.8, 2.0)),
             );
         }
@@ -527,9 +540,41 @@ mod tests {
     #[test]
     fn worlds_are_deterministic_and_differ_by_seed() {
         for f in FAMILIES {
-            assert_eq!(generate(f, 3, 0), generate(f, 3, 0), "{}", f.name());
-            assert_ne!(generate(f, 3, 0), generate(f, 4, 0), "{}", f.name());
+            assert_eq!(
+                generate(f, 3, 0, 0.2),
+                generate(f, 3, 0, 0.2),
+                "{}",
+                f.name()
+            );
+            assert_ne!(
+                generate(f, 3, 0, 0.2),
+                generate(f, 4, 0, 0.2),
+                "{}",
+                f.name()
+            );
             assert_eq!(Family::parse(f.name()), Some(f));
+        }
+    }
+
+    #[test]
+    fn a_formation_is_spaced_for_the_hull_and_the_videoray_worlds_are_unchanged() {
+        assert_eq!(formation_lattice(0.2), 4.0);
+        assert_eq!(formation_lattice(1.0), 4.0);
+        let hull = 2.25;
+        for seed in 0..8 {
+            // Every family but the formation is drawn the same for any hull.
+            for f in FAMILIES.iter().filter(|&&f| f != Family::Formation) {
+                assert_eq!(generate(*f, seed, 0, 0.2), generate(*f, seed, 0, hull));
+            }
+            let w = generate(Family::Formation, seed, 0, hull);
+            assert_eq!(w.formation_m, Some(9.0));
+            for (i, a) in w.crafts.iter().enumerate() {
+                for b in &w.crafts[i + 1..] {
+                    // Two hulls, two guard margins (2 × 0.25 m) and more apart.
+                    let gap = a.start.sub(b.start).norm() - 2.0 * hull;
+                    assert!(gap >= 4.0, "seed {seed}: {gap}");
+                }
+            }
         }
     }
 
@@ -537,7 +582,7 @@ mod tests {
     fn every_family_has_obstacles_and_a_mission_of_the_stated_length() {
         for f in FAMILIES {
             for seed in 0..4 {
-                let w = generate(f, seed, 0);
+                let w = generate(f, seed, 0, 0.2);
                 assert!(
                     !w.obstacles.is_empty() || f == Family::HeadOn,
                     "{}",

@@ -390,7 +390,10 @@ impl VehicleMetrics {
             step_cost,
             counters: v.telemetry.map(|t| t.counters),
             perception: None,
-            ping360: v.telemetry.map(|t| t.ping360).filter(|p| p.commands > 0),
+            ping360: v
+                .telemetry
+                .map(|t| t.ping360)
+                .filter(|p| v.ping360 && p.commands > 0),
             waypoints,
         }
     }

@@ -92,6 +92,35 @@ pub fn firmware_config(s: &SonarSpec) -> Result<Ping360Config, (&'static str, St
     Ok(cfg)
 }
 
+/// Whether the board images' Ping360 settings (`Ping360Config::BOARD`: they take no command
+/// line) are the scenario's `cfg`; else the key to change and why.
+pub fn board_config_matches(cfg: &Ping360Config) -> Result<(), (&'static str, String)> {
+    let b = Ping360Config::BOARD;
+    let why = |key, what: String| {
+        Err((
+            key,
+            format!("the board images drive their Ping360 with {what} (Ping360Config::BOARD; use --firmware host for other settings)"),
+        ))
+    };
+    if cfg.step_grad != b.step_grad {
+        return why(
+            "step_deg",
+            format!(
+                "a step of {} gradians ({:.1}°)",
+                b.step_grad,
+                f32::from(b.step_grad) * 0.9
+            ),
+        );
+    }
+    if cfg.samples != b.samples {
+        return why("bins", format!("{} samples", b.samples));
+    }
+    if *cfg != b {
+        return why("range_m", format!("a range of {} m", b.range_m()));
+    }
+    Ok(())
+}
+
 /// The host-process firmware's arguments for `cfg` on the pty `device`.
 pub fn firmware_args(device: &Path, cfg: &Ping360Config) -> Vec<std::ffi::OsString> {
     let mut a: Vec<std::ffi::OsString> = vec!["--ping360".into(), device.into()];
@@ -382,6 +411,22 @@ impl SimPing360 {
 mod tests {
     use super::*;
     use crate::scenario::Sonar as Spec;
+
+    #[test]
+    fn the_shipped_scenarios_ping360_is_the_boards() {
+        // `ping360_narrow_gap.toml`'s sonar: QEMU's image drives it with the same settings.
+        let spec = Spec {
+            range_m: 30.0,
+            bins: 300,
+            step: 1.8f64.to_radians(),
+            ..Spec::default()
+        };
+        let cfg = firmware_config(&spec).unwrap();
+        assert_eq!(cfg, Ping360Config::BOARD);
+        assert_eq!(board_config_matches(&cfg), Ok(()));
+        let other = firmware_config(&Spec { bins: 600, ..spec }).unwrap();
+        assert_eq!(board_config_matches(&other).unwrap_err().0, "bins");
+    }
 
     #[test]
     fn scenario_settings_map_to_the_driver() {

@@ -20,6 +20,12 @@ pub const FLATFISH_LENGTH_M: f64 = 4.5;
 pub const FLATFISH_BEAM_M: f64 = 1.46;
 /// Height h of the flat-fish hull, m (seed 003 §2).
 pub const FLATFISH_HEIGHT_M: f64 = 0.634;
+/// Its turning radius at the 1 m/s cruise with the heading autopilot at its yaw-moment limit,
+/// m (≈ 0.046 rad/s; `it_turns_much_wider_and_slower_than_the_videoray` measures it). Its yaw
+/// rate, not its radius, is what is bounded: at 0.5 m/s it turns on half of it.
+pub const FLATFISH_TURN_RADIUS_M: f64 = 22.0;
+/// Its largest steady yaw rate, rad/s: the yaw-moment limit (79 N·m) against N_r and N_r|r|.
+pub const FLATFISH_TURN_RATE_RPS: f64 = 0.046;
 
 /// The flat-fish AUV of seed 003 §2.
 ///
@@ -335,8 +341,13 @@ mod tests {
         // Left turn (r > 0), skidding outward (v < 0), near cruise speed.
         assert!(s.r > 0.0 && s.v < 0.0, "{s:?}");
         assert!(s.u > 0.95, "slows too much: {s:?}");
-        // A few vehicle lengths: 3.3 to 6.7 L.
+        // A few vehicle lengths: 3.3 to 6.7 L; the constants the bench and the recipe use.
         assert!((15.0..=30.0).contains(&radius), "radius {radius}");
+        assert!(
+            (radius / FLATFISH_TURN_RADIUS_M - 1.0).abs() < 0.05,
+            "{radius}"
+        );
+        assert!((s.r / FLATFISH_TURN_RATE_RPS - 1.0).abs() < 0.05, "{}", s.r);
         // The track agrees: 400 s at ≈ 0.046 rad/s is ≈ 3 full circles of diameter 2R.
         for d in [dx, dy] {
             assert!(

@@ -482,12 +482,12 @@ pub fn batch(spec: &Spec, spec_dir: &std::path::Path) -> Result<Vec<BatchScenari
         for i in 0..sc.bench_count {
             let case = crate::bench::case::Case {
                 family,
-                seed: i as u64,
+                seed: sc.bench_first_seed + i as u64,
                 strategy: vpf::Strategy::Vpf,
                 model: spec.craft.model,
                 sensing: sc.sensing,
             };
-            let id = format!("bench:{}:{i}", family.name());
+            let id = format!("bench:{}:{}", family.name(), sc.bench_first_seed + i as u64);
             let (w, attempt, shortest) =
                 crate::bench::case::feasible_world(&case).map_err(|e| ScenarioError {
                     file: id.clone(),

@@ -60,6 +60,9 @@ pub struct Options {
     pub quiet: bool,
     /// The firmware's link: a pty (as `hil run`) instead of a socket pair.
     pub pty: bool,
+    /// The firmware as a separate process (on the socket pair, or the pty with `pty`) instead
+    /// of its runtime in this process.
+    pub process: bool,
 }
 
 /// What a sweep did.
@@ -251,6 +254,7 @@ pub fn sweep(spec_path: &Path, opts: &Options) -> Result<Outcome, String> {
                 binary,
                 stop_early: true,
                 socket: !opts.pty,
+                in_process: !opts.process && !opts.pty,
             },
         };
         let file = std::fs::OpenOptions::new()
@@ -440,7 +444,9 @@ sweeps/NAME/shard-K-of-N). Re-running with the same --out resumes.
   --shard K/N   run only the K-th of N slices of the run list (e.g. a Slurm array task)
   --quiet       no progress bar, no table
   --show ID     print scenario ID of the batch (e.g. clutter:3) as a scenario file, and exit
-  --link socket|pty  the host firmware's link (default socket: faster than a pty)
+  --link inproc|socket|pty  the host firmware: its runtime in this process (default: no
+                process wake-up and no system call per period), or the vpf-firmware process on a
+                socket pair or a pty
 merge: combines the runs.csv of a sweep's shards into one report (default --out: the parent
 of the first DIR, merged/).
 Spec format: hil/sweeps/README.md.";
@@ -510,10 +516,13 @@ pub fn cli_sweep(mut it: impl Iterator<Item = String>) -> ExitCode {
                 "--shard" => opts.shard = Some(parse_shard(&value()?)?),
                 "--quiet" => opts.quiet = true,
                 "--link" => {
-                    opts.pty = match value()?.as_str() {
-                        "socket" => false,
-                        "pty" => true,
-                        other => return Err(format!("--link {other}: expected socket or pty")),
+                    (opts.process, opts.pty) = match value()?.as_str() {
+                        "inproc" => (false, false),
+                        "socket" => (true, false),
+                        "pty" => (true, true),
+                        other => {
+                            return Err(format!("--link {other}: expected inproc, socket or pty"))
+                        }
                     }
                 }
                 "--merge" => merge_mode = true,

@@ -156,6 +156,10 @@ pub struct Scenarios {
     pub bench_families: Vec<crate::bench::worlds::Family>,
     /// Worlds per bench family.
     pub bench_count: usize,
+    /// The first bench seed (`bench_first_seed`, default 0): the worlds are seeds
+    /// `first .. first + bench_count`, so a recipe can be tuned on seeds `hil bench` (0 ..= 16
+    /// by default) does not judge it on.
+    pub bench_first_seed: u64,
     /// Start–goal distance of generated scenarios, m: `[min, max]`.
     pub length_m: (f64, f64),
     /// How the generated scenarios' vehicles sense obstacles.
@@ -210,6 +214,7 @@ impl Default for Scenarios {
             utrap: 0,
             bench_families: Vec::new(),
             bench_count: 0,
+            bench_first_seed: 0,
             length_m: (40.0, 80.0),
             sensing: Sensing::Contacts,
             speed_mps: 1.0,
@@ -708,6 +713,7 @@ fn scenarios(root: &Table<'_>) -> Result<Scenarios, ScenarioError> {
             "utrap",
             "bench_families",
             "bench_count",
+            "bench_first_seed",
             "length_m",
             "sensing",
             "speed_mps",
@@ -768,6 +774,7 @@ fn scenarios(root: &Table<'_>) -> Result<Scenarios, ScenarioError> {
         }
     }
     s.bench_count = count("bench_count")?;
+    s.bench_first_seed = t.int_in("bench_first_seed", 0, 1_000_000)?.unwrap_or(0) as u64;
     if s.bench_families.is_empty() {
         s.bench_count = 0;
     }

@@ -2,8 +2,9 @@
 //! interrupt vector (what an svd2rust PAC would supply; there is none for the AN386).
 //!
 //! Interrupt numbers are the AN386's (ARM's "Cortex-M4 FPGA image" application note, and QEMU's
-//! `mps2-an386`): each CMSDK APB UART has a receive and a transmit interrupt. UART1 is listed
-//! for a second byte link (wire its two vectors below and bind two tasks to them).
+//! `mps2-an386`): each CMSDK APB UART has a receive and a transmit interrupt. UART0 carries the
+//! control link, UART1 the Ping360, UART2 MAVLink; the ethernet controller's interrupt (13)
+//! carries the control link's frames on QEMU (`eth.rs`).
 
 /// Priority bits the NVIC implements: the AN386 image's 3 (CMSIS `__NVIC_PRIO_BITS`).
 pub const NVIC_PRIO_BITS: u8 = 3;
@@ -16,12 +17,16 @@ pub enum Interrupt {
     UART0RX = 0,
     /// UART0 transmit.
     UART0TX = 1,
-    /// UART1 receive (free: a second byte link).
-    #[allow(dead_code)]
+    /// UART1 receive (the Ping360).
     UART1RX = 2,
     /// UART1 transmit.
-    #[allow(dead_code)]
     UART1TX = 3,
+    /// UART2 receive (MAVLink).
+    UART2RX = 4,
+    /// UART2 transmit.
+    UART2TX = 5,
+    /// The ethernet controller (LAN9220; QEMU's LAN9118).
+    ETHERNET = 13,
 }
 
 /// RTIC names bound interrupts through `device::interrupt::NAME`, as svd2rust PACs export them.
@@ -44,11 +49,32 @@ extern "C" {
     fn UART0TX();
     fn UART1RX();
     fn UART1TX();
+    fn UART2RX();
+    fn UART2TX();
+    fn ETHERNET();
+    /// cortex-m-rt's handler for interrupts nobody binds.
+    fn DefaultHandler();
 }
 
-/// The device part of the vector table: external interrupts 0–3 (the rest are never enabled).
+/// The device part of the vector table: external interrupts 0–13 (those not listed above are
+/// never enabled).
 #[allow(unsafe_code)] // `link_section` and `no_mangle` place the table; it only holds addresses.
 #[link_section = ".vector_table.interrupts"]
 #[no_mangle]
 #[used]
-static __INTERRUPTS: [unsafe extern "C" fn(); 4] = [UART0RX, UART0TX, UART1RX, UART1TX];
+static __INTERRUPTS: [unsafe extern "C" fn(); 14] = [
+    UART0RX,
+    UART0TX,
+    UART1RX,
+    UART1TX,
+    UART2RX,
+    UART2TX,
+    DefaultHandler,
+    DefaultHandler,
+    DefaultHandler,
+    DefaultHandler,
+    DefaultHandler,
+    DefaultHandler,
+    DefaultHandler,
+    ETHERNET,
+];

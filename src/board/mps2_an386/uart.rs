@@ -10,8 +10,8 @@ use core::sync::atomic::{AtomicBool, Ordering};
 use embedded_io::{ErrorType, Read, ReadReady, Write, WriteReady};
 use vcell::VolatileCell;
 
-/// Base addresses: UART0 (the control link) and UART1 (free for a second byte link).
-const BASES: [usize; 2] = [0x4000_4000, 0x4000_5000];
+/// Base addresses: UART0 (the control link), UART1 (the Ping360), UART2 (MAVLink).
+const BASES: [usize; 3] = [0x4000_4000, 0x4000_5000, 0x4000_6000];
 
 const STATE_TX_FULL: u32 = 1 << 0;
 const STATE_RX_FULL: u32 = 1 << 1;
@@ -34,15 +34,21 @@ struct Registers {
 
 /// Which UARTs have been handed out (each at most once, so each register is driven by one
 /// owner: see [`registers`]).
-static TAKEN: [AtomicBool; 2] = [AtomicBool::new(false), AtomicBool::new(false)];
+static TAKEN: [AtomicBool; 3] = [
+    AtomicBool::new(false),
+    AtomicBool::new(false),
+    AtomicBool::new(false),
+];
 
 fn registers(base: usize) -> &'static Registers {
     // # Safety
     // `base` is one of `BASES`: a CMSDK UART's register block, always mapped on this board,
     // 4-byte aligned, and touched only through `VolatileCell`s (volatile loads and stores, no
     // references into the registers escape). Each UART is handed out once (`TAKEN`), split
-    // into halves that write disjoint bits: the receive half clears only the RX interrupt and
-    // reads DATA; the transmit half alone writes DATA and CTRL after start-up.
+    // into halves that write disjoint bits: the receive half clears only the RX interrupt,
+    // reads DATA and flips CTRL's RX-interrupt bit; the transmit half writes DATA and flips
+    // CTRL's TX-interrupt bit. Both halves' tasks run at one priority (they never preempt each
+    // other), so their read-modify-writes of CTRL do not interleave.
     #[allow(unsafe_code)]
     unsafe {
         &*(base as *const Registers)
@@ -55,7 +61,7 @@ pub struct Uart {
 }
 
 impl Uart {
-    /// UART `n` (0 or 1), enabled at `bauddiv` with its receive interrupt on; `None` if it was
+    /// UART `n` (0, 1 or 2), enabled at `bauddiv` with its receive interrupt on; `None` if it was
     /// already taken or does not exist.
     pub fn take(n: usize, bauddiv: u32) -> Option<Uart> {
         let base = *BASES.get(n)?;
@@ -83,6 +89,20 @@ impl UartRx {
     /// Clears the receive interrupt (the handler then drains the buffer).
     pub fn acknowledge(&mut self) {
         registers(self.base).int.set(INT_RX);
+    }
+}
+
+impl UartRx {
+    /// Turns the receive interrupt on or off (off while the link's queue is full: the byte
+    /// waits in the UART, and QEMU holds the rest back).
+    pub fn listen(&mut self, on: bool) {
+        let ctrl = &registers(self.base).ctrl;
+        let v = ctrl.get();
+        ctrl.set(if on {
+            v | CTRL_RX_INT
+        } else {
+            v & !CTRL_RX_INT
+        });
     }
 }
 

@@ -1,7 +1,7 @@
 //! The firmware's contexts on the NUCLEO-F446RE, declared as an RTIC application with the
 //! STM32F446's PAC as the device. The same contexts as on the emulated board
-//! (`board::mps2_an386::app`, which says more); here one interrupt, USART2, moves the control
-//! link's bytes both ways.
+//! (`board::mps2_an386::app`, which says more); here one interrupt per USART moves its link's
+//! bytes both ways: USART2 the control link's, USART1 the Ping360's, USART6 MAVLink's.
 
 #[rtic::app(device = stm32f4xx_hal::pac, peripherals = false)]
 mod app {
@@ -12,7 +12,9 @@ mod app {
     use crate::board::stm32f4 as board;
     use crate::firmware::background::{self, BackgroundTask, IdleShared};
     use crate::firmware::link::{Receiver, Transmitter};
+    use crate::firmware::mavlink::{MAV_RX_SLOTS, MAV_TX_SLOTS};
     use crate::firmware::periodic::{PeriodShared, PeriodicTask};
+    use crate::firmware::sonar::{SONAR_RX_SLOTS, SONAR_TX_SLOTS};
     use crate::firmware::{
         fault, GoalFlown, LinkCounters, Lockstep, Memory, Stats, CONTROL_RX_SLOTS, CONTROL_TX_SLOTS,
     };
@@ -45,6 +47,18 @@ mod app {
             board::Usart2,
             Receiver<CONTROL_RX_SLOTS>,
             Transmitter<CONTROL_TX_SLOTS>,
+        ),
+        /// USART1 and the Ping360 link's interrupt ends.
+        usart1: (
+            board::Usart1,
+            Receiver<SONAR_RX_SLOTS>,
+            Transmitter<SONAR_TX_SLOTS>,
+        ),
+        /// USART6 and the MAVLink link's interrupt ends.
+        usart6: (
+            board::Usart6,
+            Receiver<MAV_RX_SLOTS>,
+            Transmitter<MAV_TX_SLOTS>,
         ),
     }
 
@@ -84,6 +98,8 @@ mod app {
                 periodic: fw.periodic,
                 background: fw.background,
                 usart2: (parts.control, fw.receiver, fw.transmitter),
+                usart1: (parts.sonar, fw.sonar_receiver, fw.sonar_transmitter),
+                usart6: (parts.mavlink, fw.mav_receiver, fw.mav_transmitter),
             },
         )
     }
@@ -130,11 +146,35 @@ mod app {
             });
     }
 
-    /// USART2, both directions: received bytes into the queue, then queued bytes out while
+    /// USART2, both directions: received bytes into the queue while there is room (on a full
+    /// queue RX-not-empty goes off until the background has taken bytes), then queued bytes out while
     /// the UART takes them, the transmit-empty interrupt on only while bytes remain.
     #[task(binds = USART2, priority = 3, local = [usart2])]
     fn usart2_both_ways(cx: usart2_both_ways::Context) {
         let (uart, receiver, transmitter) = cx.local.usart2;
+        let held = receiver.receive_or_hold(uart);
+        uart.listen(!held);
+        let more = transmitter.transmit(uart);
+        uart.interrupt_when_ready(more);
+    }
+
+    /// USART1 (the Ping360), both directions: received bytes into its queue while there is
+    /// room (on a full queue RX-not-empty goes off until the background has taken bytes), then
+    /// its commands out.
+    #[task(binds = USART1, priority = 3, local = [usart1])]
+    fn usart1_both_ways(cx: usart1_both_ways::Context) {
+        let (uart, receiver, transmitter) = cx.local.usart1;
+        let held = receiver.receive_or_hold(uart);
+        uart.listen(!held);
+        let more = transmitter.transmit(uart);
+        uart.interrupt_when_ready(more);
+    }
+
+    /// USART6 (MAVLink), both directions: received bytes into its queue (full: dropped,
+    /// counted), then queued frames out.
+    #[task(binds = USART6, priority = 3, local = [usart6])]
+    fn usart6_both_ways(cx: usart6_both_ways::Context) {
+        let (uart, receiver, transmitter) = cx.local.usart6;
         receiver.receive(uart);
         let more = transmitter.transmit(uart);
         uart.interrupt_when_ready(more);

@@ -89,6 +89,28 @@ impl core::fmt::Display for ConfigError {
 impl core::error::Error for ConfigError {}
 
 impl Ping360Config {
+    /// What the board images drive (they take no command line): the whole circle in 2-gradian
+    /// steps, 30 m over 300 samples (10 cm a sample; a 324-byte `device_data`, 73 ms a ping at
+    /// 115 200 baud: 5 ms of head step, 40 ms listening, 28 ms on the line), the defaults'
+    /// gain, pulse, frequency and mounting, and a timeout of four pings' time (293 ms), the
+    /// HIL's rule for a scenario's Ping360 (`hil/src/ping360/sim.rs`), so a lockstep run on
+    /// QEMU and one of the host-process firmware with the same settings fly the same. Change it
+    /// here for your sonar and range, and rebuild.
+    pub const BOARD: Ping360Config = Ping360Config {
+        start_grad: 0,
+        width_grad: GRADIANS,
+        step_grad: 2,
+        gain: 1,
+        transmit_duration_us: 100,
+        sample_period: 5333,
+        samples: 300,
+        frequency_khz: 750,
+        sound_speed: 1500.0,
+        zero_bearing_rad: PI,
+        clockwise: true,
+        timeout_ms: 293,
+    };
+
     /// Checks every field; also that the range the settings give is one the sonar module takes
     /// (`0.5 ..= 200` m).
     pub fn validate(&self) -> Result<(), ConfigError> {
@@ -205,6 +227,17 @@ mod tests {
             Ping360Config::sample_period_for(f32::NAN, 200, 1500.0),
             None
         );
+    }
+
+    #[test]
+    fn the_boards_settings_are_valid_and_reach_30_m_over_300_samples() {
+        let b = Ping360Config::BOARD;
+        assert_eq!(b.validate(), Ok(()));
+        assert_eq!(
+            Ping360Config::sample_period_for(30.0, 300, 1500.0),
+            Some(b.sample_period)
+        );
+        assert!((b.range_m() - 30.0).abs() < 0.01, "{}", b.range_m());
     }
 
     #[test]

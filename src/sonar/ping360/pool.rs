@@ -69,7 +69,8 @@ impl Pool {
             self.sum += u32::from(s);
             self.in_group += 1;
             if self.in_group == self.k {
-                let k = u32::from(self.k);
+                // `k` is at least 1 (`start`); said again so the division has no panic path.
+                let k = u32::from(self.k.max(1));
                 // A mean of u8s is a u8.
                 let mean = ((self.sum + k / 2) / k).min(255) as u8;
                 if let Some(b) = self.bins.get_mut(usize::from(self.filled)) {
