@@ -109,7 +109,17 @@ pub fn run(task: &mut BackgroundTask, shared: &mut impl Exchange) -> ! {
         let sonar = task.poll_sonar(shared);
         let mavlink = task.poll_mavlink(shared);
         if !control && !sonar && !mavlink {
-            cortex_m::asm::wfi();
+            // Checked and slept with interrupts masked: a byte received after the polls above
+            // leaves its interrupt pending, which wakes the WFI (ARMv7-M wakes on a pending
+            // interrupt whatever PRIMASK says) and is taken once they are unmasked. Unmasked, a
+            // last byte received between the check and the WFI would wait for the next
+            // interrupt, and in lockstep (SysTick stopped, the host waiting for an answer) none
+            // comes.
+            cortex_m::interrupt::free(|_| {
+                if !task.input_waiting() {
+                    cortex_m::asm::wfi();
+                }
+            });
         }
     }
 }
@@ -178,6 +188,12 @@ impl BackgroundTask {
             sonar,
             mav,
         }
+    }
+
+    /// Whether any link's receive queue holds bytes.
+    #[cfg_attr(feature = "selftest", allow(dead_code))]
+    fn input_waiting(&self) -> bool {
+        self.inbox.ready() || self.sonar.inbox.ready() || self.mav.input_waiting()
     }
 
     /// Decodes what has been received; `true` if there was anything.

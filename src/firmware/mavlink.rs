@@ -62,6 +62,11 @@ impl MavPort {
         }
     }
 
+    /// Whether received bytes wait in the queue.
+    pub fn input_waiting(&self) -> bool {
+        self.inbox.ready()
+    }
+
     /// Feeds up to 64 received bytes at firmware time `now_ms`; `true` if there were any.
     pub fn poll(
         &mut self,
