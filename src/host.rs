@@ -1,4 +1,4 @@
-//! The firmware as a host process: the same guidance runtime (`vpf::guidance::SingleContext`)
+//! The firmware as a host process: the same guidance runtime (`vpf::guidance::OneThreadRuntime`)
 //! and the same serial protocol, over stdio or a serial device (a pty from the HIL harness, or a
 //! USB serial adapter).
 //!
@@ -29,7 +29,7 @@ use std::sync::{mpsc, Arc};
 use std::time::{Duration, Instant};
 
 use vpf::guidance::mavlink::MavConfig;
-use vpf::guidance::{RuntimeConfig, SingleContext};
+use vpf::guidance::{OneThreadRuntime, RuntimeConfig};
 use vpf::link::CostUnit;
 use vpf::sonar::ping360::Ping360Config;
 use vpf::Params;
@@ -351,7 +351,7 @@ fn run(
     sonar: Option<(SonarPort, Ping360Config)>,
     mav: Option<(SonarPort, MavConfig)>,
 ) -> std::io::Result<()> {
-    let mut fw = SingleContext::new(
+    let mut fw = OneThreadRuntime::new(
         Params::default(),
         RuntimeConfig::default(),
         CostUnit::Microseconds,

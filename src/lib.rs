@@ -8,6 +8,8 @@
 //! - [`math`]: `Vec2`, angles, the hot-path `exp`, a seeded generator;
 //! - [`params`]: the validated parameter set with the papers' names;
 //! - [`field`]: potential distribution functions — obstacle shapes, stator, rotor, goal-point;
+//! - [`types`]: the value types the planner, the link and the runtime share — navigation state,
+//!   missions, the command, a scanline, the step error;
 //! - [`world`]: fixed-capacity obstacle and agent tables, ageing, overflow policy;
 //! - [`planner`]: the planner step — sampled gradient, friction, bounding, integration,
 //!   PI-D set-points, ghost goal-points, virtual-leader formation;
@@ -50,6 +52,7 @@ pub mod params;
 pub mod planner;
 pub mod route;
 pub mod sonar;
+pub mod types;
 pub mod world;
 
 pub use math::Vec2;

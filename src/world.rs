@@ -78,6 +78,8 @@ impl core::fmt::Display for ObjectError {
     }
 }
 
+impl core::error::Error for ObjectError {}
+
 fn check_velocity(v: Vec2) -> Result<Vec2, ObjectError> {
     if !v.is_finite() {
         Err(ObjectError::NonFinite)
@@ -200,6 +202,14 @@ impl Agent {
 /// A table was full: the value is handed back.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Full<T>(pub T);
+
+impl<T> core::fmt::Display for Full<T> {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str("table full")
+    }
+}
+
+impl<T: core::fmt::Debug> core::error::Error for Full<T> {}
 
 /// Counters of the tables' boundary decisions, for telemetry.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]

@@ -2,7 +2,7 @@
 //! "Faults and bad input").
 //!
 //! A bounded number of inputs, from a small deterministic PRNG (xorshift64*) with a fixed seed,
-//! go through [`SingleContext::on_bytes`] exactly as `src/host.rs` and `tests/runtime.rs` feed
+//! go through [`OneThreadRuntime::on_bytes`] exactly as `src/host.rs` and `tests/runtime.rs` feed
 //! it, each followed by one period (a `Tick` frame in lockstep mode, `on_tick` in real time, as
 //! `src/host.rs` does). Every input is built from frames of all the protocol's message types
 //! (`docs/protocol.md` §4; host → firmware ones as the firmware's input, firmware → host ones,
@@ -54,7 +54,7 @@ use std::f32::consts::{PI, TAU};
 use std::panic::{catch_unwind, AssertUnwindSafe};
 
 use vpf::field::Shape;
-use vpf::guidance::{RuntimeConfig, SingleContext};
+use vpf::guidance::{OneThreadRuntime, RuntimeConfig};
 use vpf::link::{
     BeliefRepr, BodyVelocity, ChartClearRepr, ChartObstacleRepr, CommandRepr, Contact, ContactKind,
     ContactList, ContactsRepr, CostUnit, Decoder, Direction, Error, Header, LogLevel, LogRepr,
@@ -561,7 +561,7 @@ fn payload(rng: &mut Rng, ctx: &Ctx<'_>, ty: u8) -> Vec<u8> {
             let mut p = payload_of(&Message::Params(sane_params(rng)));
             if rng.chance(0.2) {
                 // One parameter anywhere (usually out of its range): the planner refuses it.
-                let o = rng.pick(&PARAM_F32);
+                let o = rng.pick(&param_f32());
                 p[o..o + 4].copy_from_slice(&rng.range(-10.0, 1000.0).to_le_bytes());
             }
             p
@@ -667,11 +667,19 @@ fn payload(rng: &mut Rng, ctx: &Ctx<'_>, ty: u8) -> Vec<u8> {
 // ---------------------------------------------------------------------------------------------
 // Layout knowledge for the mutations (payload offsets from docs/protocol.md §5–§6)
 
-/// Offsets of the f32 parameters in `Params`.
-const PARAM_F32: [usize; 29] = [
-    0, 4, 9, 13, 17, 21, 25, 29, 33, 38, 42, 46, 50, 54, 58, 62, 66, 70, 80, 84, 89, 93, 97, 101,
-    106, 110, 114, 118, 122,
-];
+/// Offsets of the f32 parameters in `Params`, from the parameter declaration.
+fn param_f32() -> Vec<usize> {
+    use vpf::params::{Kind, ParamId};
+    let mut offset = 0;
+    let mut out = Vec::new();
+    for id in ParamId::ALL {
+        if id.kind() == Kind::F32 {
+            out.push(offset);
+        }
+        offset += id.kind().wire_len();
+    }
+    out
+}
 
 /// Floats of a shape starting at `o` (its kind byte); returns the shape's length.
 fn shape_floats(p: &[u8], o: usize, out: &mut Vec<usize>) -> Option<usize> {
@@ -715,7 +723,7 @@ fn float_offsets(ty: u8, p: &[u8]) -> Vec<usize> {
             v.push(2);
             shape_floats(p, 6, &mut v);
         }
-        0x07 => v.extend(PARAM_F32),
+        0x07 => v.extend(param_f32()),
         // MissionCount: loiter radius and the formation's; MissionItem: x, y, radius, speed;
         // Survey: rows 0–7, the loiter radius and the formation's.
         0x09 => v.extend([2, 8, 12, 16]),
@@ -1427,7 +1435,7 @@ struct Sent {
 }
 
 struct Harness {
-    fw: SingleContext,
+    fw: OneThreadRuntime,
     model: Model,
     host: Decoder,
     seq: u16,
@@ -1448,7 +1456,7 @@ struct Harness {
 impl Harness {
     fn new(sonar: bool) -> Self {
         Harness {
-            fw: SingleContext::new(
+            fw: OneThreadRuntime::new(
                 Params::default(),
                 RuntimeConfig::default(),
                 CostUnit::Unknown,

@@ -8,7 +8,7 @@ use std::collections::HashMap;
 
 use vpf::field::Shape;
 use vpf::guidance::{
-    RuntimeConfig, SingleContext, CONTROL_QUEUE, REPLY_QUEUE, REQUESTS_PER_PERIOD, TX_QUEUE,
+    OneThreadRuntime, RuntimeConfig, CONTROL_QUEUE, REPLY_QUEUE, REQUESTS_PER_PERIOD, TX_QUEUE,
 };
 use vpf::link::{
     encode_frame, ChartClearRepr, ChartObstacleRepr, CostUnit, Decoder, Direction, Message,
@@ -19,9 +19,9 @@ use vpf::planner::{MissionEnd, Survey, Waypoint, Waypoints, MAX_WAYPOINTS};
 use vpf::world::{Origin, MAX_OBSTACLES};
 use vpf::{Mission, NavState, Params, Vec2};
 
-/// A host talking to a [`SingleContext`] in lockstep, keeping what it sent by sequence number.
+/// A host talking to a [`OneThreadRuntime`] in lockstep, keeping what it sent by sequence number.
 struct Host {
-    fw: SingleContext,
+    fw: OneThreadRuntime,
     seq: u16,
     now_ms: u64,
     decoder: Decoder,
@@ -34,7 +34,7 @@ struct Host {
 
 impl Host {
     fn new() -> Self {
-        let fw = SingleContext::new(
+        let fw = OneThreadRuntime::new(
             Params::default(),
             RuntimeConfig::default(),
             CostUnit::Unknown,

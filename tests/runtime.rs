@@ -2,7 +2,7 @@
 //! garbage), commands, telemetry and replies out, decoded as a host would decode them.
 
 use vpf::field::Shape;
-use vpf::guidance::{FailsafeConfig, RuntimeConfig, SingleContext};
+use vpf::guidance::{FailsafeConfig, OneThreadRuntime, RuntimeConfig};
 use vpf::link::{
     ChartObstacleRepr, Contact, ContactKind, ContactList, ContactsRepr, CostUnit, Decoder,
     Direction, Message, MessageType, NavRepr, Outcome, ReplyStatus, TickRepr, MAX_FRAME,
@@ -11,9 +11,9 @@ use vpf::planner::HoldReason;
 use vpf::sonar::Scanline;
 use vpf::{Mission, Mode, NavState, Params, Vec2};
 
-/// A host talking to a [`SingleContext`]: frames out, everything the firmware sent decoded.
+/// A host talking to a [`OneThreadRuntime`]: frames out, everything the firmware sent decoded.
 struct Host {
-    fw: SingleContext,
+    fw: OneThreadRuntime,
     seq: u16,
     decoder: Decoder,
     commands: Vec<vpf::link::CommandRepr>,
@@ -24,7 +24,7 @@ struct Host {
 impl Host {
     fn new(params: Params) -> Self {
         Host {
-            fw: SingleContext::new(params, RuntimeConfig::default(), CostUnit::Unknown).unwrap(),
+            fw: OneThreadRuntime::new(params, RuntimeConfig::default(), CostUnit::Unknown).unwrap(),
             seq: 0,
             decoder: Decoder::accepting(Direction::ToHost),
             commands: vec![],

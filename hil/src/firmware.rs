@@ -123,10 +123,10 @@ enum Port {
     InProcess(Box<InProcess>),
 }
 
-/// The host firmware's runtime (`vpf::guidance::SingleContext`, what the `vpf-firmware` process
+/// The host firmware's runtime (`vpf::guidance::OneThreadRuntime`, what the `vpf-firmware` process
 /// runs) called directly: bytes in, a lockstep `Tick` runs its period at once, bytes out.
 struct InProcess {
-    runtime: vpf::guidance::SingleContext,
+    runtime: vpf::guidance::OneThreadRuntime,
     /// What the runtime sent, not yet read.
     out: Vec<u8>,
     /// The step cost's clock (microseconds, as the host process reports them).
@@ -564,12 +564,12 @@ impl Firmware {
     }
 
     /// The host firmware's runtime in this process: the same code the `vpf-firmware` process
-    /// runs on its input (`vpf::guidance::SingleContext`), called directly, so a lockstep
+    /// runs on its input (`vpf::guidance::OneThreadRuntime`), called directly, so a lockstep
     /// period costs no process wake-up and no system call (the sweep's, the benchmark's and the
     /// fault campaign's runs: see `hil/sweeps/README.md`). Only for lockstep: it has no clock
     /// of its own.
     pub fn in_process() -> std::io::Result<Self> {
-        let runtime = vpf::guidance::SingleContext::new(
+        let runtime = vpf::guidance::OneThreadRuntime::new(
             vpf::Params::default(),
             vpf::guidance::RuntimeConfig::default(),
             vpf::link::CostUnit::Microseconds,

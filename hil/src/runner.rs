@@ -101,7 +101,7 @@ fn fw_err(e: std::io::Error) -> RunError {
 }
 
 /// One simulated vehicle and its firmware.
-struct Sim {
+struct SimVehicle {
     model: Box<dyn VehicleModel>,
     kind: ModelKind,
     nav: NavSensor,
@@ -183,7 +183,7 @@ impl QuietRun {
 pub fn run(sc: &Scenario, cfg: &RunConfig) -> Result<RunResult, RunError> {
     output::prepare_dir(&cfg.out_dir).map_err(RunError::Output)?;
     let binary = firmware::build(&cfg.target).map_err(fw_err)?;
-    let how = How {
+    let how = RunOptions {
         log_dir: Some(&cfg.out_dir),
         progress: cfg.progress,
         stop_early: false,
@@ -206,7 +206,7 @@ pub fn run(sc: &Scenario, cfg: &RunConfig) -> Result<RunResult, RunError> {
 /// firmware built beforehand, and returns what was recorded; the metrics are
 /// [`Summary::of`] the result. The sweep's run mode (`hil sweep`).
 pub fn run_quiet(sc: &Scenario, q: &QuietRun) -> Result<RunOutput, RunError> {
-    let how = How {
+    let how = RunOptions {
         log_dir: None,
         progress: false,
         stop_early: q.stop_early,
@@ -219,7 +219,7 @@ pub fn run_quiet(sc: &Scenario, q: &QuietRun) -> Result<RunOutput, RunError> {
 /// How [`simulate`] runs: frame logs into `log_dir` if given, a progress bar if `progress`,
 /// the end at arrival or collision if `stop_early`, the host firmware on a socket if `socket`
 /// (in this process if `in_process`).
-struct How<'a> {
+struct RunOptions<'a> {
     log_dir: Option<&'a std::path::Path>,
     progress: bool,
     stop_early: bool,
@@ -241,7 +241,7 @@ fn simulate(
     sc: &Scenario,
     target: &Target,
     binary: &std::path::Path,
-    how: &How<'_>,
+    how: &RunOptions<'_>,
 ) -> Result<Simulated, RunError> {
     let mut params = sc.params;
     params.period_s = sc.dt_s as f32;
@@ -337,7 +337,7 @@ fn simulate(
             }
             None => None,
         };
-        sims.push(Sim {
+        sims.push(SimVehicle {
             model: new_model(v.model, v.start, v.heading, v.autopilot),
             kind: v.model,
             nav,
@@ -521,8 +521,8 @@ fn simulate(
 /// Whether a run can end early: a vehicle has collided at the last sample, or every vehicle's
 /// last sample is within `arrival_radius_m` of its goal (a waypoint mission: every waypoint
 /// reached, in order).
-fn finished(sims: &[Sim], arrival_radius_m: f64) -> bool {
-    let last = |s: &Sim| s.record.samples.last().cloned();
+fn finished(sims: &[SimVehicle], arrival_radius_m: f64) -> bool {
+    let last = |s: &SimVehicle| s.record.samples.last().cloned();
     let collided = sims
         .iter()
         .any(|s| last(s).is_some_and(|x| x.nearest_m < 0.0));
@@ -553,7 +553,7 @@ fn marks(v: &crate::scenario::Vehicle) -> Vec<WaypointMark> {
 /// Sends this period's navigation and sonar, with the scenario's sensor faults. A Ping360 of
 /// its own is served first, while the main link is quiet (`crate::ping360::sim` says why).
 fn send_sensors(
-    s: &mut Sim,
+    s: &mut SimVehicle,
     sc: &Scenario,
     t: f64,
     truth: &VehicleState,
@@ -629,7 +629,7 @@ fn send_sensors(
 
 /// Sends the obstacles and vehicles within `range` m as contacts.
 fn send_contacts(
-    s: &mut Sim,
+    s: &mut SimVehicle,
     t: f64,
     t_ms: u64,
     truth: &VehicleState,
@@ -649,7 +649,7 @@ fn send_contacts(
 }
 
 /// Collects the firmware's answer for this period and records it.
-fn collect(s: &mut Sim, mode: RunMode, t_ms: u64) -> Result<(), RunError> {
+fn collect(s: &mut SimVehicle, mode: RunMode, t_ms: u64) -> Result<(), RunError> {
     let got = match mode {
         RunMode::Lockstep => {
             let mut attempt = 1;

@@ -18,8 +18,9 @@ use toml::de::{DeTable, DeValue};
 use toml::Spanned;
 use vpf::field::shape::{MAX_EXTENT_M, MIN_EXTENT_M};
 use vpf::field::{Shape, MAX_POLYGON_VERTICES};
+use vpf::params::{Kind, ParamId, Value, PARAM_NAMES};
 use vpf::planner::Formation;
-use vpf::{Bounding, Params};
+use vpf::Params;
 
 pub use vpf::params::Strategy;
 
@@ -337,7 +338,7 @@ pub fn parse(text: &str, file: &str) -> Result<Scenario, ScenarioError> {
     if text.len() > MAX_SCENARIO_BYTES {
         return Err(too_big(file, text.len() as u64));
     }
-    let src = Src { file, text };
+    let src = SourceText { file, text };
     let doc = DeTable::parse(text).map_err(|e| src.syntax(&e))?;
     let root = Table::new(src, String::new(), 0..0, doc.get_ref());
     build(&root)
@@ -357,7 +358,7 @@ fn too_big(file: &str, bytes: u64) -> ScenarioError {
 }
 
 /// A name that will become a directory or file name: not blank, at most [`MAX_NAME_CHARS`].
-fn check_name(name: &Got<'_, &str>) -> Result<(), ScenarioError> {
+fn check_name(name: &Located<'_, &str>) -> Result<(), ScenarioError> {
     if name.v.trim().is_empty() {
         return Err(name.fail("must not be empty"));
     }
@@ -375,11 +376,11 @@ fn check_name(name: &Got<'_, &str>) -> Result<(), ScenarioError> {
 /// it gives (`Params::default()` with its overrides) at planner period `dt_s`. Errors name
 /// `file`, the line and the key, as for a scenario.
 pub fn parse_planner(text: &str, file: &str, dt_s: f64) -> Result<Params, ScenarioError> {
-    let src = Src { file, text };
+    let src = SourceText { file, text };
     let doc = DeTable::parse(text).map_err(|e| src.syntax(&e))?;
     let root = Table::new(src, String::new(), 0..0, doc.get_ref());
     root.allow(&["planner"], "a parameter file (only a [planner] table)")?;
-    let dt = Got {
+    let dt = Located {
         v: dt_s,
         span: 0..0,
         key: "dt_s".into(),
@@ -394,12 +395,12 @@ pub fn parse_planner(text: &str, file: &str, dt_s: f64) -> Result<Params, Scenar
 /// A TOML text and its file name, for errors that name file, line and key (shared with the
 /// sweep spec parser, `crate::sweep::spec`).
 #[derive(Clone, Copy)]
-pub(crate) struct Src<'a> {
+pub(crate) struct SourceText<'a> {
     pub(crate) file: &'a str,
     pub(crate) text: &'a str,
 }
 
-impl Src<'_> {
+impl SourceText<'_> {
     pub(crate) fn line_of(&self, offset: usize) -> usize {
         let end = offset.min(self.text.len());
         1 + self.text.as_bytes()[..end]
@@ -452,20 +453,20 @@ impl Src<'_> {
 pub(crate) type Val<'a> = Spanned<DeValue<'a>>;
 
 /// One value with its key path and span, for checks that report it.
-struct Got<'a, T> {
+struct Located<'a, T> {
     v: T,
     span: Range<usize>,
     key: String,
-    src: Src<'a>,
+    src: SourceText<'a>,
 }
 
-impl<T> Got<'_, T> {
+impl<T> Located<'_, T> {
     fn fail(&self, message: impl Into<String>) -> ScenarioError {
         self.src.err(&self.span, &self.key, message)
     }
 }
 
-impl Got<'_, f64> {
+impl Located<'_, f64> {
     /// `lo ..= hi`.
     fn within(&self, lo: f64, hi: f64, unit: &str) -> Result<f64, ScenarioError> {
         if (lo..=hi).contains(&self.v) {
@@ -519,7 +520,7 @@ fn join(path: &str, key: &str) -> String {
 /// A table of the document with its key path and the span of its header (shared with the
 /// sweep spec parser, which adds its own range-checked readers).
 pub(crate) struct Table<'a> {
-    pub(crate) src: Src<'a>,
+    pub(crate) src: SourceText<'a>,
     pub(crate) path: String,
     pub(crate) span: Range<usize>,
     /// (key, key span, value), in file order.
@@ -527,7 +528,12 @@ pub(crate) struct Table<'a> {
 }
 
 impl<'a> Table<'a> {
-    pub(crate) fn new(src: Src<'a>, path: String, span: Range<usize>, t: &'a DeTable<'a>) -> Self {
+    pub(crate) fn new(
+        src: SourceText<'a>,
+        path: String,
+        span: Range<usize>,
+        t: &'a DeTable<'a>,
+    ) -> Self {
         let mut entries: Vec<_> = t
             .iter()
             .map(|(k, v)| (k.get_ref().as_ref(), k.span(), v))
@@ -583,8 +589,8 @@ impl<'a> Table<'a> {
             .err(&self.span, &self.key(key), "missing required key")
     }
 
-    fn got<T>(&self, key: &str, v: T, span: Range<usize>) -> Got<'a, T> {
-        Got {
+    fn got<T>(&self, key: &str, v: T, span: Range<usize>) -> Located<'a, T> {
+        Located {
             v,
             span,
             key: self.key(key),
@@ -592,23 +598,23 @@ impl<'a> Table<'a> {
         }
     }
 
-    fn number(&self, key: &str) -> Result<Option<Got<'a, f64>>, ScenarioError> {
+    fn number(&self, key: &str) -> Result<Option<Located<'a, f64>>, ScenarioError> {
         self.get(key)
             .map(|v| value_number(self.src, &self.key(key), v).map(|x| self.got(key, x, v.span())))
             .transpose()
     }
 
-    fn req_number(&self, key: &str) -> Result<Got<'a, f64>, ScenarioError> {
+    fn req_number(&self, key: &str) -> Result<Located<'a, f64>, ScenarioError> {
         self.number(key)?.ok_or_else(|| self.missing(key))
     }
 
-    fn integer(&self, key: &str) -> Result<Option<Got<'a, i64>>, ScenarioError> {
+    fn integer(&self, key: &str) -> Result<Option<Located<'a, i64>>, ScenarioError> {
         self.get(key)
             .map(|v| value_integer(self.src, &self.key(key), v).map(|x| self.got(key, x, v.span())))
             .transpose()
     }
 
-    fn string(&self, key: &str) -> Result<Option<Got<'a, &'a str>>, ScenarioError> {
+    fn string(&self, key: &str) -> Result<Option<Located<'a, &'a str>>, ScenarioError> {
         self.get(key)
             .map(|v| match v.get_ref() {
                 DeValue::String(s) => Ok(self.got(key, s.as_ref(), v.span())),
@@ -634,19 +640,19 @@ impl<'a> Table<'a> {
             .transpose()
     }
 
-    fn req_string(&self, key: &str) -> Result<Got<'a, &'a str>, ScenarioError> {
+    fn req_string(&self, key: &str) -> Result<Located<'a, &'a str>, ScenarioError> {
         self.string(key)?.ok_or_else(|| self.missing(key))
     }
 
     /// A pair `[x, y]` of finite numbers.
-    fn pair(&self, key: &str) -> Result<Option<Got<'a, P2>>, ScenarioError> {
+    fn pair(&self, key: &str) -> Result<Option<Located<'a, P2>>, ScenarioError> {
         self.get(key)
             .map(|v| value_pair(self.src, &self.key(key), v).map(|p| self.got(key, p, v.span())))
             .transpose()
     }
 
     /// A position: a pair within ±[`MAX_POSITION_M`].
-    fn position(&self, key: &str) -> Result<Option<Got<'a, P2>>, ScenarioError> {
+    fn position(&self, key: &str) -> Result<Option<Located<'a, P2>>, ScenarioError> {
         let Some(p) = self.pair(key)? else {
             return Ok(None);
         };
@@ -654,7 +660,7 @@ impl<'a> Table<'a> {
         Ok(Some(p))
     }
 
-    fn req_position(&self, key: &str) -> Result<Got<'a, P2>, ScenarioError> {
+    fn req_position(&self, key: &str) -> Result<Located<'a, P2>, ScenarioError> {
         self.position(key)?.ok_or_else(|| self.missing(key))
     }
 
@@ -715,7 +721,11 @@ impl<'a> Table<'a> {
     }
 }
 
-fn as_table<'a>(src: Src<'a>, path: String, v: &'a Val<'a>) -> Result<Table<'a>, ScenarioError> {
+fn as_table<'a>(
+    src: SourceText<'a>,
+    path: String,
+    v: &'a Val<'a>,
+) -> Result<Table<'a>, ScenarioError> {
     match v.get_ref() {
         DeValue::Table(t) => Ok(Table::new(src, path, v.span(), t)),
         other => Err(src.err(
@@ -726,7 +736,11 @@ fn as_table<'a>(src: Src<'a>, path: String, v: &'a Val<'a>) -> Result<Table<'a>,
     }
 }
 
-pub(crate) fn value_integer(src: Src<'_>, key: &str, v: &Val<'_>) -> Result<i64, ScenarioError> {
+pub(crate) fn value_integer(
+    src: SourceText<'_>,
+    key: &str,
+    v: &Val<'_>,
+) -> Result<i64, ScenarioError> {
     match v.get_ref() {
         DeValue::Integer(i) => i64::from_str_radix(i.as_str(), i.radix())
             .map_err(|_| src.err(&v.span(), key, format!("integer {i} is too large"))),
@@ -739,7 +753,11 @@ pub(crate) fn value_integer(src: Src<'_>, key: &str, v: &Val<'_>) -> Result<i64,
 }
 
 /// A finite number; integers are accepted where numbers are expected.
-pub(crate) fn value_number(src: Src<'_>, key: &str, v: &Val<'_>) -> Result<f64, ScenarioError> {
+pub(crate) fn value_number(
+    src: SourceText<'_>,
+    key: &str,
+    v: &Val<'_>,
+) -> Result<f64, ScenarioError> {
     let x = match v.get_ref() {
         DeValue::Integer(_) => value_integer(src, key, v)? as f64,
         DeValue::Float(f) => f
@@ -761,7 +779,7 @@ pub(crate) fn value_number(src: Src<'_>, key: &str, v: &Val<'_>) -> Result<f64, 
     }
 }
 
-fn value_pair(src: Src<'_>, key: &str, v: &Val<'_>) -> Result<P2, ScenarioError> {
+fn value_pair(src: SourceText<'_>, key: &str, v: &Val<'_>) -> Result<P2, ScenarioError> {
     match v.get_ref() {
         DeValue::Array(a) if a.len() == 2 => {
             let x = value_number(src, &format!("{key}[0]"), &a[0])?;
@@ -781,7 +799,7 @@ fn value_pair(src: Src<'_>, key: &str, v: &Val<'_>) -> Result<P2, ScenarioError>
     }
 }
 
-fn check_position(p: &Got<'_, P2>) -> Result<(), ScenarioError> {
+fn check_position(p: &Located<'_, P2>) -> Result<(), ScenarioError> {
     if p.v.x.abs() > MAX_POSITION_M || p.v.y.abs() > MAX_POSITION_M {
         return Err(p.fail(format!(
             "coordinates must be within ±{MAX_POSITION_M} m, got [{}, {}]",
@@ -818,7 +836,7 @@ fn edit_distance(a: &str, b: &str) -> usize {
 
 /// Matches a string value against `(name, value)` choices.
 fn choose<T: Copy>(
-    s: &Got<'_, &str>,
+    s: &Located<'_, &str>,
     choices: &[(&str, T)],
     what: &str,
 ) -> Result<T, ScenarioError> {
@@ -944,104 +962,27 @@ fn build(root: &Table<'_>) -> Result<Scenario, ScenarioError> {
 
 // --- [planner] -------------------------------------------------------------------------------
 
-/// The `f32` fields of `Params` by name, with their documented range (for messages; the
-/// decision is `Params::validate`'s).
-const PARAM_F32: &[(&str, &str)] = &[
-    ("epsilon_m", "0.01 ..= 10 m"),
-    ("mu", "0 ..= 10 1/s"),
-    ("f_max", "0.001 ..= 100 m/s²"),
-    ("v_max", "0.01 ..= 20 m/s"),
-    ("a_plus", "0.001 ..= 100"),
-    ("a_rotor", "0 ..= 100"),
-    ("a_minus", "0.001 ..= 10000"),
-    ("sigma_m", "0.1 ..= 10000 m"),
-    ("agent_radius_m", "0.01 ..= 100 m"),
-    ("agent_a_plus", "0.001 ..= 100"),
-    ("arrival_radius_m", "0.01 ..= 100 m"),
-    ("ghost_lambda", "0 ..= 1"),
-    ("ghost_alpha", "0.01 ..= 2"),
-    ("ghost_eps_m", "0.01 ..= 100 m"),
-    ("stall_speed", "0 ..= v_max m/s"),
-    ("stall_time_s", "0.1 ..= 600 s"),
-    ("ghost_timeout_s", "1 ..= 3600 s"),
-    ("horizon_s", "0 ..= 120 s"),
-    ("mp_arc_m", "0.1 ..= 100 m"),
-    ("mp_turn_rad", "0.05 ..= 3.14159 rad"),
-    ("mp_xi", "0.001 ..= 10000"),
-    ("mp_eta", "0 ..= 1000000"),
-    ("mp_influence_m", "0.1 ..= 1000 m"),
-    ("nf_kappa", "0 (auto) or 1 ..= 64"),
-    ("nf_workspace_m", "1 ..= 100000 m"),
-    ("route_cell_m", "0 (route layer off) or 0.5 ..= 8 m"),
-    ("turn_rate_rps", "0 (turns at once) or 0.001 ..= 10 rad/s"),
-    ("brake_mps2", "0 (F_max) or 0.001 ..= 100 m/s²"),
-];
-
-fn param_f32<'p>(p: &'p mut Params, name: &str) -> Option<&'p mut f32> {
-    Some(match name {
-        "period_s" => &mut p.period_s,
-        "epsilon_m" => &mut p.epsilon_m,
-        "mu" => &mut p.mu,
-        "f_max" => &mut p.f_max,
-        "v_max" => &mut p.v_max,
-        "a_plus" => &mut p.a_plus,
-        "a_rotor" => &mut p.a_rotor,
-        "a_minus" => &mut p.a_minus,
-        "sigma_m" => &mut p.sigma_m,
-        "agent_radius_m" => &mut p.agent_radius_m,
-        "agent_a_plus" => &mut p.agent_a_plus,
-        "arrival_radius_m" => &mut p.arrival_radius_m,
-        "ghost_lambda" => &mut p.ghost_lambda,
-        "ghost_alpha" => &mut p.ghost_alpha,
-        "ghost_eps_m" => &mut p.ghost_eps_m,
-        "stall_speed" => &mut p.stall_speed,
-        "stall_time_s" => &mut p.stall_time_s,
-        "ghost_timeout_s" => &mut p.ghost_timeout_s,
-        "horizon_s" => &mut p.horizon_s,
-        "mp_arc_m" => &mut p.mp_arc_m,
-        "mp_turn_rad" => &mut p.mp_turn_rad,
-        "mp_xi" => &mut p.mp_xi,
-        "mp_eta" => &mut p.mp_eta,
-        "mp_influence_m" => &mut p.mp_influence_m,
-        "nf_kappa" => &mut p.nf_kappa,
-        "nf_workspace_m" => &mut p.nf_workspace_m,
-        "route_cell_m" => &mut p.route_cell_m,
-        "turn_rate_rps" => &mut p.turn_rate_rps,
-        "brake_mps2" => &mut p.brake_mps2,
-        _ => return None,
-    })
+/// A parameter's declared range and unit, for messages (the decision is `Params::validate`'s).
+fn param_range(id: ParamId) -> String {
+    let range = match (id.range(), id.kind()) {
+        (vpf::params::Range::Any, Kind::U32) => format!("0 ..= {}", u32::MAX),
+        (r, _) => r.to_string(),
+    };
+    format!("{range}{}", unit_suffix(id.unit()))
 }
 
-fn param_range(name: &str) -> String {
-    match name {
-        "period_s" => "0.02 ..= 1 s".into(),
-        "n_gamma" => format!("4 ..= {}", vpf::params::N_GAMMA_MAX),
-        "max_ghosts" => format!("0 ..= {}", vpf::planner::MAX_GHOSTS),
-        "mp_points" => format!("3 ..= {}", vpf::planner::multipoint::MAX_ARC_POINTS),
-        "mp_periphery" => format!("2 ..= {}", vpf::planner::multipoint::MAX_PERIPHERY_POINTS),
-        _ => PARAM_F32
-            .iter()
-            .find(|(n, _)| *n == name)
-            .map_or_else(|| "its documented range".into(), |(_, r)| (*r).into()),
-    }
+/// A parameter's value as a scenario would write it.
+fn param_value(p: &Params, id: ParamId) -> String {
+    p.get(id).to_string()
 }
 
-fn param_value(p: &Params, name: &str) -> String {
-    let mut p = *p;
-    match name {
-        "n_gamma" => p.n_gamma.to_string(),
-        "max_ghosts" => p.max_ghosts.to_string(),
-        "mp_points" => p.mp_points.to_string(),
-        "mp_periphery" => p.mp_periphery.to_string(),
-        _ => param_f32(&mut p, name).map_or_else(String::new, |v| v.to_string()),
-    }
-}
-
-fn planner(root: &Table<'_>, dt: &Got<'_, f64>) -> Result<Params, ScenarioError> {
+fn planner(root: &Table<'_>, dt: &Located<'_, f64>) -> Result<Params, ScenarioError> {
     let mut params = Params {
         period_s: dt.v as f32,
         ..Params::default()
     };
+    // Every name validate reports is a declared parameter.
+    let id_of = |name: &str| ParamId::from_name(name).unwrap_or(ParamId::period_s);
     let Some(t) = root.table("planner")? else {
         params.validate().map_err(|e| {
             root.src.err(
@@ -1049,74 +990,51 @@ fn planner(root: &Table<'_>, dt: &Got<'_, f64>) -> Result<Params, ScenarioError>
                 &format!("planner.{}", e.name),
                 format!(
                     "the default value {} is refused by vpf ({e})",
-                    param_value(&params, e.name)
+                    param_value(&params, id_of(e.name))
                 ),
             )
         })?;
         return Ok(params);
     };
-    t.allow(
-        &vpf::link::PARAM_NAMES,
-        "[planner] (the names of vpf::Params' fields)",
-    )?;
+    t.allow(&PARAM_NAMES, "[planner] (the names of vpf::Params' fields)")?;
 
     for &(name, _, _) in &t.entries {
-        match name {
-            "strategy" => {
-                let s = t.req_string(name)?;
-                params.strategy = Strategy::from_name(s.v).ok_or_else(|| {
-                    s.fail(format!(
-                        "unknown strategy \"{}\" (expected \"vpf\", \"multipoint\" or \"navfn\")",
-                        s.v
-                    ))
-                })?;
-            }
-            "period_s" => {
+        let Some(id) = ParamId::from_name(name) else {
+            continue;
+        };
+        let value = match id.kind() {
+            _ if id == ParamId::period_s => {
                 return Err(t.src.err(
                     &t.span_of(name),
                     &t.key(name),
                     "the planner period is the top-level `dt_s`; set it there",
                 ))
             }
-            "bounding" => {
+            Kind::Code(names) => {
                 let s = t.req_string(name)?;
-                params.bounding = choose(
-                    &s,
-                    &[("plain", Bounding::Plain), ("split", Bounding::Split)],
-                    "bounding",
-                )?;
+                let choices: Vec<(&str, u8)> = names.iter().copied().zip(0u8..).collect();
+                Value::Code(choose(&s, &choices, name)?)
             }
-            "n_gamma" | "max_ghosts" | "mp_points" | "mp_periphery" => {
+            Kind::U8 | Kind::U32 => {
                 let i = t.integer(name)?.ok_or_else(|| t.missing(name))?;
-                let v = u8::try_from(i.v).map_err(|_| {
-                    i.fail(format!("must be in {}, got {}", param_range(name), i.v))
-                })?;
-                *match name {
-                    "n_gamma" => &mut params.n_gamma,
-                    "max_ghosts" => &mut params.max_ghosts,
-                    "mp_points" => &mut params.mp_points,
-                    _ => &mut params.mp_periphery,
-                } = v;
-            }
-            "seed" => {
-                let i = t.integer(name)?.ok_or_else(|| t.missing(name))?;
-                params.seed = u32::try_from(i.v)
-                    .map_err(|_| i.fail(format!("must be in 0 ..= {}, got {}", u32::MAX, i.v)))?;
-            }
-            _ => {
-                let n = t.req_number(name)?;
-                if let Some(field) = param_f32(&mut params, name) {
-                    // Out-of-f32 values become infinite and are refused by validate below.
-                    *field = n.v as f32;
+                let refuse = || i.fail(format!("must be in {}, got {}", param_range(id), i.v));
+                if id.kind() == Kind::U8 {
+                    Value::U8(u8::try_from(i.v).map_err(|_| refuse())?)
+                } else {
+                    Value::U32(u32::try_from(i.v).map_err(|_| refuse())?)
                 }
             }
-        }
+            // Out-of-f32 values become infinite and are refused by validate below.
+            Kind::F32 => Value::F32(t.req_number(name)?.v as f32),
+        };
+        params.set(id, value);
     }
 
     params.validate().map_err(|e| {
-        let value = param_value(&params, e.name);
+        let id = id_of(e.name);
+        let value = param_value(&params, id);
         // Every number read is a finite f64, so a non-finite f32 here overflowed: out of range.
-        let problem = format!("must be in {}", param_range(e.name));
+        let problem = format!("must be in {}", param_range(id));
         if e.name == "period_s" {
             dt.fail(format!("{problem}, got {}", dt.v))
         } else if t.has(e.name) {
@@ -1328,7 +1246,7 @@ fn obstacle(t: &Table<'_>) -> Result<(SimObstacle, Shape), ScenarioError> {
             let center = t.req_position("center")?.v;
             let half = t.pair("half_size")?.ok_or_else(|| t.missing("half_size"))?;
             for (i, v) in [half.v.x, half.v.y].into_iter().enumerate() {
-                let side = Got {
+                let side = Located {
                     v,
                     span: half.span.clone(),
                     key: format!("{}[{i}]", half.key),
@@ -1408,7 +1326,7 @@ fn polygon(t: &Table<'_>) -> Result<Vec<P2>, ScenarioError> {
     }
     let mut pts = Vec::with_capacity(n);
     for (i, item) in items.iter().enumerate() {
-        let p = Got {
+        let p = Located {
             v: value_pair(t.src, &format!("{key}[{i}]"), item)?,
             span: item.span(),
             key: format!("{key}[{i}]"),
@@ -1523,7 +1441,7 @@ fn vehicle(
             )
         }
         (None, Some((_, placed))) => match placed.last() {
-            Some(p) => Got {
+            Some(p) => Located {
                 v: p.at.v,
                 span: p.at.span.clone(),
                 key: p.at.key.clone(),

@@ -384,6 +384,14 @@ pub type Usart6 = Usart<USART6>;
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct LineError;
 
+impl core::fmt::Display for LineError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str("UART line error (overrun, noise, framing or parity)")
+    }
+}
+
+impl core::error::Error for LineError {}
+
 impl embedded_io::Error for LineError {
     fn kind(&self) -> embedded_io::ErrorKind {
         embedded_io::ErrorKind::InvalidData

@@ -42,6 +42,8 @@ impl core::fmt::Display for ShapeError {
     }
 }
 
+impl core::error::Error for ShapeError {}
+
 /// The geometry of an obstacle. Construct with the checked constructors; the fields stay
 /// private so a `Shape` is always valid.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -4,7 +4,7 @@
 
 use heapless::spsc::Consumer;
 use rtic::Mutex;
-use vpf::guidance::{Background, Control, NavSample, Sighting, Sink};
+use vpf::guidance::{Background, BackgroundOutputs, Control, NavSample, Sighting};
 use vpf::link::ReplyRepr;
 use vpf::route::{Route, Router};
 
@@ -109,14 +109,12 @@ pub fn run(task: &mut BackgroundTask, shared: &mut impl Exchange) -> ! {
         let sonar = task.poll_sonar(shared);
         let mavlink = task.poll_mavlink(shared);
         if !control && !sonar && !mavlink {
-            // Checked and slept with interrupts masked: a byte received after the polls above
-            // leaves its interrupt pending, which wakes the WFI (ARMv7-M wakes on a pending
-            // interrupt whatever PRIMASK says) and is taken once they are unmasked. Unmasked, a
-            // last byte received between the check and the WFI would wait for the next
-            // interrupt, and in lockstep (SysTick stopped, the host waiting for an answer) none
-            // comes.
+            // Interrupts off from the last look to the sleep: one that came between the polls
+            // and WFI would otherwise run first and leave the background asleep until the next
+            // one, which in lockstep (the host waiting on this firmware) never comes. WFI wakes
+            // on a pending interrupt even while they are masked.
             cortex_m::interrupt::free(|_| {
-                if !task.input_waiting() {
+                if task.nothing_received() {
                     cortex_m::asm::wfi();
                 }
             });
@@ -136,13 +134,13 @@ pub struct BackgroundTask {
     mav: MavPort,
 }
 
-/// The background's [`Sink`]: its queue ends and the shared resources.
+/// The background's [`BackgroundOutputs`]: its queue ends and the shared resources.
 struct Outlet<'a, X: Exchange> {
     queues: &'a mut Producers,
     exchange: &'a mut X,
 }
 
-impl<X: Exchange> Sink for Outlet<'_, X> {
+impl<X: Exchange> BackgroundOutputs for Outlet<'_, X> {
     fn nav(&mut self, sample: NavSample) {
         self.exchange.publish_nav(sample);
     }
@@ -190,10 +188,10 @@ impl BackgroundTask {
         }
     }
 
-    /// Whether any link's receive queue holds bytes.
+    /// No byte waits in any receive queue (the control link's, the Ping360's, MAVLink's).
     #[cfg_attr(feature = "selftest", allow(dead_code))]
-    fn input_waiting(&self) -> bool {
-        self.inbox.ready() || self.sonar.inbox.ready() || self.mav.input_waiting()
+    fn nothing_received(&self) -> bool {
+        !self.inbox.ready() && !self.sonar.inbox.ready() && !self.mav.received()
     }
 
     /// Decodes what has been received; `true` if there was anything.
@@ -262,7 +260,9 @@ impl BackgroundTask {
     #[cfg_attr(feature = "selftest", allow(dead_code))]
     pub fn poll_sonar(&mut self, exchange: &mut impl Exchange) -> bool {
         let busy = self.sonar_bytes(exchange);
-        if !self.background.lockstep() && vpf::guidance::single::ping360_started(&self.background) {
+        if !self.background.lockstep()
+            && vpf::guidance::one_thread::ping360_started(&self.background)
+        {
             let now = exchange.now_ms();
             self.sonar.poll(now);
         }

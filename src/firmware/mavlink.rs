@@ -17,7 +17,7 @@ use core::sync::atomic::{AtomicU32, Ordering};
 
 use heapless::spsc::{Consumer, Producer, Queue};
 use vpf::guidance::mavlink::{MavConfig, MavInbound, MavMission, MavOutbound};
-use vpf::guidance::{Background, Periodic, Sink};
+use vpf::guidance::{Background, BackgroundOutputs, Periodic};
 use vpf::planner::Command;
 use vpf::route::Router;
 use vpf::sonar::EvidenceMap;
@@ -62,8 +62,8 @@ impl MavPort {
         }
     }
 
-    /// Whether received bytes wait in the queue.
-    pub fn input_waiting(&self) -> bool {
+    /// Bytes wait in the receive queue.
+    pub fn received(&self) -> bool {
         self.inbox.ready()
     }
 
@@ -72,7 +72,7 @@ impl MavPort {
         &mut self,
         now_ms: u64,
         background: &mut Background,
-        sink: &mut impl Sink,
+        sink: &mut impl BackgroundOutputs,
         map: Option<&EvidenceMap>,
         router: Option<&mut Router>,
     ) -> bool {
@@ -100,7 +100,7 @@ impl MavPort {
         bytes: &[u8],
         now_ms: u64,
         background: &mut Background,
-        sink: &mut impl Sink,
+        sink: &mut impl BackgroundOutputs,
         map: Option<&EvidenceMap>,
         router: Option<&mut Router>,
     ) {

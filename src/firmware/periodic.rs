@@ -3,7 +3,7 @@
 
 use core::sync::atomic::Ordering;
 
-use vpf::guidance::{Control, Inputs, NavSample, Periodic, Sighting};
+use vpf::guidance::{Control, NavSample, Periodic, PeriodicInputs, Sighting};
 use vpf::link::ReplyRepr;
 use vpf::route::Route;
 
@@ -58,13 +58,13 @@ pub struct PeriodShared<'a> {
     pub stats: &'a mut Stats,
 }
 
-struct PeriodInputs<'a> {
+struct Inlet<'a> {
     queues: &'a mut Consumers,
     nav: Option<NavSample>,
     link_counters: LinkCounters,
 }
 
-impl Inputs for PeriodInputs<'_> {
+impl PeriodicInputs for Inlet<'_> {
     fn nav(&mut self) -> Option<NavSample> {
         self.nav
     }
@@ -160,7 +160,7 @@ impl PeriodicTask {
         let dropped = self.rx_dropped.swap(0, Ordering::Relaxed);
         self.runtime.count_rx_dropped(dropped);
 
-        let mut inputs = PeriodInputs {
+        let mut inputs = Inlet {
             queues: &mut self.queues,
             nav: *shared.nav,
             link_counters: *shared.link_counters,

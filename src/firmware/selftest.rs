@@ -28,6 +28,15 @@ use super::background::{BackgroundTask, Exchange};
 use super::Stats;
 use crate::board::active as board;
 
+/// Bins of the flood's scanlines (and of the link's cost measurement).
+const FLOOD_BINS: usize = 400;
+/// A transmit buffer for one such scanline frame, and one for a `Params` frame: the test's
+/// stand-ins for the UART's queue hold only what they carry, so that the stack high-water
+/// measures the firmware rather than the test (`MAX_FRAME` is the longest message's, 715).
+const SCAN_FRAME: usize =
+    vpf::link::frame_buffer_len(vpf::link::sensors::SCANLINE_HEAD_LEN + FLOOD_BINS);
+const PARAMS_FRAME: usize = vpf::link::frame_buffer_len(vpf::link::control::PARAMS_LEN);
+
 /// Periods to run.
 pub const PERIODS: u32 = 50;
 /// The planner step budget, instructions (shared/DESIGN.md).
@@ -105,7 +114,7 @@ fn report_stack() {
 /// frame buffer would otherwise sit under every later measurement's stack.
 #[inline(never)]
 fn link_costs(idle: &mut BackgroundTask, x: &mut impl Exchange) {
-    let bins = [7u8; 400];
+    let bins = [7u8; FLOOD_BINS];
     let scan = Scanline {
         time_ms: x.now_ms(),
         bearing_rad: 0.0,
@@ -116,7 +125,7 @@ fn link_costs(idle: &mut BackgroundTask, x: &mut impl Exchange) {
     let mut costs = [u32::MAX; 2];
     for (damaged, least) in costs.iter_mut().enumerate() {
         for seq in 0..8u16 {
-            let mut frame = [0u8; vpf::link::MAX_FRAME];
+            let mut frame = [0u8; SCAN_FRAME];
             let refused = vpf::link::encode_frame(
                 vpf::link::MessageType::Scanline,
                 seq,
@@ -222,7 +231,7 @@ fn feed_ping360(idle: &mut BackgroundTask, x: &mut impl Exchange, ping: u32, st:
 
 /// Switches the planner's parameters by a `Params` message, as a host would.
 fn set_strategy(idle: &mut BackgroundTask, x: &mut impl Exchange, p: Params) {
-    let mut frame = [0u8; vpf::link::MAX_FRAME];
+    let mut frame = [0u8; PARAMS_FRAME];
     if let Ok(n) = Message::Params(p).emit_frame(0, &mut frame) {
         if let Some(f) = frame.get(..n) {
             idle.feed(f, x);
@@ -237,7 +246,7 @@ fn flood(
     x: &mut impl Exchange,
     mut sonar: Option<&mut PingStats>,
 ) -> Flood {
-    let mut bins = [0u8; 400];
+    let mut bins = [0u8; FLOOD_BINS];
     let mut ping = 0u32;
     let mut f = Flood {
         scanlines: 0,
@@ -286,7 +295,7 @@ fn flood(
             range_m: 40.0,
             bins: &bins,
         };
-        let mut frame = [0u8; vpf::link::MAX_FRAME];
+        let mut frame = [0u8; SCAN_FRAME];
         if let Ok(n) = scan.emit_frame(ping as u16, &mut frame) {
             if let Some(bytes) = frame.get(..n) {
                 let periods = x.stats().periods;

@@ -16,7 +16,7 @@
 //!   its timeouts) runs once per period: in real time after each period, in lockstep at each
 //!   `Tick`'s time just before that period runs, so the period's telemetry counts the command
 //!   (the HIL harness relies on it). It starts once navigation has come, or at the first `Tick`
-//!   (`vpf::guidance::single::ping360_started`, the host-process firmware's rule).
+//!   (`vpf::guidance::one_thread::ping360_started`, the host-process firmware's rule).
 
 use core::sync::atomic::AtomicBool;
 

@@ -5,7 +5,7 @@
 //! extraction, contacts as sightings, missions, parameters and charts as requests, ticks to the
 //! lockstep clock. Requests refused at the wire, and requests that find the request queue full
 //! ("busy"), get their reply through the ring of owed replies instead. Everything leaves
-//! through a [`Sink`], which the board implements with lock-free queues.
+//! through a [`BackgroundOutputs`], which the board implements with lock-free queues.
 
 use crate::link::{Decoder, Direction, Message, MessageType, Outcome, ReplyRepr, RxCounters};
 use crate::route::{Route, Router};
@@ -14,9 +14,10 @@ use crate::sonar::{ConfigError, EvidenceMap, Extractor, ExtractorConfig, Pose, S
 use super::{Control, NavSample, Sighting};
 use crate::planner::NavState;
 
-/// Where the background's results go. Each `false` means "full": the item is dropped and
-/// counted.
-pub trait Sink {
+/// Where the background's results go: the writing ends of the queues and slots whose reading
+/// ends are the periodic task's [`PeriodicInputs`](super::PeriodicInputs). Each `false` means
+/// "full": the item is dropped and counted.
+pub trait BackgroundOutputs {
     /// Publishes the newest navigation (overwrites the previous one).
     fn nav(&mut self, sample: NavSample);
     /// Queues a sighting for the world tables.
@@ -125,7 +126,7 @@ impl Background {
         &mut self,
         scan: &Scanline<'_>,
         pose: Option<Pose>,
-        sink: &mut impl Sink,
+        sink: &mut impl BackgroundOutputs,
         map: Option<&EvidenceMap>,
     ) {
         scanline(
@@ -146,7 +147,7 @@ impl Background {
         &mut self,
         nav: NavState,
         now_ms: u64,
-        sink: &mut impl Sink,
+        sink: &mut impl BackgroundOutputs,
         map: Option<&EvidenceMap>,
         router: Option<&mut Router>,
     ) {
@@ -168,7 +169,7 @@ impl Background {
         &mut self,
         bytes: &'b [u8],
         now_ms: u64,
-        sink: &mut impl Sink,
+        sink: &mut impl BackgroundOutputs,
         map: Option<&EvidenceMap>,
         mut router: Option<&mut Router>,
     ) -> &'b [u8] {
@@ -248,14 +249,18 @@ fn is_request(t: MessageType) -> bool {
 
 /// Queues a reply owed outside the request queue; when the ring is full too the request goes
 /// unanswered, counted.
-fn owe(sink: &mut impl Sink, r: ReplyRepr, counters: &mut BackgroundCounters) {
+fn owe(sink: &mut impl BackgroundOutputs, r: ReplyRepr, counters: &mut BackgroundCounters) {
     let ok = sink.reply(r);
     count_if(!ok, &mut counters.requests_unanswered);
 }
 
 /// Queues a request; a full queue answers "busy". `true` if it was queued (the request will be
 /// applied), so side effects of a request (the route layer's) happen only then.
-fn request(sink: &mut impl Sink, c: Control, counters: &mut BackgroundCounters) -> bool {
+fn request(
+    sink: &mut impl BackgroundOutputs,
+    c: Control,
+    counters: &mut BackgroundCounters,
+) -> bool {
     if sink.control(c) {
         return true;
     }
@@ -281,7 +286,7 @@ fn scanline(
     counters: &mut BackgroundCounters,
     scan: &Scanline<'_>,
     pose: Option<Pose>,
-    sink: &mut impl Sink,
+    sink: &mut impl BackgroundOutputs,
     map: Option<&EvidenceMap>,
 ) {
     let Some(p) = pose else {
@@ -318,7 +323,7 @@ fn navigation(
     nav: NavState,
     time_ms: u64,
     pose: &mut Option<Pose>,
-    sink: &mut impl Sink,
+    sink: &mut impl BackgroundOutputs,
     map: Option<&EvidenceMap>,
     router: Option<&mut Router>,
 ) {
@@ -349,7 +354,7 @@ fn dispatch(
     (pose, last_bearing): (&mut Option<Pose>, &mut Option<f32>),
     counters: &mut BackgroundCounters,
     contact_a_plus: f32,
-    sink: &mut impl Sink,
+    sink: &mut impl BackgroundOutputs,
     map: Option<&EvidenceMap>,
 ) {
     match msg {
@@ -419,7 +424,7 @@ fn dispatch(
                 r.forget_charts();
             }
         }
-        // Waypoint missions reach the route layer through the periodic task's goal (`Sink::goal`),
+        // Waypoint missions reach the route layer through the periodic task's goal (`BackgroundOutputs::goal`),
         // once they are complete and accepted.
         Message::MissionCount(c) => {
             request(sink, Control::MissionCount(header, c), counters);

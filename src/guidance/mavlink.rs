@@ -34,7 +34,7 @@ use crate::route::Router;
 use crate::sonar::EvidenceMap;
 use crate::world::World;
 
-use super::{Background, NavSample, Periodic, Sink};
+use super::{Background, BackgroundOutputs, NavSample, Periodic};
 
 /// Who is who on the MAVLink line.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -135,7 +135,7 @@ impl MavInbound {
         bytes: &[u8],
         now_ms: u64,
         background: &mut Background,
-        sink: &mut impl Sink,
+        sink: &mut impl BackgroundOutputs,
         map: Option<&EvidenceMap>,
         mut router: Option<&mut Router>,
         missions: &mut impl FnMut(MavMission) -> bool,

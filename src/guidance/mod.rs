@@ -34,16 +34,16 @@ pub mod background;
 pub mod failsafe;
 pub mod guard;
 pub mod mavlink;
+pub mod one_thread;
 pub mod periodic;
-pub mod single;
 pub mod tracks;
 pub mod upload;
 
-pub use background::{Background, BackgroundCounters, Sink};
+pub use background::{Background, BackgroundCounters, BackgroundOutputs};
 pub use failsafe::FailsafeConfig;
 pub use guard::{GuardConfig, Verdict};
-pub use periodic::{Inputs, Periodic, RuntimeConfig};
-pub use single::SingleContext;
+pub use one_thread::OneThreadRuntime;
+pub use periodic::{Periodic, PeriodicInputs, RuntimeConfig};
 pub use tracks::TrackConfig;
 
 use crate::link::{ChartClearRepr, Header, MissionCountRepr, MissionItemRepr, SurveyRepr};

@@ -87,8 +87,9 @@ fn slowed(mut c: Command, v: f32) -> Command {
     c
 }
 
-/// What the periodic task reads from the slow side each period (the board's queues).
-pub trait Inputs {
+/// What the periodic task reads from the slow side each period: the reading ends of the queues
+/// and slots the background writes through [`BackgroundOutputs`](super::BackgroundOutputs).
+pub trait PeriodicInputs {
     /// The newest navigation, if any has come.
     fn nav(&mut self) -> Option<NavSample>;
     /// The next queued sighting.
@@ -275,7 +276,7 @@ impl Periodic {
     pub fn on_tick(
         &mut self,
         now_ms: u64,
-        inputs: &mut impl Inputs,
+        inputs: &mut impl PeriodicInputs,
         map: Option<&EvidenceMap>,
         cost: &mut impl FnMut() -> u32,
         tx: &mut impl FnMut(&[u8]) -> bool,

@@ -6,6 +6,7 @@
 //! never flying half a mission). Items may come in any order and again (a host resends what
 //! came back "busy"); an item outside the open upload is refused and changes nothing.
 
+use crate::link::mission::field::mission_item;
 use crate::link::{Header, MissionCountRepr, MissionItemRepr, Problem, ReplyRepr};
 use crate::math::Vec2;
 use crate::planner::{Formation, MissionEnd, Planner, Waypoint, Waypoints, MAX_WAYPOINTS};
@@ -60,7 +61,7 @@ impl Upload {
         let mut refuse = |problem| {
             let c = &mut planner.counters.bad_mission;
             *c = c.saturating_add(1);
-            ReplyRepr::rejected(h, 0, problem)
+            ReplyRepr::rejected(h, mission_item::INDEX.row, problem)
         };
         if !self.is_open() {
             return refuse(Problem::Invalid);

@@ -14,8 +14,24 @@
 
 use super::codec::{Reader, Writer};
 use super::frame::MessageType;
-use super::message::Payload;
+use super::payload::Payload;
 use super::{Error, Problem};
+
+/// `Belief`'s rows (docs/protocol.md §6), by name: each constant is the row of the field it
+/// names.
+#[allow(missing_docs)]
+pub mod field {
+    use crate::link::layout::Field;
+
+    pub const TIME_MS: Field = Field::new(0, 0, "u64", "time_ms");
+    pub const CELL_M: Field = Field::new(1, 8, "f32", "cell_m");
+    pub const X0: Field = Field::new(2, 12, "i32", "x0");
+    pub const Y0: Field = Field::new(3, 16, "i32", "y0");
+    pub const ROWS: Field = Field::new(4, 20, "u8", "rows");
+    pub const BITMAP: Field = Field::new(5, 21, "rows × u64", "bitmap");
+    /// Every row, in order.
+    pub const ALL: &[Field] = &[TIME_MS, CELL_M, X0, Y0, ROWS, BITMAP];
+}
 
 /// Most rows in one `Belief` chunk.
 pub const BELIEF_ROWS: usize = 16;
@@ -63,13 +79,13 @@ impl BeliefRepr<'_> {
     fn check(&self) -> Result<(), Error> {
         let c = self.cell_m();
         if !c.is_finite() {
-            return Err(Error::field(1, Problem::NonFinite));
+            return Err(field::CELL_M.error(Problem::NonFinite));
         }
         if !(0.05..=10.0).contains(&c) {
-            return Err(Error::field(1, Problem::OutOfRange));
+            return Err(field::CELL_M.error(Problem::OutOfRange));
         }
         if !self.bitmap.len().is_multiple_of(8) || self.rows() > BELIEF_ROWS {
-            return Err(Error::field(4, Problem::OutOfRange));
+            return Err(field::ROWS.error(Problem::OutOfRange));
         }
         Ok(())
     }
@@ -86,7 +102,7 @@ impl<'a> Payload<'a> for BeliefRepr<'a> {
         let y0 = r.u32()? as i32;
         let rows = usize::from(r.u8()?);
         if rows > BELIEF_ROWS {
-            return Err(Error::field(4, Problem::OutOfRange));
+            return Err(field::ROWS.error(Problem::OutOfRange));
         }
         let bitmap = r.bytes(8 * rows)?;
         r.finish()?;

@@ -3,6 +3,7 @@
 //! A [`Reader`] runs out with [`Error::Length`], a [`Writer`] with [`Error::BufferTooSmall`];
 //! neither indexes, so no input can make them panic.
 
+use super::layout::Field;
 use super::{Error, Problem};
 use crate::math::{Vec2, TAU};
 
@@ -127,43 +128,43 @@ impl<'a> Writer<'a> {
 }
 
 /// `v` must be finite.
-pub(crate) fn finite(index: u8, v: f32) -> Result<(), Error> {
+pub(crate) fn finite(f: Field, v: f32) -> Result<(), Error> {
     if v.is_finite() {
         Ok(())
     } else {
-        Err(Error::field(index, Problem::NonFinite))
+        Err(f.error(Problem::NonFinite))
     }
 }
 
 /// `v` must be finite and within `lo ..= hi`.
-pub(crate) fn within(index: u8, v: f32, lo: f32, hi: f32) -> Result<(), Error> {
-    finite(index, v)?;
+pub(crate) fn within(f: Field, v: f32, lo: f32, hi: f32) -> Result<(), Error> {
+    finite(f, v)?;
     if (lo..=hi).contains(&v) {
         Ok(())
     } else {
-        Err(Error::field(index, Problem::OutOfRange))
+        Err(f.error(Problem::OutOfRange))
     }
 }
 
 /// `|v| ≤ max`, finite.
-pub(crate) fn magnitude(index: u8, v: f32, max: f32) -> Result<(), Error> {
-    within(index, v, -max, max)
+pub(crate) fn magnitude(f: Field, v: f32, max: f32) -> Result<(), Error> {
+    within(f, v, -max, max)
 }
 
 /// An angle in radians: finite and within ±2π (a wider value is a unit error, e.g. degrees).
-pub(crate) fn angle(index: u8, v: f32) -> Result<(), Error> {
-    magnitude(index, v, TAU)
+pub(crate) fn angle(f: Field, v: f32) -> Result<(), Error> {
+    magnitude(f, v, TAU)
 }
 
 /// Both components of a point within ±`max`.
-pub(crate) fn point(index: u8, p: Vec2, max: f32) -> Result<(), Error> {
-    magnitude(index, p.x, max)?;
-    magnitude(index, p.y, max)
+pub(crate) fn point(f: Field, p: Vec2, max: f32) -> Result<(), Error> {
+    magnitude(f, p.x, max)?;
+    magnitude(f, p.y, max)
 }
 
 /// A field refused with `problem`.
-pub(crate) fn refuse<T>(index: u8, problem: Problem) -> Result<T, Error> {
-    Err(Error::field(index, problem))
+pub(crate) fn refuse<T>(f: Field, problem: Problem) -> Result<T, Error> {
+    Err(f.error(problem))
 }
 
 #[cfg(test)]
@@ -196,18 +197,20 @@ mod tests {
         assert_eq!(buf, [0xef, 0xbe, 0xad, 0xde, 7]);
     }
 
+    const F: Field = Field::new(4, 0, "f32", "f");
+
     #[test]
     fn checks_name_the_field_and_problem() {
         assert_eq!(
-            within(4, f32::NAN, 0.0, 1.0),
+            within(F, f32::NAN, 0.0, 1.0),
             Err(Error::field(4, Problem::NonFinite))
         );
         assert_eq!(
-            within(4, 1.5, 0.0, 1.0),
+            within(F, 1.5, 0.0, 1.0),
             Err(Error::field(4, Problem::OutOfRange))
         );
-        assert_eq!(within(4, 1.0, 0.0, 1.0), Ok(()));
-        assert_eq!(angle(2, 7.0), Err(Error::field(2, Problem::OutOfRange)));
-        assert_eq!(angle(2, -6.0), Ok(()));
+        assert_eq!(within(F, 1.0, 0.0, 1.0), Ok(()));
+        assert_eq!(angle(F, 7.0), Err(Error::field(4, Problem::OutOfRange)));
+        assert_eq!(angle(F, -6.0), Ok(()));
     }
 }

@@ -3,36 +3,93 @@
 //!
 //! `Mission` and `Params` parse straight into the library's [`Mission`] and [`Params`].
 
-use super::codec::{angle, finite, magnitude, refuse, within, Reader, Writer};
+use super::codec::{magnitude, refuse, within, Reader, Writer};
+use super::formation::{self, FormationRows};
 use super::frame::MessageType;
-use super::message::Payload;
+use super::payload::Payload;
 use super::shape::{read_shape, shape_len, write_shape};
 use super::{Error, Problem};
 use crate::field::Shape;
-use crate::params::{Bounding, Params, Strategy};
-use crate::planner::{Formation, Mission, MAX_COORD_M};
+use crate::params::{Kind, ParamId, Params, Value};
+use crate::types::{Mission, MAX_COORD_M};
 use crate::world::{ObjectError, Obstacle, Origin};
+use field::{chart_clear, chart_obstacle, mission};
 
 /// `Mission` payload length without a formation.
 pub const MISSION_LEN: usize = 9;
 /// `Mission` payload length with a formation.
 pub const MISSION_LEN_WITH_FORMATION: usize = 22;
 /// `Mission` flag bit: a formation follows.
-pub const MISSION_FLAG_FORMATION: u8 = 0x01;
+pub const MISSION_FLAG_FORMATION: u8 = formation::FLAG_FORMATION;
+
+/// Each message's rows (docs/protocol.md §6), by name: each constant is the row of the field
+/// it names.
+#[allow(missing_docs)]
+pub mod field {
+    /// `Mission`.
+    pub mod mission {
+        use crate::link::layout::Field;
+
+        pub const GOAL_X: Field = Field::new(0, 0, "f32", "goal_x");
+        pub const GOAL_Y: Field = Field::new(1, 4, "f32", "goal_y");
+        pub const FLAGS: Field = Field::new(2, 8, "u8", "flags");
+        pub const Q: Field = Field::new(3, 9, "u8", "q");
+        pub const LATTICE_M: Field = Field::new(4, 10, "f32", "lattice_m");
+        pub const ORIENTATION: Field = Field::new(5, 14, "f32", "orientation");
+        pub const ATTRACTION: Field = Field::new(6, 18, "f32", "attraction");
+        /// Every row, in order.
+        pub const ALL: &[Field] = &[GOAL_X, GOAL_Y, FLAGS, Q, LATTICE_M, ORIENTATION, ATTRACTION];
+    }
+
+    /// `ChartObstacle`.
+    pub mod chart_obstacle {
+        use crate::link::layout::Field;
+
+        pub const ID: Field = Field::new(0, 0, "u16", "id");
+        pub const A_PLUS: Field = Field::new(1, 2, "f32", "a_plus");
+        pub const SHAPE: Field = Field::new(2, 6, "shape", "shape");
+        /// Every row, in order.
+        pub const ALL: &[Field] = &[ID, A_PLUS, SHAPE];
+    }
+
+    /// `ChartClear`.
+    pub mod chart_clear {
+        use crate::link::layout::Field;
+
+        pub const SCOPE: Field = Field::new(0, 0, "u8", "scope");
+        pub const ID: Field = Field::new(1, 1, "u16", "id");
+        /// Every row, in order.
+        pub const ALL: &[Field] = &[SCOPE, ID];
+    }
+
+    /// `Tick`.
+    pub mod tick {
+        use crate::link::layout::Field;
+
+        pub const TIME_MS: Field = Field::new(0, 0, "u64", "time_ms");
+        /// Every row, in order.
+        pub const ALL: &[Field] = &[TIME_MS];
+    }
+
+    /// `Params`: the rows are the parameters, [`ParamId`](crate::params::ParamId), in
+    /// declaration order.
+    pub use crate::params::ParamId as params;
+}
+
+/// The rows of `Mission`'s formation.
+const FORMATION_ROWS: FormationRows = FormationRows {
+    flags: mission::FLAGS,
+    q: mission::Q,
+    lattice_m: mission::LATTICE_M,
+    orientation: mission::ORIENTATION,
+    attraction: mission::ATTRACTION,
+};
 
 fn check_mission(m: &Mission) -> Result<(), Error> {
-    magnitude(0, m.goal.x, MAX_COORD_M)?;
-    magnitude(1, m.goal.y, MAX_COORD_M)?;
-    if let Some(f) = m.formation {
-        if !matches!(f.q, 3 | 4 | 6) {
-            return refuse(3, Problem::UnknownCode);
-        }
-        // The ranges of Formation::validate, per field so the reply can name it.
-        within(4, f.lattice_m, 0.5, 1000.0)?;
-        angle(5, f.orientation)?;
-        within(6, f.attraction, 0.001, 1e4)?;
-        f.validate()
-            .map_err(|_| Error::field(2, Problem::Invalid))?;
+    magnitude(mission::GOAL_X, m.goal.x, MAX_COORD_M)?;
+    magnitude(mission::GOAL_Y, m.goal.y, MAX_COORD_M)?;
+    if let Some(f) = &m.formation {
+        formation::check(f, &FORMATION_ROWS)?;
     }
     Ok(())
 }
@@ -52,15 +109,10 @@ impl<'a> Payload<'a> for Mission {
         let goal = r.vec2()?;
         let flags = r.u8()?;
         if flags & !MISSION_FLAG_FORMATION != 0 {
-            return refuse(2, Problem::UnknownCode);
+            return refuse(mission::FLAGS, Problem::UnknownCode);
         }
         let formation = if flags & MISSION_FLAG_FORMATION != 0 {
-            Some(Formation {
-                q: r.u8()?,
-                lattice_m: r.f32()?,
-                orientation: r.f32()?,
-                attraction: r.f32()?,
-            })
+            Some(formation::read(&mut r)?)
         } else {
             None
         };
@@ -82,16 +134,7 @@ impl<'a> Payload<'a> for Mission {
         check_mission(self)?;
         let mut w = Writer::new(out);
         w.vec2(self.goal)?;
-        match self.formation {
-            Some(f) => {
-                w.u8(MISSION_FLAG_FORMATION)?;
-                w.u8(f.q)?;
-                w.f32(f.lattice_m)?;
-                w.f32(f.orientation)?;
-                w.f32(f.attraction)?;
-            }
-            None => w.u8(0)?,
-        }
+        formation::write(&mut w, &self.formation)?;
         Ok(w.len())
     }
 }
@@ -118,8 +161,8 @@ impl ChartObstacleRepr {
     }
 
     fn check(&self) -> Result<(), Error> {
-        within(1, self.a_plus, 0.001, 100.0)?;
-        super::shape::check_shape(2, &self.shape)
+        within(chart_obstacle::A_PLUS, self.a_plus, 0.001, 100.0)?;
+        super::shape::check_shape(chart_obstacle::SHAPE, &self.shape)
     }
 }
 
@@ -130,7 +173,7 @@ impl<'a> Payload<'a> for ChartObstacleRepr {
         let mut r = Reader::new(payload);
         let id = r.u16()?;
         let a_plus = r.f32()?;
-        let shape = read_shape(&mut r, 2)?;
+        let shape = read_shape(&mut r, chart_obstacle::SHAPE)?;
         r.finish()?;
         let c = ChartObstacleRepr { id, a_plus, shape };
         c.check()?;
@@ -146,7 +189,7 @@ impl<'a> Payload<'a> for ChartObstacleRepr {
         let mut w = Writer::new(out);
         w.u16(self.id)?;
         w.f32(self.a_plus)?;
-        write_shape(&mut w, 2, &self.shape)?;
+        write_shape(&mut w, chart_obstacle::SHAPE, &self.shape)?;
         Ok(w.len())
     }
 }
@@ -174,9 +217,9 @@ impl<'a> Payload<'a> for ChartClearRepr {
         r.finish()?;
         match (scope, id) {
             (0, 0) => Ok(ChartClearRepr::All),
-            (0, _) => refuse(1, Problem::Invalid),
+            (0, _) => refuse(chart_clear::ID, Problem::Invalid),
             (1, id) => Ok(ChartClearRepr::One(id)),
-            _ => refuse(0, Problem::UnknownCode),
+            _ => refuse(chart_clear::SCOPE, Problem::UnknownCode),
         }
     }
 
@@ -197,110 +240,36 @@ impl<'a> Payload<'a> for ChartClearRepr {
 }
 
 /// The names of [`Params`]' fields in wire order: the parameter index of a `Params` field and
-/// of a [`ReplyRepr`](super::ReplyRepr) rejecting it.
-pub const PARAM_NAMES: [&str; 36] = [
-    "period_s",
-    "epsilon_m",
-    "n_gamma",
-    "mu",
-    "f_max",
-    "v_max",
-    "a_plus",
-    "a_rotor",
-    "a_minus",
-    "sigma_m",
-    "bounding",
-    "agent_radius_m",
-    "agent_a_plus",
-    "arrival_radius_m",
-    "ghost_lambda",
-    "ghost_alpha",
-    "ghost_eps_m",
-    "stall_speed",
-    "stall_time_s",
-    "ghost_timeout_s",
-    "max_ghosts",
-    "seed",
-    "strategy",
-    "horizon_s",
-    "mp_arc_m",
-    "mp_points",
-    "mp_turn_rad",
-    "mp_xi",
-    "mp_eta",
-    "mp_influence_m",
-    "mp_periphery",
-    "nf_kappa",
-    "nf_workspace_m",
-    "route_cell_m",
-    "turn_rate_rps",
-    "brake_mps2",
-];
+/// of a [`ReplyRepr`](super::ReplyRepr) rejecting it (from the declaration in `crate::params`).
+pub use crate::params::PARAM_NAMES;
 
 /// The wire index of the parameter called `name` (as in
 /// [`ParamError::name`](crate::params::ParamError)).
 pub fn param_index(name: &str) -> Option<u8> {
-    PARAM_NAMES
-        .iter()
-        .position(|n| *n == name)
-        .and_then(|i| u8::try_from(i).ok())
+    ParamId::from_name(name).map(ParamId::index)
 }
 
-/// `Params` payload length.
-pub const PARAMS_LEN: usize = 126;
-
-/// The 29 `f32` parameters with their indices, for the finiteness check.
-fn param_floats(p: &Params) -> [(u8, f32); 29] {
-    [
-        (0, p.period_s),
-        (1, p.epsilon_m),
-        (3, p.mu),
-        (4, p.f_max),
-        (5, p.v_max),
-        (6, p.a_plus),
-        (7, p.a_rotor),
-        (8, p.a_minus),
-        (9, p.sigma_m),
-        (11, p.agent_radius_m),
-        (12, p.agent_a_plus),
-        (13, p.arrival_radius_m),
-        (14, p.ghost_lambda),
-        (15, p.ghost_alpha),
-        (16, p.ghost_eps_m),
-        (17, p.stall_speed),
-        (18, p.stall_time_s),
-        (19, p.ghost_timeout_s),
-        (23, p.horizon_s),
-        (24, p.mp_arc_m),
-        (26, p.mp_turn_rad),
-        (27, p.mp_xi),
-        (28, p.mp_eta),
-        (29, p.mp_influence_m),
-        (31, p.nf_kappa),
-        (32, p.nf_workspace_m),
-        (33, p.route_cell_m),
-        (34, p.turn_rate_rps),
-        (35, p.brake_mps2),
-    ]
-}
-
-/// Wire code of a [`Strategy`].
-const fn strategy_code(s: Strategy) -> u8 {
-    match s {
-        Strategy::Vpf => 0,
-        Strategy::Multipoint => 1,
-        Strategy::Navfn => 2,
+const fn wire_len(ids: &[ParamId]) -> usize {
+    match ids {
+        [first, rest @ ..] => first.kind().wire_len() + wire_len(rest),
+        [] => 0,
     }
 }
 
+/// `Params` payload length: every declared parameter's wire length.
+pub const PARAMS_LEN: usize = wire_len(&ParamId::ALL);
+
+/// The `f32` parameters must be finite (the ranges are the planner's).
 fn check_params(p: &Params) -> Result<(), Error> {
-    param_floats(p).iter().try_for_each(|&(i, v)| finite(i, v))
+    ParamId::ALL.iter().try_for_each(|&id| match p.get(id) {
+        Value::F32(v) if !v.is_finite() => Err(Error::field(id.index(), Problem::NonFinite)),
+        _ => Ok(()),
+    })
 }
 
-/// `Params` (0x07): the whole parameter set, every field of [`Params`] in declaration order
-/// (the index is the row; see [`PARAM_NAMES`]); `n_gamma`, `max_ghosts`, `mp_points` and
-/// `mp_periphery` are u8, `bounding` a u8 code (0 plain, 1 split), `strategy` a u8 code (0 vpf,
-/// 1 multipoint, 2 navfn), `seed` a u32, the other 29 are f32.
+/// `Params` (0x07): the whole parameter set, every parameter of [`Params`] in declaration order
+/// ([`ParamId`]: its index is the row) as its [`Kind`] says: `f32`, `u8`, `u32`, or an enum's
+/// `u8` code (`bounding`: 0 plain, 1 split; `strategy`: 0 vpf, 1 multipoint, 2 navfn).
 ///
 /// Only non-finite numbers and unknown codes are refused here. Ranges are checked by
 /// [`Planner::set_params`](crate::planner::Planner::set_params), whose
@@ -312,64 +281,18 @@ impl<'a> Payload<'a> for Params {
 
     fn parse(payload: &'a [u8]) -> Result<Self, Error> {
         let mut r = Reader::new(payload);
-        let period_s = r.f32()?;
-        let epsilon_m = r.f32()?;
-        let n_gamma = r.u8()?;
-        let mu = r.f32()?;
-        let f_max = r.f32()?;
-        let v_max = r.f32()?;
-        let a_plus = r.f32()?;
-        let a_rotor = r.f32()?;
-        let a_minus = r.f32()?;
-        let sigma_m = r.f32()?;
-        let bounding = match r.u8()? {
-            0 => Bounding::Plain,
-            1 => Bounding::Split,
-            _ => return refuse(10, Problem::UnknownCode),
-        };
-        let p = Params {
-            period_s,
-            epsilon_m,
-            n_gamma,
-            mu,
-            f_max,
-            v_max,
-            a_plus,
-            a_rotor,
-            a_minus,
-            sigma_m,
-            bounding,
-            agent_radius_m: r.f32()?,
-            agent_a_plus: r.f32()?,
-            arrival_radius_m: r.f32()?,
-            ghost_lambda: r.f32()?,
-            ghost_alpha: r.f32()?,
-            ghost_eps_m: r.f32()?,
-            stall_speed: r.f32()?,
-            stall_time_s: r.f32()?,
-            ghost_timeout_s: r.f32()?,
-            max_ghosts: r.u8()?,
-            seed: r.u32()?,
-            strategy: match r.u8()? {
-                0 => Strategy::Vpf,
-                1 => Strategy::Multipoint,
-                2 => Strategy::Navfn,
-                _ => return refuse(22, Problem::UnknownCode),
-            },
-            horizon_s: r.f32()?,
-            mp_arc_m: r.f32()?,
-            mp_points: r.u8()?,
-            mp_turn_rad: r.f32()?,
-            mp_xi: r.f32()?,
-            mp_eta: r.f32()?,
-            mp_influence_m: r.f32()?,
-            mp_periphery: r.u8()?,
-            nf_kappa: r.f32()?,
-            nf_workspace_m: r.f32()?,
-            route_cell_m: r.f32()?,
-            turn_rate_rps: r.f32()?,
-            brake_mps2: r.f32()?,
-        };
+        let mut p = Params::default();
+        for id in ParamId::ALL {
+            let v = match id.kind() {
+                Kind::F32 => Value::F32(r.f32()?),
+                Kind::U8 => Value::U8(r.u8()?),
+                Kind::U32 => Value::U32(r.u32()?),
+                Kind::Code(_) => Value::Code(r.u8()?),
+            };
+            if !p.set(id, v) {
+                return Err(Error::field(id.index(), Problem::UnknownCode));
+            }
+        }
         r.finish()?;
         check_params(&p)?;
         Ok(p)
@@ -382,57 +305,13 @@ impl<'a> Payload<'a> for Params {
     fn emit(&self, out: &mut [u8]) -> Result<usize, Error> {
         check_params(self)?;
         let mut w = Writer::new(out);
-        w.f32(self.period_s)?;
-        w.f32(self.epsilon_m)?;
-        w.u8(self.n_gamma)?;
-        for v in [
-            self.mu,
-            self.f_max,
-            self.v_max,
-            self.a_plus,
-            self.a_rotor,
-            self.a_minus,
-            self.sigma_m,
-        ] {
-            w.f32(v)?;
+        for id in ParamId::ALL {
+            match self.get(id) {
+                Value::F32(v) => w.f32(v)?,
+                Value::U8(v) | Value::Code(v) => w.u8(v)?,
+                Value::U32(v) => w.u32(v)?,
+            }
         }
-        w.u8(match self.bounding {
-            Bounding::Plain => 0,
-            Bounding::Split => 1,
-        })?;
-        for v in [
-            self.agent_radius_m,
-            self.agent_a_plus,
-            self.arrival_radius_m,
-            self.ghost_lambda,
-            self.ghost_alpha,
-            self.ghost_eps_m,
-            self.stall_speed,
-            self.stall_time_s,
-            self.ghost_timeout_s,
-        ] {
-            w.f32(v)?;
-        }
-        w.u8(self.max_ghosts)?;
-        w.u32(self.seed)?;
-        w.u8(strategy_code(self.strategy))?;
-        w.f32(self.horizon_s)?;
-        w.f32(self.mp_arc_m)?;
-        w.u8(self.mp_points)?;
-        for v in [
-            self.mp_turn_rad,
-            self.mp_xi,
-            self.mp_eta,
-            self.mp_influence_m,
-        ] {
-            w.f32(v)?;
-        }
-        w.u8(self.mp_periphery)?;
-        w.f32(self.nf_kappa)?;
-        w.f32(self.nf_workspace_m)?;
-        w.f32(self.route_cell_m)?;
-        w.f32(self.turn_rate_rps)?;
-        w.f32(self.brake_mps2)?;
         Ok(w.len())
     }
 }
@@ -476,6 +355,7 @@ pub(crate) mod tests {
     use super::*;
     use crate::link::shape::tests::arb_shape;
     use crate::math::Vec2;
+    use crate::types::Formation;
     use proptest::prelude::*;
     use proptest::strategy::Strategy;
     use std::vec::Vec;
@@ -701,63 +581,27 @@ pub(crate) mod tests {
             })
     }
 
+    /// Any parameter set the wire carries: every f32 finite, any u8 and u32, any defined code.
     pub(crate) fn arb_params() -> impl Strategy<Value = Params> {
+        use crate::params::PARAM_COUNT;
         (
-            proptest::array::uniform29(-1e6f32..1e6),
-            (any::<u8>(), any::<u8>(), any::<u8>(), any::<u8>()),
-            (any::<bool>(), 0u8..3),
+            proptest::collection::vec(-1e6f32..1e6, PARAM_COUNT),
+            proptest::collection::vec(any::<u8>(), PARAM_COUNT),
             any::<u32>(),
         )
-            .prop_map(
-                |(f, (n_gamma, max_ghosts, mp_points, mp_periphery), (split, strategy), seed)| {
-                    Params {
-                        period_s: f[0],
-                        epsilon_m: f[1],
-                        n_gamma,
-                        mu: f[2],
-                        f_max: f[3],
-                        v_max: f[4],
-                        a_plus: f[5],
-                        a_rotor: f[6],
-                        a_minus: f[7],
-                        sigma_m: f[8],
-                        bounding: if split {
-                            Bounding::Split
-                        } else {
-                            Bounding::Plain
-                        },
-                        agent_radius_m: f[9],
-                        agent_a_plus: f[10],
-                        arrival_radius_m: f[11],
-                        ghost_lambda: f[12],
-                        ghost_alpha: f[13],
-                        ghost_eps_m: f[14],
-                        stall_speed: f[15],
-                        stall_time_s: f[16],
-                        ghost_timeout_s: f[17],
-                        max_ghosts,
-                        seed,
-                        strategy: match strategy {
-                            0 => crate::params::Strategy::Vpf,
-                            1 => crate::params::Strategy::Multipoint,
-                            _ => crate::params::Strategy::Navfn,
-                        },
-                        horizon_s: f[18],
-                        mp_arc_m: f[19],
-                        mp_points,
-                        mp_turn_rad: f[20],
-                        mp_xi: f[21],
-                        mp_eta: f[22],
-                        mp_influence_m: f[23],
-                        mp_periphery,
-                        nf_kappa: f[24],
-                        nf_workspace_m: f[25],
-                        route_cell_m: f[26],
-                        turn_rate_rps: f[27],
-                        brake_mps2: f[28],
-                    }
-                },
-            )
+            .prop_map(|(f, b, seed)| {
+                let mut p = Params::default();
+                for (i, id) in ParamId::ALL.into_iter().enumerate() {
+                    let v = match id.kind() {
+                        Kind::F32 => Value::F32(f[i]),
+                        Kind::U8 => Value::U8(b[i]),
+                        Kind::U32 => Value::U32(seed),
+                        Kind::Code(names) => Value::Code(b[i] % names.len() as u8),
+                    };
+                    assert!(p.set(id, v));
+                }
+                p
+            })
     }
 
     pub(crate) fn arb_chart() -> impl Strategy<Value = ChartObstacleRepr> {

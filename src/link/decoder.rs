@@ -408,7 +408,7 @@ impl Decoder {
 mod tests {
     extern crate std;
     use super::*;
-    use crate::link::message::tests::{arb_owned, Owned};
+    use crate::link::message::tests::{arb_owned, OwnedMessage};
     use crate::link::{
         coded, crc::crc16, encode_frame, LogLevel, LogRepr, MessageType, Payload, Problem,
         TickRepr, MAX_FRAME, MAX_PAYLOAD, PROTOCOL_VERSION,
@@ -771,7 +771,10 @@ mod tests {
     }
 
     /// The frames of the messages that flow `direction`, and their (type, seq).
-    fn encode_all(msgs: &[Owned], direction: Direction) -> (Vec<Vec<u8>>, Vec<(MessageType, u16)>) {
+    fn encode_all(
+        msgs: &[OwnedMessage],
+        direction: Direction,
+    ) -> (Vec<Vec<u8>>, Vec<(MessageType, u16)>) {
         let mut frames = Vec::new();
         let mut ids = Vec::new();
         for (i, o) in msgs.iter().enumerate() {

@@ -25,6 +25,7 @@ use super::control::{
 };
 use super::frame::{encode_frame, split_frame, Direction, Header, MessageType};
 use super::mission::{MissionCountRepr, MissionItemRepr, SurveyRepr};
+use super::payload::Payload;
 use super::report::{CommandRepr, LogRepr, ReplyRepr, TelemetryRepr, COMMAND_LEN, TELEMETRY_LEN};
 use super::sensors::{
     ContactsRepr, NavRepr, CONTACTS_HEAD_LEN, MAX_CONTACT_LEN, NAV_LEN_WITH_BODY, SCANLINE_HEAD_LEN,
@@ -32,34 +33,7 @@ use super::sensors::{
 use super::shape::MAX_SHAPE_LEN;
 use super::{Error, DELIMITER, MAX_BINS, MAX_CONTACTS, MAX_FRAME, MAX_LOG_LEN, MAX_RAW};
 use crate::params::Params;
-use crate::planner::Mission;
-use crate::sonar::Scanline;
-
-/// A message's payload: its wire type, and parse/emit in smoltcp's `Repr` style.
-///
-/// `parse` checks the length exactly and every field (see each type's layout); `emit` refuses
-/// exactly what `parse` would refuse, writes [`Payload::payload_len`] bytes and returns that
-/// number.
-pub trait Payload<'a>: Sized {
-    /// The message type this payload travels as.
-    const TYPE: MessageType;
-
-    /// Parses and validates a payload (the bytes between header and CRC). Borrowed fields
-    /// (scanline bins, contacts, log text) point into `payload`.
-    fn parse(payload: &'a [u8]) -> Result<Self, Error>;
-
-    /// The number of bytes [`Payload::emit`] writes.
-    fn payload_len(&self) -> usize;
-
-    /// Validates and writes the payload into `out`; returns the bytes written.
-    fn emit(&self, out: &mut [u8]) -> Result<usize, Error>;
-
-    /// Writes a complete frame (COBS, CRC, delimiter) with sequence number `seq` into `out`;
-    /// returns its length. [`MAX_FRAME`] bytes always suffice.
-    fn emit_frame(&self, seq: u16, out: &mut [u8]) -> Result<usize, Error> {
-        encode_frame(Self::TYPE, seq, |buf| self.emit(buf), out)
-    }
-}
+use crate::types::{Mission, Scanline};
 
 /// Any message, parsed. Variants borrow from the frame they were parsed from.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -456,9 +430,9 @@ pub(crate) mod tests {
         );
     }
 
-    /// Owned material for any message, so the strategy can outlive the borrow.
+    /// OwnedMessage material for any message, so the strategy can outlive the borrow.
     #[derive(Clone, Debug)]
-    pub(crate) enum Owned {
+    pub(crate) enum OwnedMessage {
         Nav(NavRepr),
         Scanline((u64, f32, f32, f32, Vec<u8>)),
         Contacts(u64, Vec<Contact>),
@@ -474,60 +448,60 @@ pub(crate) mod tests {
         Belief(crate::link::belief::tests::OwnedBelief),
     }
 
-    impl Owned {
+    impl OwnedMessage {
         pub(crate) fn message(&self) -> Message<'_> {
             match self {
-                Owned::Nav(n) => Message::Nav(*n),
-                Owned::Scanline((t, b, s, r, bins)) => Message::Scanline(Scanline {
+                OwnedMessage::Nav(n) => Message::Nav(*n),
+                OwnedMessage::Scanline((t, b, s, r, bins)) => Message::Scanline(Scanline {
                     time_ms: *t,
                     bearing_rad: *b,
                     step_rad: *s,
                     range_m: *r,
                     bins,
                 }),
-                Owned::Contacts(t, cs) => Message::Contacts(ContactsRepr {
+                OwnedMessage::Contacts(t, cs) => Message::Contacts(ContactsRepr {
                     time_ms: *t,
                     contacts: ContactList::new(cs),
                 }),
-                Owned::Mission(m) => Message::Mission(*m),
-                Owned::Chart(c) => Message::ChartObstacle(*c),
-                Owned::Clear(c) => Message::ChartClear(*c),
-                Owned::Params(p) => Message::Params(*p),
-                Owned::Tick(t) => Message::Tick(*t),
-                Owned::Command(c) => Message::Command(*c),
-                Owned::Telemetry(t) => Message::Telemetry(*t),
-                Owned::Reply(r) => Message::Reply(*r),
-                Owned::Log((l, text)) => Message::Log(LogRepr {
+                OwnedMessage::Mission(m) => Message::Mission(*m),
+                OwnedMessage::Chart(c) => Message::ChartObstacle(*c),
+                OwnedMessage::Clear(c) => Message::ChartClear(*c),
+                OwnedMessage::Params(p) => Message::Params(*p),
+                OwnedMessage::Tick(t) => Message::Tick(*t),
+                OwnedMessage::Command(c) => Message::Command(*c),
+                OwnedMessage::Telemetry(t) => Message::Telemetry(*t),
+                OwnedMessage::Reply(r) => Message::Reply(*r),
+                OwnedMessage::Log((l, text)) => Message::Log(LogRepr {
                     level: LogLevel::from_code(*l).unwrap(),
                     text,
                 }),
-                Owned::Belief(b) => Message::Belief(crate::link::belief::tests::belief(b)),
+                OwnedMessage::Belief(b) => Message::Belief(crate::link::belief::tests::belief(b)),
             }
         }
     }
 
-    pub(crate) fn arb_owned() -> impl Strategy<Value = Owned> {
+    pub(crate) fn arb_owned() -> impl Strategy<Value = OwnedMessage> {
         prop_oneof![
-            arb_nav().prop_map(Owned::Nav),
-            arb_scanline().prop_map(Owned::Scanline),
+            arb_nav().prop_map(OwnedMessage::Nav),
+            arb_scanline().prop_map(OwnedMessage::Scanline),
             (
                 any::<u64>(),
                 proptest::collection::vec(arb_contact(), 0..=MAX_CONTACTS)
             )
-                .prop_map(|(t, c)| Owned::Contacts(t, c)),
-            arb_mission().prop_map(Owned::Mission),
-            arb_chart().prop_map(Owned::Chart),
-            proptest::option::of(any::<u16>()).prop_map(|id| Owned::Clear(match id {
+                .prop_map(|(t, c)| OwnedMessage::Contacts(t, c)),
+            arb_mission().prop_map(OwnedMessage::Mission),
+            arb_chart().prop_map(OwnedMessage::Chart),
+            proptest::option::of(any::<u16>()).prop_map(|id| OwnedMessage::Clear(match id {
                 Some(id) => ChartClearRepr::One(id),
                 None => ChartClearRepr::All,
             })),
-            arb_params().prop_map(Owned::Params),
-            any::<u64>().prop_map(|t| Owned::Tick(TickRepr { time_ms: t })),
-            arb_command().prop_map(Owned::Command),
-            arb_telemetry().prop_map(Owned::Telemetry),
-            arb_reply().prop_map(Owned::Reply),
-            arb_log().prop_map(Owned::Log),
-            crate::link::belief::tests::arb_belief().prop_map(Owned::Belief),
+            arb_params().prop_map(OwnedMessage::Params),
+            any::<u64>().prop_map(|t| OwnedMessage::Tick(TickRepr { time_ms: t })),
+            arb_command().prop_map(OwnedMessage::Command),
+            arb_telemetry().prop_map(OwnedMessage::Telemetry),
+            arb_reply().prop_map(OwnedMessage::Reply),
+            arb_log().prop_map(OwnedMessage::Log),
+            crate::link::belief::tests::arb_belief().prop_map(OwnedMessage::Belief),
         ]
     }
 

@@ -13,15 +13,20 @@
 //! Every field is checked here, with its row; what this module accepts the planner accepts.
 
 use super::codec::{angle, finite, magnitude, refuse, within, Reader, Writer};
+use super::formation::{self, FormationRows, FLAG_FORMATION};
 use super::frame::MessageType;
-use super::message::Payload;
+use super::layout::Field;
+use super::payload::Payload;
 use super::{Error, Problem};
+use field::{mission_count, mission_item, survey};
+
+pub use super::formation::FORMATION_LEN;
 use crate::math::Vec2;
-use crate::planner::mission::{
+use crate::types::mission::{
     LOITER_RADIUS_M, MAX_SURVEY_SIDE_M, MAX_WAYPOINT_RADIUS_M, MAX_WAYPOINT_SPEED,
     MIN_WAYPOINT_SPEED,
 };
-use crate::planner::{
+use crate::types::{
     Formation, MissionEnd, MissionError, Survey, Waypoint, MAX_COORD_M, MAX_WAYPOINTS,
 };
 
@@ -31,57 +36,156 @@ pub const MISSION_COUNT_LEN: usize = 7;
 pub const MISSION_ITEM_LEN: usize = 17;
 /// `Survey` payload length without a formation.
 pub const SURVEY_LEN: usize = 38;
-/// Bytes a formation adds (q u8, λ, θ₀, A⁻).
-pub const FORMATION_LEN: usize = 13;
-/// Flag bit: a formation follows.
-const FLAG_FORMATION: u8 = 0x01;
+/// Each message's rows (docs/protocol.md §6), by name: each constant is the row of the field
+/// it names.
+#[allow(missing_docs)]
+pub mod field {
+    /// `MissionCount`.
+    pub mod mission_count {
+        use crate::link::layout::Field;
+
+        pub const COUNT: Field = Field::new(0, 0, "u8", "count");
+        pub const END: Field = Field::new(1, 1, "u8", "end");
+        pub const LOITER_RADIUS_M: Field = Field::new(2, 2, "f32", "loiter_radius_m");
+        pub const FLAGS: Field = Field::new(3, 6, "u8", "flags");
+        pub const Q: Field = Field::new(4, 7, "u8", "q");
+        pub const LATTICE_M: Field = Field::new(5, 8, "f32", "lattice_m");
+        pub const ORIENTATION: Field = Field::new(6, 12, "f32", "orientation");
+        pub const ATTRACTION: Field = Field::new(7, 16, "f32", "attraction");
+        /// Every row, in order.
+        pub const ALL: &[Field] = &[
+            COUNT,
+            END,
+            LOITER_RADIUS_M,
+            FLAGS,
+            Q,
+            LATTICE_M,
+            ORIENTATION,
+            ATTRACTION,
+        ];
+    }
+
+    /// `MissionItem`.
+    pub mod mission_item {
+        use crate::link::layout::Field;
+
+        pub const INDEX: Field = Field::new(0, 0, "u8", "index");
+        pub const X: Field = Field::new(1, 1, "f32", "x");
+        pub const Y: Field = Field::new(2, 5, "f32", "y");
+        pub const RADIUS_M: Field = Field::new(3, 9, "f32", "radius_m");
+        pub const SPEED: Field = Field::new(4, 13, "f32", "speed");
+        /// Every row, in order.
+        pub const ALL: &[Field] = &[INDEX, X, Y, RADIUS_M, SPEED];
+    }
+
+    /// `Survey`.
+    pub mod survey {
+        use crate::link::layout::Field;
+
+        pub const CORNER_X: Field = Field::new(0, 0, "f32", "corner_x");
+        pub const CORNER_Y: Field = Field::new(1, 4, "f32", "corner_y");
+        pub const LENGTH_M: Field = Field::new(2, 8, "f32", "length_m");
+        pub const WIDTH_M: Field = Field::new(3, 12, "f32", "width_m");
+        pub const HEADING: Field = Field::new(4, 16, "f32", "heading");
+        pub const SPACING_M: Field = Field::new(5, 20, "f32", "spacing_m");
+        pub const RADIUS_M: Field = Field::new(6, 24, "f32", "radius_m");
+        pub const SPEED: Field = Field::new(7, 28, "f32", "speed");
+        pub const END: Field = Field::new(8, 32, "u8", "end");
+        pub const LOITER_RADIUS_M: Field = Field::new(9, 33, "f32", "loiter_radius_m");
+        pub const FLAGS: Field = Field::new(10, 37, "u8", "flags");
+        pub const Q: Field = Field::new(11, 38, "u8", "q");
+        pub const LATTICE_M: Field = Field::new(12, 39, "f32", "lattice_m");
+        pub const ORIENTATION: Field = Field::new(13, 43, "f32", "orientation");
+        pub const ATTRACTION: Field = Field::new(14, 47, "f32", "attraction");
+        /// Every row, in order.
+        pub const ALL: &[Field] = &[
+            CORNER_X,
+            CORNER_Y,
+            LENGTH_M,
+            WIDTH_M,
+            HEADING,
+            SPACING_M,
+            RADIUS_M,
+            SPEED,
+            END,
+            LOITER_RADIUS_M,
+            FLAGS,
+            Q,
+            LATTICE_M,
+            ORIENTATION,
+            ATTRACTION,
+        ];
+    }
+}
+
+/// Where the end and the formation that close `MissionCount` and `Survey` sit in their tables.
+struct TailRows {
+    end: Field,
+    loiter_radius_m: Field,
+    formation: FormationRows,
+}
+
+macro_rules! tail_rows {
+    ($m:ident) => {
+        TailRows {
+            end: $m::END,
+            loiter_radius_m: $m::LOITER_RADIUS_M,
+            formation: FormationRows {
+                flags: $m::FLAGS,
+                q: $m::Q,
+                lattice_m: $m::LATTICE_M,
+                orientation: $m::ORIENTATION,
+                attraction: $m::ATTRACTION,
+            },
+        }
+    };
+}
+
+const COUNT_TAIL: TailRows = tail_rows!(mission_count);
+const SURVEY_TAIL: TailRows = tail_rows!(survey);
 
 /// The end and formation that close `MissionCount` and `Survey`: `end` u8 (0 hold, 1 loiter
 /// anticlockwise, 2 loiter clockwise) · `loiter_radius_m` f32 (0 with hold) · `flags` u8 (bit
 /// 0: a formation follows) · \[`q` u8 · `lattice_m` f32 · `orientation` f32 · `attraction`
-/// f32\], from row `row`.
-fn read_tail(r: &mut Reader<'_>, row: u8) -> Result<(MissionEnd, Option<Formation>), Error> {
+/// f32\].
+fn read_tail(
+    r: &mut Reader<'_>,
+    rows: &TailRows,
+) -> Result<(MissionEnd, Option<Formation>), Error> {
     let end = r.u8()?;
     let radius_m = r.f32()?;
     let end = match end {
         0 if radius_m == 0.0 => MissionEnd::Hold,
-        0 => return refuse(row + 1, Problem::Invalid),
+        0 => return refuse(rows.loiter_radius_m, Problem::Invalid),
         1 | 2 => MissionEnd::Loiter {
             radius_m,
             clockwise: end == 2,
         },
-        _ => return refuse(row, Problem::UnknownCode),
+        _ => return refuse(rows.end, Problem::UnknownCode),
     };
     let flags = r.u8()?;
     if flags & !FLAG_FORMATION != 0 {
-        return refuse(row + 2, Problem::UnknownCode);
+        return refuse(rows.formation.flags, Problem::UnknownCode);
     }
     let formation = if flags & FLAG_FORMATION != 0 {
-        Some(Formation {
-            q: r.u8()?,
-            lattice_m: r.f32()?,
-            orientation: r.f32()?,
-            attraction: r.f32()?,
-        })
+        Some(formation::read(r)?)
     } else {
         None
     };
     Ok((end, formation))
 }
 
-fn check_tail(end: &MissionEnd, formation: &Option<Formation>, row: u8) -> Result<(), Error> {
+fn check_tail(end: &MissionEnd, f: &Option<Formation>, rows: &TailRows) -> Result<(), Error> {
     if let MissionEnd::Loiter { radius_m, .. } = *end {
-        within(row + 1, radius_m, LOITER_RADIUS_M.0, LOITER_RADIUS_M.1)?;
+        within(
+            rows.loiter_radius_m,
+            radius_m,
+            LOITER_RADIUS_M.0,
+            LOITER_RADIUS_M.1,
+        )?;
     }
-    if let Some(f) = formation {
-        if !matches!(f.q, 3 | 4 | 6) {
-            return refuse(row + 3, Problem::UnknownCode);
-        }
-        within(row + 4, f.lattice_m, 0.5, 1000.0)?;
-        angle(row + 5, f.orientation)?;
-        within(row + 6, f.attraction, 0.001, 1e4)?;
-        f.validate()
-            .map_err(|_| Error::field(row + 2, Problem::Invalid))?;
+    if let Some(f) = f {
+        formation::check(f, &rows.formation)?;
     }
     Ok(())
 }
@@ -108,20 +212,11 @@ fn write_tail(
             w.f32(radius_m)?;
         }
     }
-    match formation {
-        Some(f) => {
-            w.u8(FLAG_FORMATION)?;
-            w.u8(f.q)?;
-            w.f32(f.lattice_m)?;
-            w.f32(f.orientation)?;
-            w.f32(f.attraction)
-        }
-        None => w.u8(0),
-    }
+    formation::write(w, formation)
 }
 
 /// A radius: finite, > 0 and at most `max`.
-fn positive(row: u8, v: f32, max: f32) -> Result<(), Error> {
+fn positive(row: Field, v: f32, max: f32) -> Result<(), Error> {
     finite(row, v)?;
     if v > 0.0 && v <= max {
         Ok(())
@@ -131,7 +226,7 @@ fn positive(row: u8, v: f32, max: f32) -> Result<(), Error> {
 }
 
 /// A leg's speed: 0 (none: v_max) or [`MIN_WAYPOINT_SPEED`] ..= [`MAX_WAYPOINT_SPEED`].
-fn speed(row: u8, v: f32) -> Result<Option<f32>, Error> {
+fn speed(row: Field, v: f32) -> Result<Option<f32>, Error> {
     finite(row, v)?;
     if v == 0.0 {
         return Ok(None);
@@ -160,9 +255,9 @@ pub struct MissionCountRepr {
 impl MissionCountRepr {
     fn check(&self) -> Result<(), Error> {
         if self.count == 0 || usize::from(self.count) > MAX_WAYPOINTS {
-            return refuse(0, Problem::OutOfRange);
+            return refuse(mission_count::COUNT, Problem::OutOfRange);
         }
-        check_tail(&self.end, &self.formation, 1)
+        check_tail(&self.end, &self.formation, &COUNT_TAIL)
     }
 }
 
@@ -172,7 +267,7 @@ impl<'a> Payload<'a> for MissionCountRepr {
     fn parse(payload: &'a [u8]) -> Result<Self, Error> {
         let mut r = Reader::new(payload);
         let count = r.u8()?;
-        let (end, formation) = read_tail(&mut r, 1)?;
+        let (end, formation) = read_tail(&mut r, &COUNT_TAIL)?;
         r.finish()?;
         let m = MissionCountRepr {
             count,
@@ -213,7 +308,7 @@ pub struct MissionItemRepr {
 impl MissionItemRepr {
     fn check(&self) -> Result<(), Error> {
         if usize::from(self.index) >= MAX_WAYPOINTS {
-            return refuse(0, Problem::OutOfRange);
+            return refuse(mission_item::INDEX, Problem::OutOfRange);
         }
         Ok(())
     }
@@ -229,14 +324,14 @@ impl<'a> Payload<'a> for MissionItemRepr {
         let radius_m = r.f32()?;
         let v = r.f32()?;
         r.finish()?;
-        magnitude(1, p.x, MAX_COORD_M)?;
-        magnitude(2, p.y, MAX_COORD_M)?;
-        positive(3, radius_m, MAX_WAYPOINT_RADIUS_M)?;
-        let v = speed(4, v)?;
+        magnitude(mission_item::X, p.x, MAX_COORD_M)?;
+        magnitude(mission_item::Y, p.y, MAX_COORD_M)?;
+        positive(mission_item::RADIUS_M, radius_m, MAX_WAYPOINT_RADIUS_M)?;
+        let v = speed(mission_item::SPEED, v)?;
         // The checks above are Waypoint::new's and with_speed's, row by row.
         let waypoint = Waypoint::new(p, radius_m)
             .and_then(|w| w.with_speed(v))
-            .map_err(|_| Error::field(1, Problem::Invalid))?;
+            .map_err(|_| mission_item::X.error(Problem::Invalid))?;
         let m = MissionItemRepr { index, waypoint };
         m.check()?;
         Ok(m)
@@ -280,23 +375,23 @@ pub struct SurveyRepr {
 impl SurveyRepr {
     fn check(&self) -> Result<(), Error> {
         let s = &self.survey;
-        magnitude(0, s.corner.x, MAX_COORD_M)?;
-        magnitude(1, s.corner.y, MAX_COORD_M)?;
-        positive(2, s.length_m, MAX_SURVEY_SIDE_M)?;
-        positive(3, s.width_m, MAX_SURVEY_SIDE_M)?;
-        angle(4, s.heading)?;
-        positive(5, s.spacing_m, MAX_SURVEY_SIDE_M)?;
-        positive(6, s.radius_m, MAX_WAYPOINT_RADIUS_M)?;
-        speed(7, s.speed.unwrap_or(0.0))?;
+        magnitude(survey::CORNER_X, s.corner.x, MAX_COORD_M)?;
+        magnitude(survey::CORNER_Y, s.corner.y, MAX_COORD_M)?;
+        positive(survey::LENGTH_M, s.length_m, MAX_SURVEY_SIDE_M)?;
+        positive(survey::WIDTH_M, s.width_m, MAX_SURVEY_SIDE_M)?;
+        angle(survey::HEADING, s.heading)?;
+        positive(survey::SPACING_M, s.spacing_m, MAX_SURVEY_SIDE_M)?;
+        positive(survey::RADIUS_M, s.radius_m, MAX_WAYPOINT_RADIUS_M)?;
+        speed(survey::SPEED, s.speed.unwrap_or(0.0))?;
         if s.speed == Some(0.0) {
-            return refuse(7, Problem::OutOfRange);
+            return refuse(survey::SPEED, Problem::OutOfRange);
         }
-        check_tail(&self.end, &self.formation, 8)?;
+        check_tail(&self.end, &self.formation, &SURVEY_TAIL)?;
         // Too many lines for the list: the spacing is what to change.
         match s.waypoints() {
             Ok(_) => Ok(()),
-            Err(MissionError::TooMany { .. }) => refuse(5, Problem::OutOfRange),
-            Err(_) => refuse(0, Problem::Invalid),
+            Err(MissionError::TooMany { .. }) => refuse(survey::SPACING_M, Problem::OutOfRange),
+            Err(_) => refuse(survey::CORNER_X, Problem::Invalid),
         }
     }
 }
@@ -313,7 +408,7 @@ impl<'a> Payload<'a> for SurveyRepr {
         let spacing_m = r.f32()?;
         let radius_m = r.f32()?;
         let v = r.f32()?;
-        let (end, formation) = read_tail(&mut r, 8)?;
+        let (end, formation) = read_tail(&mut r, &SURVEY_TAIL)?;
         r.finish()?;
         let s = SurveyRepr {
             survey: Survey {
@@ -323,7 +418,7 @@ impl<'a> Payload<'a> for SurveyRepr {
                 heading,
                 spacing_m,
                 radius_m,
-                speed: speed(7, v)?,
+                speed: speed(survey::SPEED, v)?,
             },
             end,
             formation,

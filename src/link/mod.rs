@@ -6,6 +6,9 @@
 //! logic: each message is a plain `Repr` (or a library type such as [`Params`]) with
 //! [`Payload::parse`] and [`Payload::emit`], and the runtime decides what to do with it.
 //!
+//! The messages carry the crate's value types ([`crate::types`], [`crate::params`]); nothing
+//! here needs the planner.
+//!
 //! **Layers** (one file each):
 //! - [`crc`]: CRC-16/CCITT-FALSE (poly 0x1021, init 0xFFFF, check 0x29B1), table-free;
 //! - [`cobs`]: Consistent Overhead Byte Stuffing, so 0x00 can delimit frames (to the host);
@@ -16,9 +19,14 @@
 //!   COBS-encoded (to the host), 0x00-ended;
 //! - [`decoder`]: the stream decoder: bytes in, one [`Outcome`] per byte or chunk, resync on
 //!   the next 0x00, a counter for every rejection;
+//! - [`layout`]: [`Field`](layout::Field), a named row of a message's layout; each message file's
+//!   `field` module names its rows (checked against `docs/protocol.md` by a test);
 //! - [`shape`]: the wire form of an obstacle [`Shape`](crate::field::Shape);
-//! - [`sensors`], [`control`], [`mission`] (host → firmware) and [`report`] (firmware → host):
-//!   the messages;
+//! - [`sensors`], [`control`], [`mission`] (host → firmware), [`report`] (firmware → host) and
+//!   [`belief`]: the messages, each with a `field` module naming its rows; [`formation`], the
+//!   formation block three of them share; [`modes`] and [`counters`], the mode codes and
+//!   counters the reports carry;
+//! - [`payload`]: the [`Payload`] trait every message implements (parse, emit, length);
 //! - [`message`]: [`Message`], every message in one enum, and whole-frame parse/emit.
 //!
 //! **Frame** on the wire: to the firmware `zero-substitute(whiten(header ‖ payload ‖ CRC ‖
@@ -42,12 +50,17 @@ pub mod cobs;
 mod codec;
 pub mod coded;
 pub mod control;
+pub mod counters;
 pub mod crc;
 pub mod decoder;
+pub mod formation;
 pub mod frame;
+pub mod layout;
 pub mod mavlink;
 pub mod message;
 pub mod mission;
+pub mod modes;
+pub mod payload;
 pub mod ping;
 pub mod reed_solomon;
 pub mod report;
@@ -58,13 +71,15 @@ pub use belief::{BeliefRepr, BELIEF_ROWS};
 pub use control::{
     param_index, ChartClearRepr, ChartObstacleRepr, TickRepr, PARAMS_LEN, PARAM_NAMES,
 };
+pub use counters::{Ping360Counters, TelemetryCounters};
 pub use decoder::{Decoder, Outcome, RxCounters};
 pub use frame::{encode_frame, frame_buffer_len, split_frame, Direction, Header, MessageType};
-pub use message::{Message, Payload};
+pub use message::Message;
 pub use mission::{MissionCountRepr, MissionItemRepr, SurveyRepr};
+pub use payload::Payload;
 pub use report::{
-    CommandRepr, CostUnit, LogLevel, LogRepr, ReplyRepr, ReplyStatus, TelemetryCounters,
-    TelemetryRepr, FIELD_WHOLE_MESSAGE,
+    CommandRepr, CostUnit, LogLevel, LogRepr, ReplyRepr, ReplyStatus, TelemetryRepr,
+    FIELD_WHOLE_MESSAGE,
 };
 pub use sensors::{BodyVelocity, Contact, ContactKind, ContactList, ContactsRepr, NavRepr};
 
@@ -82,7 +97,7 @@ pub const HEADER_LEN: usize = 4;
 pub const CRC_LEN: usize = 2;
 /// Most intensity bins in one [`Scanline`](crate::sonar::Scanline) message (the Micron's
 /// maximum resolution; the same number as the sonar module's).
-pub const MAX_BINS: usize = crate::sonar::MAX_BINS;
+pub const MAX_BINS: usize = crate::types::MAX_BINS;
 /// Most contacts in one `Contacts` message (a sonar that extracts features itself rarely
 /// reports more per ping; send several messages for more).
 pub const MAX_CONTACTS: usize = 8;
@@ -156,6 +171,8 @@ impl core::fmt::Display for Problem {
         })
     }
 }
+
+impl core::error::Error for Problem {}
 
 /// Why bytes could not be parsed or emitted. Small and `Copy`, like smoltcp's `wire::Error`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

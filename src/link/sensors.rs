@@ -1,18 +1,21 @@
 //! Sensor messages, host → firmware: `Nav`, `Scanline` and `Contacts`.
 //!
-//! Field rows (the `index` of [`Error::Field`]) are the rows of the layout tables in
-//! `docs/protocol.md`, repeated on each constant below.
+//! Field rows (the `index` of [`Error::Field`]) are named in [`field`], one module per message,
+//! as in the layout tables of `docs/protocol.md`.
 
 use super::codec::{angle, finite, magnitude, refuse, within, Reader, Writer};
 use super::frame::MessageType;
-use super::message::Payload;
+use super::payload::Payload;
 use super::shape::{read_shape, shape_len, write_shape, MAX_SHAPE_LEN};
 use super::{Error, Problem, MAX_BINS, MAX_CONTACTS};
 use crate::field::Shape;
 use crate::math::{Vec2, TAU};
-use crate::planner::{NavState, MAX_COORD_M, MAX_NAV_SPEED};
-use crate::sonar::{Scanline, MAX_RANGE_M, MAX_STEP_RAD, MIN_RANGE_M, MIN_STEP_RAD};
+use crate::types::{
+    NavState, Scanline, MAX_COORD_M, MAX_NAV_SPEED, MAX_RANGE_M, MAX_STEP_RAD, MIN_RANGE_M,
+    MIN_STEP_RAD,
+};
 use crate::world::{Agent, ObjectError, Obstacle, Origin, MAX_OBJECT_SPEED};
+use field::{contacts, nav, scanline};
 
 /// Largest yaw rate accepted in a `Nav` message, rad/s (one turn per second: beyond any AUV).
 pub const MAX_YAW_RATE: f32 = TAU;
@@ -23,6 +26,59 @@ pub const NAV_LEN: usize = 29;
 pub const NAV_LEN_WITH_BODY: usize = NAV_LEN + 12;
 /// `Nav` flag bit: body velocities follow.
 pub const NAV_FLAG_BODY: u8 = 0x01;
+
+/// Each message's rows (docs/protocol.md §6), by name: each constant is the row of the field
+/// it names.
+#[allow(missing_docs)]
+pub mod field {
+    /// `Nav`.
+    pub mod nav {
+        use crate::link::layout::Field;
+
+        pub const TIME_MS: Field = Field::new(0, 0, "u64", "time_ms");
+        pub const X: Field = Field::new(1, 8, "f32", "x");
+        pub const Y: Field = Field::new(2, 12, "f32", "y");
+        pub const HEADING: Field = Field::new(3, 16, "f32", "heading");
+        pub const VX: Field = Field::new(4, 20, "f32", "vx");
+        pub const VY: Field = Field::new(5, 24, "f32", "vy");
+        pub const FLAGS: Field = Field::new(6, 28, "u8", "flags");
+        pub const U: Field = Field::new(7, 29, "f32", "u");
+        pub const V: Field = Field::new(8, 33, "f32", "v");
+        pub const R: Field = Field::new(9, 37, "f32", "r");
+        /// Every row, in order.
+        pub const ALL: &[Field] = &[TIME_MS, X, Y, HEADING, VX, VY, FLAGS, U, V, R];
+    }
+
+    /// `Scanline`.
+    pub mod scanline {
+        use crate::link::layout::Field;
+
+        pub const TIME_MS: Field = Field::new(0, 0, "u64", "time_ms");
+        pub const BEARING_RAD: Field = Field::new(1, 8, "f32", "bearing_rad");
+        pub const STEP_RAD: Field = Field::new(2, 12, "f32", "step_rad");
+        pub const RANGE_M: Field = Field::new(3, 16, "f32", "range_m");
+        pub const BIN_COUNT: Field = Field::new(4, 20, "u16", "bin_count");
+        pub const BINS: Field = Field::new(5, 22, "u8 × n", "bins");
+        /// Every row, in order.
+        pub const ALL: &[Field] = &[TIME_MS, BEARING_RAD, STEP_RAD, RANGE_M, BIN_COUNT, BINS];
+    }
+
+    /// `Contacts` (the entry's rows, 2–7, continue the message's; their offsets are in the entry).
+    pub mod contacts {
+        use crate::link::layout::Field;
+
+        pub const TIME_MS: Field = Field::new(0, 0, "u64", "time_ms");
+        pub const COUNT: Field = Field::new(1, 8, "u8", "count");
+        pub const ID: Field = Field::new(2, 0, "u16", "id");
+        pub const KIND: Field = Field::new(3, 2, "u8", "kind");
+        pub const SHAPE: Field = Field::new(4, 3, "shape", "shape");
+        pub const VX: Field = Field::new(5, 3, "f32", "vx").plus(" + s");
+        pub const VY: Field = Field::new(6, 7, "f32", "vy").plus(" + s");
+        pub const CONFIDENCE: Field = Field::new(7, 11, "f32", "confidence").plus(" + s");
+        /// Every row, in order.
+        pub const ALL: &[Field] = &[TIME_MS, COUNT, ID, KIND, SHAPE, VX, VY, CONFIDENCE];
+    }
+}
 
 /// Body-frame velocities from a DVL or the vehicle's own estimator.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -58,18 +114,18 @@ pub struct NavRepr {
 impl NavRepr {
     fn check(&self) -> Result<(), Error> {
         let n = &self.nav;
-        magnitude(1, n.position.x, MAX_COORD_M)?;
-        magnitude(2, n.position.y, MAX_COORD_M)?;
-        angle(3, n.heading)?;
-        finite(4, n.velocity.x)?;
-        finite(5, n.velocity.y)?;
+        magnitude(nav::X, n.position.x, MAX_COORD_M)?;
+        magnitude(nav::Y, n.position.y, MAX_COORD_M)?;
+        angle(nav::HEADING, n.heading)?;
+        finite(nav::VX, n.velocity.x)?;
+        finite(nav::VY, n.velocity.y)?;
         if n.velocity.norm2() > MAX_NAV_SPEED * MAX_NAV_SPEED {
-            return refuse(4, Problem::OutOfRange);
+            return refuse(nav::VX, Problem::OutOfRange);
         }
         if let Some(b) = self.body {
-            magnitude(7, b.u, MAX_NAV_SPEED)?;
-            magnitude(8, b.v, MAX_NAV_SPEED)?;
-            magnitude(9, b.r, MAX_YAW_RATE)?;
+            magnitude(nav::U, b.u, MAX_NAV_SPEED)?;
+            magnitude(nav::V, b.v, MAX_NAV_SPEED)?;
+            magnitude(nav::R, b.r, MAX_YAW_RATE)?;
         }
         Ok(())
     }
@@ -86,7 +142,7 @@ impl<'a> Payload<'a> for NavRepr {
         let velocity = r.vec2()?;
         let flags = r.u8()?;
         if flags & !NAV_FLAG_BODY != 0 {
-            return refuse(6, Problem::UnknownCode);
+            return refuse(nav::FLAGS, Problem::UnknownCode);
         }
         let body = if flags & NAV_FLAG_BODY != 0 {
             Some(BodyVelocity {
@@ -160,7 +216,7 @@ impl<'a> Payload<'a> for Scanline<'a> {
         let range_m = r.f32()?;
         let n = usize::from(r.u16()?);
         if !(1..=MAX_BINS).contains(&n) {
-            return refuse(4, Problem::OutOfRange);
+            return refuse(scanline::BIN_COUNT, Problem::OutOfRange);
         }
         let bins = r.bytes(n)?;
         r.finish()?;
@@ -194,15 +250,21 @@ impl<'a> Payload<'a> for Scanline<'a> {
 }
 
 fn check_scanline(s: &Scanline<'_>) -> Result<(), Error> {
-    angle(1, s.bearing_rad)?;
-    finite(2, s.step_rad)?;
-    within(2, s.step_rad.abs(), MIN_STEP_RAD, MAX_STEP_RAD)?;
-    within(3, s.range_m, MIN_RANGE_M, MAX_RANGE_M)?;
+    angle(scanline::BEARING_RAD, s.bearing_rad)?;
+    finite(scanline::STEP_RAD, s.step_rad)?;
+    within(
+        scanline::STEP_RAD,
+        s.step_rad.abs(),
+        MIN_STEP_RAD,
+        MAX_STEP_RAD,
+    )?;
+    within(scanline::RANGE_M, s.range_m, MIN_RANGE_M, MAX_RANGE_M)?;
     if !(1..=MAX_BINS).contains(&s.bins.len()) {
-        return refuse(4, Problem::OutOfRange);
+        return refuse(scanline::BIN_COUNT, Problem::OutOfRange);
     }
     // The sonar module's own rules, in case they are ever stricter than the wire's.
-    s.validate().map_err(|_| Error::field(5, Problem::Invalid))
+    s.validate()
+        .map_err(|_| scanline::BINS.error(Problem::Invalid))
 }
 
 /// What a contact is.
@@ -261,21 +323,21 @@ impl Contact {
     }
 
     fn check(&self) -> Result<(), Error> {
-        super::shape::check_shape(ROW_SHAPE, &self.shape)?;
-        finite(ROW_VX, self.velocity.x)?;
-        finite(ROW_VY, self.velocity.y)?;
+        super::shape::check_shape(contacts::SHAPE, &self.shape)?;
+        finite(contacts::VX, self.velocity.x)?;
+        finite(contacts::VY, self.velocity.y)?;
         if self.velocity.norm2() > MAX_OBJECT_SPEED * MAX_OBJECT_SPEED {
-            return refuse(ROW_VX, Problem::OutOfRange);
+            return refuse(contacts::VX, Problem::OutOfRange);
         }
-        within(ROW_CONFIDENCE, self.confidence, 0.0, 1.0)
+        within(contacts::CONFIDENCE, self.confidence, 0.0, 1.0)
     }
 
     fn read(r: &mut Reader<'_>) -> Result<Contact, Error> {
         let id = r.u16()?;
         let kind = r.u8()?;
         let kind =
-            ContactKind::from_code(kind).ok_or(Error::field(ROW_KIND, Problem::UnknownCode))?;
-        let shape = read_shape(r, ROW_SHAPE)?;
+            ContactKind::from_code(kind).ok_or(contacts::KIND.error(Problem::UnknownCode))?;
+        let shape = read_shape(r, contacts::SHAPE)?;
         let velocity = r.vec2()?;
         let confidence = r.f32()?;
         let c = Contact {
@@ -293,18 +355,11 @@ impl Contact {
         self.check()?;
         w.u16(self.id)?;
         w.u8(self.kind as u8)?;
-        write_shape(w, ROW_SHAPE, &self.shape)?;
+        write_shape(w, contacts::SHAPE, &self.shape)?;
         w.vec2(self.velocity)?;
         w.f32(self.confidence)
     }
 }
-
-/// `Contacts` rows: the entry fields continue the message's rows (0 `time_ms`, 1 `count`).
-const ROW_KIND: u8 = 3;
-const ROW_SHAPE: u8 = 4;
-const ROW_VX: u8 = 5;
-const ROW_VY: u8 = 6;
-const ROW_CONFIDENCE: u8 = 7;
 
 /// Longest wire form of one contact.
 pub const MAX_CONTACT_LEN: usize = 2 + 1 + MAX_SHAPE_LEN + 8 + 4;
@@ -444,7 +499,7 @@ impl<'a> Payload<'a> for ContactsRepr<'a> {
         let time_ms = r.u64()?;
         let count = r.u8()?;
         if usize::from(count) > MAX_CONTACTS {
-            return refuse(1, Problem::OutOfRange);
+            return refuse(contacts::COUNT, Problem::OutOfRange);
         }
         let entries = r.rest();
         for _ in 0..count {
@@ -468,7 +523,7 @@ impl<'a> Payload<'a> for ContactsRepr<'a> {
     fn emit(&self, out: &mut [u8]) -> Result<usize, Error> {
         let n = self.contacts.len();
         if n > MAX_CONTACTS {
-            return refuse(1, Problem::OutOfRange);
+            return refuse(contacts::COUNT, Problem::OutOfRange);
         }
         let mut w = Writer::new(out);
         w.u64(self.time_ms)?;
@@ -817,7 +872,7 @@ pub(crate) mod tests {
             })
     }
 
-    /// Owned scanline fields: (time, bearing, step, range, bins).
+    /// OwnedMessage scanline fields: (time, bearing, step, range, bins).
     pub(crate) fn arb_scanline() -> impl Strategy<Value = (u64, f32, f32, f32, Vec<u8>)> {
         (
             any::<u64>(),

@@ -15,11 +15,12 @@
 //! winding; it is stored, and re-emitted, counter-clockwise.
 
 use super::codec::{angle, point, refuse, Reader, Writer};
+use super::layout::Field;
 use super::{Error, Problem};
 use crate::field::shape::MAX_POLYGON_VERTICES;
 use crate::field::{Shape, ShapeError};
 use crate::math::Vec2;
-use crate::planner::MAX_COORD_M;
+use crate::types::MAX_COORD_M;
 
 /// Kind code of a circle.
 pub const KIND_CIRCLE: u8 = 0;
@@ -51,7 +52,7 @@ fn problem(e: ShapeError) -> Problem {
 
 /// The checks the constructors do not make: coordinates within ±[`MAX_COORD_M`], angles
 /// within ±2π. Errors name field `index`.
-pub(crate) fn check_shape(index: u8, shape: &Shape) -> Result<(), Error> {
+pub(crate) fn check_shape(index: Field, shape: &Shape) -> Result<(), Error> {
     match shape {
         Shape::Circle(c) => point(index, c.center(), MAX_COORD_M),
         Shape::Rectangle(r) => {
@@ -70,7 +71,7 @@ pub(crate) fn check_shape(index: u8, shape: &Shape) -> Result<(), Error> {
 }
 
 /// Reads a shape; errors name field `index`.
-pub(crate) fn read_shape(r: &mut Reader<'_>, index: u8) -> Result<Shape, Error> {
+pub(crate) fn read_shape(r: &mut Reader<'_>, index: Field) -> Result<Shape, Error> {
     let kind = r.u8()?;
     let built = match kind {
         KIND_CIRCLE => {
@@ -101,13 +102,13 @@ pub(crate) fn read_shape(r: &mut Reader<'_>, index: u8) -> Result<Shape, Error> 
         }
         _ => return refuse(index, Problem::UnknownCode),
     };
-    let shape = built.map_err(|e| Error::field(index, problem(e)))?;
+    let shape = built.map_err(|e| index.error(problem(e)))?;
     check_shape(index, &shape)?;
     Ok(shape)
 }
 
 /// Writes a shape (after [`check_shape`]); errors name field `index`.
-pub(crate) fn write_shape(w: &mut Writer<'_>, index: u8, shape: &Shape) -> Result<(), Error> {
+pub(crate) fn write_shape(w: &mut Writer<'_>, index: Field, shape: &Shape) -> Result<(), Error> {
     check_shape(index, shape)?;
     match shape {
         Shape::Circle(c) => {
@@ -144,13 +145,17 @@ pub(crate) mod tests {
     use super::*;
     use proptest::prelude::*;
 
+    /// A shape in row 9 of some message.
+    const AT: Field = Field::new(9, 0, "shape", "shape");
+    const AT0: Field = Field::new(0, 0, "shape", "shape");
+
     fn roundtrip(bytes: &[u8]) -> Result<(Shape, std::vec::Vec<u8>), Error> {
         let mut r = Reader::new(bytes);
-        let s = read_shape(&mut r, 9)?;
+        let s = read_shape(&mut r, AT)?;
         r.finish()?;
         let mut out = [0u8; MAX_SHAPE_LEN];
         let mut w = Writer::new(&mut out);
-        write_shape(&mut w, 9, &s)?;
+        write_shape(&mut w, AT, &s)?;
         let n = w.len();
         assert_eq!(n, shape_len(&s));
         Ok((s, out[..n].to_vec()))
@@ -287,18 +292,18 @@ pub(crate) mod tests {
         fn shapes_round_trip(s in arb_shape()) {
             let mut out = [0u8; MAX_SHAPE_LEN];
             let mut w = Writer::new(&mut out);
-            write_shape(&mut w, 0, &s).unwrap();
+            write_shape(&mut w, AT0, &s).unwrap();
             let n = w.len();
             prop_assert_eq!(n, shape_len(&s));
             let mut r = Reader::new(&out[..n]);
-            prop_assert_eq!(read_shape(&mut r, 0), Ok(s));
+            prop_assert_eq!(read_shape(&mut r, AT0), Ok(s));
             prop_assert_eq!(r.finish(), Ok(()));
         }
 
         #[test]
         fn arbitrary_bytes_never_panic(bytes in proptest::collection::vec(any::<u8>(), 0..80)) {
             let mut r = Reader::new(&bytes);
-            let _ = read_shape(&mut r, 0);
+            let _ = read_shape(&mut r, AT0);
         }
     }
 }

@@ -35,8 +35,7 @@ use heapless::Vec;
 use crate::math::{Vec2, XorShift32};
 use crate::params::Params;
 
-/// Depth of the ghost goal-point stack.
-pub const MAX_GHOSTS: usize = 4;
+pub use crate::params::MAX_GHOSTS;
 
 /// What holds a stalled vehicle in place (see the module notes).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

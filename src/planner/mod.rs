@@ -44,188 +44,25 @@ use crate::math::Vec2;
 use crate::params::{ParamError, Params, Strategy};
 use crate::world::{World, MAX_OBSTACLES};
 
+pub use crate::types::{
+    Command, Formation, FormationError, HoldReason, Mission, Mode, NavState, PidSetpoints,
+    StepError, MAX_COORD_M, MAX_NAV_SPEED,
+};
 pub use escape::{EscapeCounters, GhostGoal, StallCause, MAX_GHOSTS};
-pub use formation::{Formation, FormationError};
 pub use gradient::SampleCircle;
 pub use mission::{
     MissionEnd, MissionError, MissionProgress, Survey, Waypoint, WaypointError, Waypoints,
     MAX_WAYPOINTS,
 };
-pub use setpoints::PidSetpoints;
 
+use crate::types::nav::finite_coord;
 use escape::Escape;
 use setpoints::{Measured, SetpointState, V_EPS};
 use strategy::ArcState;
 
-/// Largest coordinate accepted for the vehicle or a goal, m (100 km: beyond any AUV mission in a
-/// local frame, and where `f32` still resolves 8 mm).
-pub const MAX_COORD_M: f32 = 100_000.0;
-/// Largest speed over ground accepted from navigation, m/s.
-pub const MAX_NAV_SPEED: f32 = 20.0;
 /// Deceleration planned for arrival, as a fraction of F_max: half, so that an autopilot that
 /// lags the speed set-point still stops in the arrival circle.
 pub const ARRIVAL_BRAKE: f32 = 0.5;
-
-/// The vehicle's navigation state, as the planner needs it.
-#[derive(Clone, Copy, Debug, PartialEq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct NavState {
-    /// Position in the local Earth-fixed frame, m.
-    pub position: Vec2,
-    /// Compass heading from +x, counter-clockwise, rad.
-    pub heading: f32,
-    /// Velocity over ground in the Earth-fixed frame, m/s.
-    pub velocity: Vec2,
-}
-
-/// The mission: where to go, and optionally which formation to keep. A single goal is the
-/// one-waypoint, hold-at-last case of a waypoint mission ([`Planner::set_waypoints`],
-/// [`mission`]); while one is flown, [`Planner::mission`] gives the waypoint being flown to.
-#[derive(Clone, Copy, Debug, PartialEq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct Mission {
-    /// The goal-point p_GP, m (000 eq. 13).
-    pub goal: Vec2,
-    /// Formation by virtual leader (001 §3.2), if any.
-    pub formation: Option<Formation>,
-}
-
-/// Why the planner holds instead of planning.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum HoldReason {
-    /// No mission has been given.
-    NoMission,
-    /// Navigation is older than the runtime's timeout.
-    StaleNav,
-    /// The vehicle is inside an obstacle's surface.
-    InsideObstacle,
-    /// A collision cannot be avoided at the current speed.
-    CollisionImminent,
-    /// Navigation fixes keep coming but do not change while the vehicle is commanded to move:
-    /// the navigation source has frozen (`crate::guidance::failsafe::FreezeDetector`).
-    FrozenNav,
-    /// The sonar has not yet swept once round the vehicle since it started, or it has gone
-    /// quiet and the vehicle has gone as far as the map it has can be trusted
-    /// (`crate::guidance::failsafe::SonarWatch`).
-    SonarBlind,
-}
-
-/// What the planner is doing.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum Mode {
-    /// Zero set-points, for the reason given.
-    Hold(HoldReason),
-    /// Following the field to the mission goal.
-    Transit,
-    /// Following the field to a ghost goal-point (000 §III).
-    Escape,
-    /// Within the arrival radius of the goal (the field keeps station).
-    Arrived,
-    /// The waypoint mission is complete and the vehicle circles its last waypoint
-    /// ([`MissionEnd::Loiter`]).
-    Loiter,
-    /// The planner's command was turned, slowed or stopped by the guard, because it would have
-    /// driven into something believed (`crate::guidance::guard`).
-    Guarded,
-}
-
-/// One period's output: set-points for the autopilots, and what produced them.
-#[derive(Clone, Copy, Debug, PartialEq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct Command {
-    /// ψ_set, heading set-point, rad in (−π, π] (000 eq. 6).
-    pub psi_set: f32,
-    /// v_set, speed set-point, m/s, 0 ..= v_max (000 eq. 7).
-    pub v_set: f32,
-    /// PI-D set-points (001 §2).
-    pub setpoints: PidSetpoints,
-    /// Mode.
-    pub mode: Mode,
-    /// F̄, the bounded controlling force, m/s².
-    pub force: Vec2,
-    /// v̄_c, the bounded commanded velocity, m/s.
-    pub velocity: Vec2,
-    /// The active goal-point (mission goal or top ghost), m.
-    pub target: Vec2,
-    /// Number of stacked ghost goal-points.
-    pub ghost_depth: u8,
-    /// Signed distance to the nearest obstacle or vehicle circle, m (negative: inside).
-    pub clearance_m: f32,
-}
-
-impl Command {
-    /// A hold: zero speed, heading kept at `heading`.
-    pub fn hold(reason: HoldReason, heading: f32) -> Command {
-        Command {
-            psi_set: crate::math::wrap_angle(heading),
-            v_set: 0.0,
-            setpoints: PidSetpoints {
-                phi_c: crate::math::wrap_angle(heading),
-                ..PidSetpoints::default()
-            },
-            mode: Mode::Hold(reason),
-            force: Vec2::ZERO,
-            velocity: Vec2::ZERO,
-            target: Vec2::ZERO,
-            ghost_depth: 0,
-            clearance_m: f32::INFINITY,
-        }
-    }
-
-    /// Every number finite (clearance may be +∞ in an empty world).
-    pub fn is_finite(&self) -> bool {
-        let s = &self.setpoints;
-        [
-            self.psi_set,
-            self.v_set,
-            s.a_c,
-            s.v_c,
-            s.i_surge,
-            s.alpha_c,
-            s.omega_c,
-            s.phi_c,
-        ]
-        .iter()
-        .all(|x| x.is_finite())
-            && self.force.is_finite()
-            && self.velocity.is_finite()
-            && self.target.is_finite()
-            && !self.clearance_m.is_nan()
-    }
-}
-
-/// Why a step or a setting was refused. The planner's state is unchanged after any of them.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum StepError {
-    /// Navigation has a non-finite or out-of-range number.
-    BadNav,
-    /// The mission's goal is non-finite or out of range.
-    BadGoal,
-    /// The mission's formation request is invalid.
-    BadFormation(FormationError),
-    /// The waypoint mission is invalid.
-    BadMission(MissionError),
-    /// A parameter is invalid.
-    BadParams(ParamError),
-    /// The computation produced a non-finite number (never expected; the step is discarded).
-    NonFinite,
-}
-
-impl core::fmt::Display for StepError {
-    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        match self {
-            StepError::BadNav => f.write_str("navigation state non-finite or out of range"),
-            StepError::BadGoal => f.write_str("goal non-finite or out of range"),
-            StepError::BadFormation(e) => write!(f, "formation refused: {e}"),
-            StepError::BadMission(e) => write!(f, "mission refused: {e}"),
-            StepError::BadParams(e) => write!(f, "{e}"),
-            StepError::NonFinite => f.write_str("planner produced a non-finite number"),
-        }
-    }
-}
 
 /// Counters of refused inputs, for telemetry.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -360,25 +197,6 @@ pub struct Planner {
     motion: Motion,
     /// Refused-input counters.
     pub counters: PlannerCounters,
-}
-
-fn finite_coord(p: Vec2) -> bool {
-    p.is_finite() && p.x.abs() <= MAX_COORD_M && p.y.abs() <= MAX_COORD_M
-}
-
-impl NavState {
-    /// Checks that every number is finite and in range.
-    pub fn validate(&self) -> Result<(), StepError> {
-        let ok = finite_coord(self.position)
-            && self.heading.is_finite()
-            && self.velocity.is_finite()
-            && self.velocity.norm2() <= MAX_NAV_SPEED * MAX_NAV_SPEED;
-        if ok {
-            Ok(())
-        } else {
-            Err(StepError::BadNav)
-        }
-    }
 }
 
 impl Planner {

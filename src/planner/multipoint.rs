@@ -78,11 +78,9 @@
 use crate::field::Shape;
 use crate::math::{max, min, sin_cos, wrap_angle, Vec2, PI};
 
-/// Most arc points N (the capacity of [`choose`]'s stack arrays). A larger
-/// [`ArcConfig::points`] is clamped to it.
-pub const MAX_ARC_POINTS: usize = 32;
-/// Most periphery points K per obstacle. A larger [`ArcConfig::periphery`] is clamped to it.
-pub const MAX_PERIPHERY_POINTS: usize = 16;
+/// Most arc points N (the capacity of [`choose`]'s stack arrays; a larger [`ArcConfig::points`]
+/// is clamped to it) and most periphery points K per obstacle (likewise).
+pub use crate::params::{MAX_ARC_POINTS, MAX_PERIPHERY_POINTS};
 
 /// Floor on d_o in eq. 5 of seed 003, m: closer than this the repulsion stops growing, so an
 /// arc point on a periphery point (or a vehicle inside an obstacle) gives a large finite
@@ -145,20 +143,27 @@ impl Default for ArcConfig {
     /// - K = 9 (odd, so the point facing the vehicle is one of them): one point every 22.5°,
     ///   dense enough (spacing ≤ d_t/2) on obstacles up to 10 m in radius; larger ones get the
     ///   nearest-point term of the module notes.
+    ///
+    /// The values are declared as the `mp_*` parameters' defaults (`crate::params`).
     fn default() -> Self {
-        ArcConfig {
-            arc_m: 1.0,
-            points: 25,
-            max_turn_rad: 0.2 * PI,
-            xi: 1.0,
-            eta: 10.0,
-            influence_m: 8.0,
-            periphery: 9,
-        }
+        ArcConfig::of(&crate::params::Params::default())
     }
 }
 
 impl ArcConfig {
+    /// The multipoint settings of a parameter set (its `mp_*` parameters).
+    pub fn of(p: &crate::params::Params) -> ArcConfig {
+        ArcConfig {
+            arc_m: p.mp_arc_m,
+            points: p.mp_points,
+            max_turn_rad: p.mp_turn_rad,
+            xi: p.mp_xi,
+            eta: p.mp_eta,
+            influence_m: p.mp_influence_m,
+            periphery: p.mp_periphery,
+        }
+    }
+
     /// Every field finite and in the range its documentation gives (`points` and `periphery`
     /// are clamped, never refused).
     pub fn is_valid(&self) -> bool {

@@ -112,6 +112,24 @@ pub enum NavfnError {
     InvalidKappa,
 }
 
+impl core::fmt::Display for NavfnError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            NavfnError::Full => f.write_str("sphere world full"),
+            NavfnError::NonFinite => f.write_str("a number is not finite"),
+            NavfnError::OutsideWorkspace => f.write_str("outside the workspace"),
+            NavfnError::InsideObstacle(i) => write!(f, "inside obstacle circle {i}"),
+            NavfnError::GoalBlocked => {
+                f.write_str("goal inside an obstacle or outside the workspace")
+            }
+            NavfnError::InvalidRadius => f.write_str("radius not strictly positive"),
+            NavfnError::InvalidKappa => f.write_str("kappa below its minimum"),
+        }
+    }
+}
+
+impl core::error::Error for NavfnError {}
+
 /// The circle enclosing a table shape, for the sphere world: the shape's own
 /// [`Shape::center`] and [`Shape::bounding_radius`] (seed 004 models obstacles as discs; the
 /// enclosure is our choice). Circle → itself; rectangle → its centre and half-diagonal;

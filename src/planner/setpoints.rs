@@ -44,30 +44,12 @@
 //!   at full thrust once released ([`SetpointState::restart_integral`]).
 
 use crate::math::{wrap_angle, Vec2};
+pub use crate::types::PidSetpoints;
 
 /// Speed below which curvature and course are not computed from velocity, m/s.
 pub const V_EPS: f32 = 0.05;
 /// Largest integral error I_surge, m: beyond it the idealised position is dragged along.
 pub const I_SURGE_LIMIT_M: f32 = 10.0;
-
-/// Set-points for parallel PI-D surge and heading autopilots (001 §2).
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct PidSetpoints {
-    /// a_c, surge acceleration command (derivative channel), m/s².
-    pub a_c: f32,
-    /// v_c, surge speed command, m/s (⟨v̄_c, ê₁⟩: negative means back up).
-    pub v_c: f32,
-    /// I_surge, integral channel: how far the idealised position is ahead of the vehicle along
-    /// its travel, m (negative: the vehicle is ahead).
-    pub i_surge: f32,
-    /// α_c, heading acceleration command (derivative channel), rad/s².
-    pub alpha_c: f32,
-    /// ω_c, heading rate command, rad/s.
-    pub omega_c: f32,
-    /// φ_c, heading command, rad in (−π, π].
-    pub phi_c: f32,
-}
 
 /// What the decomposition remembers between periods.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]

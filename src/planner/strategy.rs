@@ -42,15 +42,7 @@ pub(super) struct ArcState {
 }
 
 fn arc_config(p: &Params) -> ArcConfig {
-    ArcConfig {
-        arc_m: p.mp_arc_m,
-        points: p.mp_points,
-        max_turn_rad: p.mp_turn_rad,
-        xi: p.mp_xi,
-        eta: p.mp_eta,
-        influence_m: p.mp_influence_m,
-        periphery: p.mp_periphery,
-    }
+    ArcConfig::of(p)
 }
 
 impl Context<'_> {

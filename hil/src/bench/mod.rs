@@ -203,7 +203,7 @@ pub fn cases(o: &Options) -> Vec<Case> {
     v
 }
 
-fn io<'a>(what: &'a str, p: &'a Path) -> impl Fn(std::io::Error) -> String + 'a {
+fn io_error<'a>(what: &'a str, p: &'a Path) -> impl Fn(std::io::Error) -> String + 'a {
     move |e| format!("{what} {}: {e}", p.display())
 }
 
@@ -218,7 +218,7 @@ pub fn bench(o: &Options) -> Result<(PathBuf, report::Report), String> {
     }
     let (params, recipe_text) = match &o.params {
         Some(p) => {
-            let text = std::fs::read_to_string(p).map_err(io("cannot read", p))?;
+            let text = std::fs::read_to_string(p).map_err(io_error("cannot read", p))?;
             let prm = scenario::parse_planner(&text, &p.display().to_string(), 0.1)
                 .map_err(|e| e.to_string())?;
             (Some(prm), text)
@@ -233,7 +233,7 @@ pub fn bench(o: &Options) -> Result<(PathBuf, report::Report), String> {
             .map_or("default".to_string(), |s| s.to_string_lossy().into_owned());
         PathBuf::from("bench").join(crate::output::file_stem(&name))
     });
-    std::fs::create_dir_all(&dir).map_err(io("cannot create", &dir))?;
+    std::fs::create_dir_all(&dir).map_err(io_error("cannot create", &dir))?;
     let identity = format!(
         "{:016x}",
         fnv1a(&[FORMAT.as_bytes(), recipe_text.as_bytes()])
@@ -249,7 +249,9 @@ pub fn bench(o: &Options) -> Result<(PathBuf, report::Report), String> {
             ))
         }
         Ok(_) => {}
-        Err(_) => std::fs::write(&id_path, &identity).map_err(io("cannot write", &id_path))?,
+        Err(_) => {
+            std::fs::write(&id_path, &identity).map_err(io_error("cannot write", &id_path))?
+        }
     }
 
     // Rows already there: complete lines of runs.jsonl (a cut-off last line is dropped).
@@ -288,7 +290,7 @@ pub fn bench(o: &Options) -> Result<(PathBuf, report::Report), String> {
             .create(true)
             .append(true)
             .open(&rows_path)
-            .map_err(io("cannot open", &rows_path))?;
+            .map_err(io_error("cannot open", &rows_path))?;
         let mut file = std::io::BufWriter::new(file);
         let fly = |i: usize| case::fly(&all[i], params.as_ref(), &run, &failed);
         pool::run_all(
@@ -306,7 +308,7 @@ pub fn bench(o: &Options) -> Result<(PathBuf, report::Report), String> {
                 Ok(())
             },
         )
-        .map_err(io("cannot append to", &rows_path))?;
+        .map_err(io_error("cannot append to", &rows_path))?;
     }
     // The report covers the cases asked for, in table order.
     let wanted: HashSet<String> = all.iter().map(Case::id).collect();
@@ -317,14 +319,14 @@ pub fn bench(o: &Options) -> Result<(PathBuf, report::Report), String> {
     rows.dedup_by(|a, b| a.id == b.id);
     let rep = report::Report::of(&rows, &params.unwrap_or_default(), o.params.as_deref());
     let md = dir.join("bench.md");
-    std::fs::write(&md, rep.markdown()).map_err(io("cannot write", &md))?;
+    std::fs::write(&md, rep.markdown()).map_err(io_error("cannot write", &md))?;
     let js = dir.join("bench.json");
     let json = serde_json::json!({ "format": FORMAT, "summary": rep.json(), "runs": rows });
     std::fs::write(
         &js,
         serde_json::to_string_pretty(&json).unwrap_or_default() + "\n",
     )
-    .map_err(io("cannot write", &js))?;
+    .map_err(io_error("cannot write", &js))?;
     Ok((dir, rep))
 }
 

@@ -400,9 +400,9 @@ impl VehicleMetrics {
 }
 
 /// `1.23 m`, or `n/a`.
-struct Opt(Option<f64>, &'static str);
+struct MaybeValue(Option<f64>, &'static str);
 
-impl fmt::Display for Opt {
+impl fmt::Display for MaybeValue {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self.0 {
             Some(x) => write!(f, "{x:.2} {}", self.1),
@@ -441,21 +441,21 @@ impl fmt::Display for VehicleMetrics {
             (false, Some(t)) => write!(
                 f,
                 "did NOT reach its goal (was within the arrival radius at t = {t:.1} s but ended {} away)",
-                Opt(self.final_distance_m, "m")
+                MaybeValue(self.final_distance_m, "m")
             )?,
             _ => write!(
                 f,
                 "did NOT reach its goal (closest {}, final {})",
-                Opt(self.min_goal_distance_m, "m"),
-                Opt(self.final_distance_m, "m")
+                MaybeValue(self.min_goal_distance_m, "m"),
+                MaybeValue(self.final_distance_m, "m")
             )?,
         }
         write!(
             f,
             "; path {:.2} m over {}; minimum clearance {}; ",
             self.path_length_m,
-            Opt(self.duration_s, "s"),
-            Opt(self.min_clearance_m, "m")
+            MaybeValue(self.duration_s, "s"),
+            MaybeValue(self.min_clearance_m, "m")
         )?;
         match self.collisions {
             0 => f.write_str("no collisions")?,

@@ -5,7 +5,7 @@
 use vpf::planner::{MissionEnd, Survey, Waypoint, Waypoints, MAX_WAYPOINTS};
 use vpf::Params;
 
-use super::{type_name, value_pair, DeValue, Got, ScenarioError, Table, Val};
+use super::{type_name, value_pair, DeValue, Located, ScenarioError, Table, Val};
 use crate::types::P2;
 
 /// The keys of a vehicle's mission, besides `goal`.
@@ -47,7 +47,7 @@ fn limit(v: f32) -> f64 {
 
 /// A waypoint's position as written, for the checks against obstacles.
 pub(super) struct Placed<'a> {
-    pub(super) at: Got<'a, P2>,
+    pub(super) at: Located<'a, P2>,
 }
 
 /// The mission of vehicle table `t`, if it has one, with where each waypoint was written (a
@@ -92,7 +92,7 @@ pub(super) fn parse<'a>(
                 .map(|w| {
                     let p = w.position();
                     Placed {
-                        at: Got {
+                        at: Located {
                             v: P2::new(f64::from(p.x), f64::from(p.y)),
                             span: s.span.clone(),
                             key: s.path.clone(),
@@ -206,7 +206,7 @@ fn list<'a>(
                 (at, radius, speed)
             }
             _ => {
-                let at = Got {
+                let at = Located {
                     v: value_pair(t.src, &k, item)?,
                     span: item.span(),
                     key: k.clone(),

@@ -115,7 +115,7 @@ pub fn parse_shard(s: &str) -> Result<(usize, usize), String> {
     Ok((k, n))
 }
 
-fn io<'a>(what: &str, path: &'a Path) -> impl Fn(std::io::Error) -> String + 'a {
+fn io_error<'a>(what: &str, path: &'a Path) -> impl Fn(std::io::Error) -> String + 'a {
     let what = what.to_string();
     move |e| format!("{what} {}: {e}", path.display())
 }
@@ -141,7 +141,7 @@ pub fn sweep(spec_path: &Path, opts: &Options) -> Result<Outcome, String> {
             None => base,
         }
     });
-    std::fs::create_dir_all(&dir).map_err(io("cannot create", &dir))?;
+    std::fs::create_dir_all(&dir).map_err(io_error("cannot create", &dir))?;
     let scenario_ids: Vec<String> = batch.iter().map(|b| b.id.clone()).collect();
 
     // The directory's identity: new, or the same sweep and shard.
@@ -175,9 +175,9 @@ pub fn sweep(spec_path: &Path, opts: &Options) -> Result<Outcome, String> {
             "craft": spec.craft.model.name(),
         });
         let text = serde_json::to_string_pretty(&meta).map_err(|e| e.to_string())?;
-        std::fs::write(&meta_path, text + "\n").map_err(io("cannot write", &meta_path))?;
+        std::fs::write(&meta_path, text + "\n").map_err(io_error("cannot write", &meta_path))?;
         let copy = dir.join("spec.toml");
-        std::fs::write(&copy, &spec.text).map_err(io("cannot write", &copy))?;
+        std::fs::write(&copy, &spec.text).map_err(io_error("cannot write", &copy))?;
     }
 
     // What is done already: complete rows of runs.csv (rewritten without a cut-off last line).
@@ -198,7 +198,8 @@ pub fn sweep(spec_path: &Path, opts: &Options) -> Result<Outcome, String> {
     };
     rows.sort_by_key(|r| r.run);
     rows.dedup_by_key(|r| r.run);
-    std::fs::write(&csv_path, csv::render(&spec, &rows)).map_err(io("cannot write", &csv_path))?;
+    std::fs::write(&csv_path, csv::render(&spec, &rows))
+        .map_err(io_error("cannot write", &csv_path))?;
 
     let in_shard = |r: usize| opts.shard.is_none_or(|(k, n)| r % n == k - 1);
     let mine: Vec<usize> = (0..total).filter(|&r| in_shard(r)).collect();
@@ -235,7 +236,7 @@ pub fn sweep(spec_path: &Path, opts: &Options) -> Result<Outcome, String> {
         private = Some(binary.clone());
         let fw_hash = format!(
             "{:016x}",
-            fnv1a(&[&std::fs::read(&binary).map_err(io("cannot read", &binary))?])
+            fnv1a(&[&std::fs::read(&binary).map_err(io_error("cannot read", &binary))?])
         );
         note_firmware(&meta_path, &fw_hash, opts.quiet)?;
         started = Instant::now();
@@ -260,10 +261,10 @@ pub fn sweep(spec_path: &Path, opts: &Options) -> Result<Outcome, String> {
         let file = std::fs::OpenOptions::new()
             .append(true)
             .open(&csv_path)
-            .map_err(io("cannot open", &csv_path))?;
+            .map_err(io_error("cannot open", &csv_path))?;
         let mut file = std::io::BufWriter::new(file);
         pool::run_all(
-            &|run| pool::one(&work, run),
+            &|run| pool::run_one(&work, run),
             &pending,
             jobs,
             opts.quiet,
@@ -274,7 +275,7 @@ pub fn sweep(spec_path: &Path, opts: &Options) -> Result<Outcome, String> {
                 file.flush()
             },
         )
-        .map_err(io("cannot append to", &csv_path))?;
+        .map_err(io_error("cannot append to", &csv_path))?;
     }
     let elapsed = started.elapsed();
     if let Some(copy) = &private {
@@ -282,11 +283,12 @@ pub fn sweep(spec_path: &Path, opts: &Options) -> Result<Outcome, String> {
     }
 
     // Sorted by run, then the reports from the file as written.
-    let text = std::fs::read_to_string(&csv_path).map_err(io("cannot read", &csv_path))?;
+    let text = std::fs::read_to_string(&csv_path).map_err(io_error("cannot read", &csv_path))?;
     let (mut rows, _) = csv::read(&spec, &text, total).map_err(|e| e.to_string())?;
     rows.sort_by_key(|r| r.run);
     rows.dedup_by_key(|r| r.run);
-    std::fs::write(&csv_path, csv::render(&spec, &rows)).map_err(io("cannot write", &csv_path))?;
+    std::fs::write(&csv_path, csv::render(&spec, &rows))
+        .map_err(io_error("cannot write", &csv_path))?;
     let ctx = report::Context {
         spec_file: spec.file.clone(),
         identity,
@@ -294,7 +296,8 @@ pub fn sweep(spec_path: &Path, opts: &Options) -> Result<Outcome, String> {
         total_runs: total,
         date: report::today(),
     };
-    let report = report::write(&dir, &spec, &rows, &ctx).map_err(io("cannot write to", &dir))?;
+    let report =
+        report::write(&dir, &spec, &rows, &ctx).map_err(io_error("cannot write to", &dir))?;
     Ok(Outcome {
         dir,
         ran: pending.len(),
@@ -312,14 +315,14 @@ fn private_copy(built: &Path) -> Result<PathBuf, String> {
     static COUNT: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
     let k = COUNT.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
     let copy = std::env::temp_dir().join(format!("hil-sweep-firmware-{}-{k}", std::process::id()));
-    std::fs::copy(built, &copy).map_err(io("cannot copy the firmware to", &copy))?;
+    std::fs::copy(built, &copy).map_err(io_error("cannot copy the firmware to", &copy))?;
     Ok(copy)
 }
 
 /// Records the firmware's hash in `sweep.json`; warns if the directory's earlier runs used
 /// another build (their rows are kept: the spec's identity does not cover the firmware).
 fn note_firmware(meta_path: &Path, hash: &str, quiet: bool) -> Result<(), String> {
-    let text = std::fs::read_to_string(meta_path).map_err(io("cannot read", meta_path))?;
+    let text = std::fs::read_to_string(meta_path).map_err(io_error("cannot read", meta_path))?;
     let mut meta: serde_json::Value =
         serde_json::from_str(&text).map_err(|e| format!("{}: {e}", meta_path.display()))?;
     let mut seen: Vec<String> = meta["firmware"]
@@ -342,7 +345,7 @@ fn note_firmware(meta_path: &Path, hash: &str, quiet: bool) -> Result<(), String
     seen.push(hash.to_string());
     meta["firmware"] = serde_json::json!(seen);
     let text = serde_json::to_string_pretty(&meta).map_err(|e| e.to_string())?;
-    std::fs::write(meta_path, text + "\n").map_err(io("cannot write", meta_path))
+    std::fs::write(meta_path, text + "\n").map_err(io_error("cannot write", meta_path))
 }
 
 /// Merges the `runs.csv` of several output directories of one sweep (its shards, or partial
@@ -356,7 +359,8 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<(Report, Spec, usize), Stri
     let mut rows: Vec<measure::RunRow> = Vec::new();
     for d in dirs {
         let meta_path = d.join("sweep.json");
-        let text = std::fs::read_to_string(&meta_path).map_err(io("cannot read", &meta_path))?;
+        let text =
+            std::fs::read_to_string(&meta_path).map_err(io_error("cannot read", &meta_path))?;
         let meta: serde_json::Value =
             serde_json::from_str(&text).map_err(|e| format!("{}: {e}", meta_path.display()))?;
         let id = meta["identity"].as_str().unwrap_or_default().to_string();
@@ -373,14 +377,14 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<(Report, Spec, usize), Stri
         }
         if spec.is_none() {
             let path = d.join("spec.toml");
-            let text = std::fs::read_to_string(&path).map_err(io("cannot read", &path))?;
+            let text = std::fs::read_to_string(&path).map_err(io_error("cannot read", &path))?;
             let name = meta["spec_file"].as_str().unwrap_or("spec.toml");
             spec = Some(spec::parse(&text, name).map_err(|e| e.to_string())?);
         }
         let Some(sp) = spec.as_ref() else { continue };
         let total = meta["total_runs"].as_u64().unwrap_or(0) as usize;
         let path = d.join("runs.csv");
-        let text = std::fs::read_to_string(&path).map_err(io("cannot read", &path))?;
+        let text = std::fs::read_to_string(&path).map_err(io_error("cannot read", &path))?;
         let (mut r, _) =
             csv::read(sp, &text, total).map_err(|e| format!("{}: {e}", path.display()))?;
         rows.append(&mut r);
@@ -406,7 +410,7 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<(Report, Spec, usize), Stri
                 .collect()
         })
         .unwrap_or_default();
-    std::fs::create_dir_all(out).map_err(io("cannot create", out))?;
+    std::fs::create_dir_all(out).map_err(io_error("cannot create", out))?;
     let mut merged = meta.clone();
     merged["shard"] = serde_json::Value::Null;
     merged["merged_from"] = serde_json::json!(dirs
@@ -416,7 +420,7 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<(Report, Spec, usize), Stri
     let text = serde_json::to_string_pretty(&merged).map_err(|e| e.to_string())?;
     let w = |name: &str, body: &str| {
         let p = out.join(name);
-        std::fs::write(&p, body).map_err(io("cannot write", &p))
+        std::fs::write(&p, body).map_err(io_error("cannot write", &p))
     };
     w("sweep.json", &(text + "\n"))?;
     w("spec.toml", &spec.text)?;
@@ -428,7 +432,8 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<(Report, Spec, usize), Stri
         total_runs: total,
         date: report::today(),
     };
-    let report = report::write(out, &spec, &rows, &ctx).map_err(io("cannot write to", out))?;
+    let report =
+        report::write(out, &spec, &rows, &ctx).map_err(io_error("cannot write to", out))?;
     Ok((report, spec, total))
 }
 

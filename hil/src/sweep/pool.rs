@@ -25,7 +25,7 @@ pub struct Work<'a> {
 }
 
 /// Runs one run of the sweep: run index `run` = set × scenarios + scenario.
-pub fn one(w: &Work<'_>, run: usize) -> RunRow {
+pub fn run_one(w: &Work<'_>, run: usize) -> RunRow {
     let n = w.batch.len();
     let (set, j) = (run / n, run % n);
     let b = &w.batch[j];

@@ -103,7 +103,7 @@ pub struct Report {
     pub best_by_family: Vec<(String, usize, usize, usize, f64)>,
 }
 
-fn f(x: f64, d: usize) -> String {
+fn fixed(x: f64, d: usize) -> String {
     if x.is_finite() {
         format!("{x:.d$}")
     } else {
@@ -358,13 +358,13 @@ impl Report {
                 st.runs,
                 st.collided,
                 st.close,
-                f(st.mean_clearance_m, 2),
-                f(st.worst_clearance_m, 2),
-                f(st.path_ratio, 3),
-                f(st.time_s, 1),
-                f(st.energy, 1),
-                f(st.oscillation, 2),
-                f(st.cost, 3)
+                fixed(st.mean_clearance_m, 2),
+                fixed(st.worst_clearance_m, 2),
+                fixed(st.path_ratio, 3),
+                fixed(st.time_s, 1),
+                fixed(st.energy, 1),
+                fixed(st.oscillation, 2),
+                fixed(st.cost, 3)
             );
         }
         s
@@ -665,18 +665,18 @@ impl Report {
             b.successes,
             b.runs,
             b.collided,
-            f(b.mean_clearance_m, 2),
-            f(b.worst_clearance_m, 2)
+            fixed(b.mean_clearance_m, 2),
+            fixed(b.worst_clearance_m, 2)
         );
         let _ = writeln!(
             s,
             "#   ({} runs under the {} m margin), path ratio {}, time {} s, energy {}, {} reversals/100 m.",
             b.close,
             spec.craft.margin_m,
-            f(b.path_ratio, 3),
-            f(b.time_s, 1),
-            f(b.energy, 1),
-            f(b.oscillation, 2)
+            fixed(b.path_ratio, 3),
+            fixed(b.time_s, 1),
+            fixed(b.energy, 1),
+            fixed(b.oscillation, 2)
         );
         let _ = writeln!(
             s,
@@ -745,11 +745,11 @@ impl Report {
                 100.0 * st.success_rate(),
                 st.collided,
                 st.close,
-                f(st.mean_clearance_m, 2),
-                f(st.worst_clearance_m, 2),
-                f(st.path_ratio, 2),
-                f(st.time_s, 1),
-                f(st.cost, 3)
+                fixed(st.mean_clearance_m, 2),
+                fixed(st.worst_clearance_m, 2),
+                fixed(st.path_ratio, 2),
+                fixed(st.time_s, 1),
+                fixed(st.cost, 3)
             );
         }
         s
@@ -818,20 +818,15 @@ pub fn families(ids: &[String]) -> String {
         .join(", ")
 }
 
-/// A method-independent parameter's value in `p`.
+/// A parameter's value in `p`, as a recipe writes it (an enum by its name).
 fn param_value(p: &vpf::Params, name: &str) -> Option<Value> {
-    let f = |x: f32| Value::Float(x.to_string().parse().unwrap_or(f64::from(x)));
-    Some(match name {
-        "a_plus" => f(p.a_plus),
-        "a_rotor" => f(p.a_rotor),
-        "epsilon_m" => f(p.epsilon_m),
-        "n_gamma" => Value::Int(i64::from(p.n_gamma)),
-        "mu" => f(p.mu),
-        "f_max" => f(p.f_max),
-        "v_max" => f(p.v_max),
-        "sigma_m" => f(p.sigma_m),
-        "a_minus" => f(p.a_minus),
-        _ => return None,
+    use vpf::params::{Kind, ParamId, Value as V};
+    let id = ParamId::from_name(name)?;
+    Some(match (p.get(id), id.kind()) {
+        (V::F32(x), _) => Value::Float(x.to_string().parse().unwrap_or(f64::from(x))),
+        (V::Code(c), Kind::Code(names)) => Value::Str(names.get(usize::from(c))?.to_string()),
+        (V::U8(x) | V::Code(x), _) => Value::Int(i64::from(x)),
+        (V::U32(x), _) => Value::Int(i64::from(x)),
     })
 }
 

@@ -12,8 +12,8 @@ use std::fmt::Write as _;
 use toml::de::{DeTable, DeValue};
 
 use crate::scenario::{
-    self, type_name, value_integer, value_number, ModelKind, ScenarioError, Sensing, Src, Table,
-    Val,
+    self, type_name, value_integer, value_number, ModelKind, ScenarioError, Sensing, SourceText,
+    Table, Val,
 };
 use crate::sim::Rng;
 
@@ -408,7 +408,7 @@ impl<'a> SpecReads<'a> for Table<'a> {
 }
 
 /// A `[planner]` value: integer, finite float or string.
-fn value_any(src: Src<'_>, key: &str, v: &Val<'_>) -> Result<Value, ScenarioError> {
+fn value_any(src: SourceText<'_>, key: &str, v: &Val<'_>) -> Result<Value, ScenarioError> {
     match v.get_ref() {
         DeValue::Integer(_) => value_integer(src, key, v).map(Value::Int),
         DeValue::Float(_) => value_number(src, key, v).map(Value::Float),
@@ -426,7 +426,7 @@ fn value_any(src: Src<'_>, key: &str, v: &Val<'_>) -> Result<Value, ScenarioErro
 
 /// Parses and validates sweep `text`; `file` names it in errors.
 pub fn parse(text: &str, file: &str) -> Result<Spec, ScenarioError> {
-    let src = Src { file, text };
+    let src = SourceText { file, text };
     let doc = DeTable::parse(text).map_err(|e| src.syntax(&e))?;
     let root = Table::new(src, String::new(), 0..0, doc.get_ref());
     root.allow(
@@ -500,7 +500,10 @@ fn craft(root: &Table<'_>) -> Result<Craft, ScenarioError> {
 
 /// The fixed `[planner]` keys, checked by the scenario parser on the spec's own text with every
 /// line outside the table blanked (so its errors carry the spec's line numbers).
-fn base_planner(root: &Table<'_>, src: Src<'_>) -> Result<Vec<(String, Value)>, ScenarioError> {
+fn base_planner(
+    root: &Table<'_>,
+    src: SourceText<'_>,
+) -> Result<Vec<(String, Value)>, ScenarioError> {
     let Some(t) = root.table("planner")? else {
         return Ok(Vec::new());
     };

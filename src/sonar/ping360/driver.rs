@@ -44,55 +44,7 @@ pub const TRANSDUCER_FRAME_LEN: usize = 8 + crate::link::ping::ping360::TRANSDUC
 #[cfg(target_os = "none")]
 const _: () = assert!(core::mem::size_of::<Ping360>() <= 512);
 
-/// The driver's counters, for telemetry. Saturating.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-#[cfg_attr(feature = "serde", derive(serde::Serialize))]
-pub struct Ping360Counters {
-    /// `device_data` turned into scanlines.
-    pub data: u32,
-    /// `transducer` commands sent.
-    pub commands: u32,
-    /// Commands not answered within the timeout (or refused with a `nack`).
-    pub timeouts: u32,
-    /// Frames dropped for a checksum mismatch.
-    pub checksum_errors: u32,
-    /// Frames refused otherwise: a header announcing an oversize payload, a `device_data`
-    /// whose data length or fields are wrong.
-    pub malformed: u32,
-    /// Bytes skipped looking for a frame start.
-    pub bytes_skipped: u32,
-}
-
-impl Ping360Counters {
-    /// Number of counters (telemetry rows).
-    pub const COUNT: usize = 6;
-
-    /// The counters in telemetry's order.
-    pub const fn to_array(&self) -> [u32; Self::COUNT] {
-        [
-            self.data,
-            self.commands,
-            self.timeouts,
-            self.checksum_errors,
-            self.malformed,
-            self.bytes_skipped,
-        ]
-    }
-
-    /// The counters from telemetry's order.
-    pub const fn from_array(a: [u32; Self::COUNT]) -> Self {
-        let [data, commands, timeouts, checksum_errors, malformed, bytes_skipped] = a;
-        Ping360Counters {
-            data,
-            commands,
-            timeouts,
-            checksum_errors,
-            malformed,
-            bytes_skipped,
-        }
-    }
-}
+pub use crate::link::counters::Ping360Counters;
 
 /// The `device_data` being received.
 #[derive(Clone, Copy, Debug)]

@@ -7,7 +7,7 @@
 //!
 //! The wire format is [`crate::link::ping`]. The driver runs wherever bytes from the sonar's
 //! serial port are read (the background context); the host-process firmware runs it
-//! (`src/host.rs`, `--ping360 DEVICE`), and `SingleContext::with_ping360` wires it to the
+//! (`src/host.rs`, `--ping360 DEVICE`), and `OneThreadRuntime::with_ping360` wires it to the
 //! extractor and the evidence map.
 
 pub mod config;

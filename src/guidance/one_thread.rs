@@ -1,7 +1,7 @@
 //! Both halves of the runtime in one context, wired with queues of the same capacities and
 //! policies as the firmware's: the host-process firmware and the tests run this.
 //!
-//! Bytes in with [`SingleContext::on_bytes`]; a period with [`SingleContext::on_tick`] (real
+//! Bytes in with [`OneThreadRuntime::on_bytes`]; a period with [`OneThreadRuntime::on_tick`] (real
 //! time), or by a `Tick` message from the host (lockstep), which runs the period right away.
 //! Outgoing frames are appended to a caller-supplied transmit function.
 
@@ -17,8 +17,8 @@ use super::mavlink::{MavConfig, MavInbound, MavMission, MavOutbound};
 use crate::sonar::{EvidenceMap, ExtractorConfig};
 
 use super::{
-    Background, BackgroundCounters, Control, Inputs, NavSample, Periodic, RuntimeConfig, Sighting,
-    Sink, CONTROL_QUEUE, REPLY_QUEUE, SIGHTING_QUEUE,
+    Background, BackgroundCounters, BackgroundOutputs, Control, NavSample, Periodic,
+    PeriodicInputs, RuntimeConfig, Sighting, CONTROL_QUEUE, REPLY_QUEUE, SIGHTING_QUEUE,
 };
 
 /// The queues between the halves.
@@ -36,7 +36,7 @@ struct Queues {
     ping360: Ping360Counters,
 }
 
-impl Sink for Queues {
+impl BackgroundOutputs for Queues {
     fn nav(&mut self, sample: NavSample) {
         self.nav = Some(sample);
     }
@@ -60,7 +60,7 @@ impl Sink for Queues {
     }
 }
 
-impl Inputs for Queues {
+impl PeriodicInputs for Queues {
     fn nav(&mut self) -> Option<NavSample> {
         self.nav
     }
@@ -111,7 +111,7 @@ struct Mav {
 }
 
 /// The runtime in one context.
-pub struct SingleContext {
+pub struct OneThreadRuntime {
     background: Background,
     periodic: Periodic,
     queues: Queues,
@@ -123,7 +123,7 @@ pub struct SingleContext {
     mavlink: Option<Mav>,
 }
 
-impl SingleContext {
+impl OneThreadRuntime {
     /// A runtime with planner `params`, runtime `config` and default sonar extraction. Step
     /// costs are reported in `cost_unit` (what `cost` passed to the tick functions counts).
     pub fn new(
@@ -139,7 +139,7 @@ impl SingleContext {
                     problem: crate::params::ParamProblem::OutOfRange,
                 }
             })?;
-        Ok(SingleContext {
+        Ok(OneThreadRuntime {
             background,
             periodic,
             queues: Queues {
@@ -185,7 +185,7 @@ impl SingleContext {
     /// and the evidence map, placed with the newest navigation when its data began to arrive.
     /// Ignored without a Ping360 ([`Self::set_ping360`]).
     pub fn on_ping360_bytes(&mut self, bytes: &[u8]) {
-        let SingleContext {
+        let OneThreadRuntime {
             background,
             queues,
             map,
@@ -239,7 +239,7 @@ impl SingleContext {
 
     /// Feeds bytes from the MAVLink line (ignored without [`Self::set_mavlink`]).
     pub fn on_mavlink_bytes(&mut self, bytes: &[u8]) {
-        let SingleContext {
+        let OneThreadRuntime {
             background,
             queues,
             map,
