@@ -322,6 +322,37 @@ fn a_flood_of_contacts_is_counted_not_fatal() {
     assert_eq!(tel.obstacles, 16);
 }
 
+/// A repeated `Tick` (the harness's start-up Tick is one) takes the sightings that came before
+/// it into the table: a period's worth of contacts each period never overflows their queue.
+#[test]
+fn a_repeated_tick_takes_the_sightings_in() {
+    let mut host = Host::new(Params::default());
+    host.send(mission(Vec2::new(30.0, 0.0)));
+    host.nav(0, Vec2::ZERO, Vec2::ZERO);
+    host.tick(0);
+    let contacts: Vec<Contact> = (0..10u16)
+        .map(|i| Contact {
+            id: i,
+            kind: ContactKind::Obstacle,
+            shape: Shape::circle(Vec2::new(10.0 + i as f32 * 3.0, 5.0), 1.0).unwrap(),
+            velocity: Vec2::ZERO,
+            confidence: 0.9,
+        })
+        .collect();
+    for t in [0, 100] {
+        for half in contacts.chunks(5) {
+            host.send(Message::Contacts(ContactsRepr {
+                time_ms: t,
+                contacts: ContactList::new(half),
+            }));
+        }
+        host.tick(t);
+    }
+    let tel = host.telemetry.last().unwrap();
+    assert_eq!(tel.counters.features_dropped, 0);
+    assert_eq!(tel.obstacles, 10);
+}
+
 /// A `Tick` repeated for the same time (the host's answer was slow or lost) gets the same
 /// command again, without a second planner step: lockstep results do not depend on timing.
 #[test]

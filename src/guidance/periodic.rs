@@ -282,6 +282,10 @@ impl Periodic {
         tx: &mut impl FnMut(&[u8]) -> bool,
     ) -> Command {
         if let Some((t, cmd)) = self.last.filter(|(t, _)| *t == now_ms) {
+            // The sightings that came since go into the tables now, as the next period would
+            // take them: a repeated Tick (the harness's start-up Tick is one) must not leave
+            // two periods' worth in their queue to overflow it.
+            self.take_sightings(inputs, self.nav.map_or(Vec2::ZERO, |n| n.nav.position));
             let command = CommandRepr {
                 time_ms: t,
                 command: cmd,
@@ -302,10 +306,7 @@ impl Periodic {
         }
         let nav = self.accept_nav(inputs.nav(), now_ms);
         let position = nav.map_or(Vec2::ZERO, |n| n.nav.position);
-        for _ in 0..SIGHTINGS_PER_PERIOD {
-            let Some(s) = inputs.sighting() else { break };
-            self.admit(s, position);
-        }
+        self.take_sightings(inputs, position);
         self.world.expire(now_ms, self.config.max_age_ms);
         if let (Some(m), Some(n)) = (map, nav) {
             self.snapshot(m, n.nav.position);
@@ -540,6 +541,14 @@ impl Periodic {
                     reply(h, Err(crate::planner::StepError::BadMission(e)))
                 }
             },
+        }
+    }
+
+    /// Takes up to [`SIGHTINGS_PER_PERIOD`] queued sightings into the tables.
+    fn take_sightings(&mut self, inputs: &mut impl PeriodicInputs, vehicle: Vec2) {
+        for _ in 0..SIGHTINGS_PER_PERIOD {
+            let Some(s) = inputs.sighting() else { break };
+            self.admit(s, vehicle);
         }
     }
 
