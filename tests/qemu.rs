@@ -1,5 +1,6 @@
 //! The firmware on the emulated Cortex-M4 (QEMU `mps2-an386`):
-//! - the on-target self-test: planner step cost in instructions at full capacity, deadline
+//! - the on-target self-test: planner step cost in instructions at full capacity (checked
+//!   full: 32 obstacles, 8 agents, 32 map cells, 4 ghost goal-points for the VPF), deadline
 //!   overruns under a sonar flood, stack high-water;
 //! - the serial link: boots the firmware, talks to its UART through a pty, sends navigation,
 //!   a mission, scanlines and garbage, and checks the commands and counters that come back;
@@ -130,7 +131,15 @@ fn selftest_meets_the_budgets_on_the_emulated_cortex_m4() {
     println!("{text}");
     assert_matches_expected(&text, "selftest.run");
     // One report line per strategy, each within the budget.
-    for strategy in ["vpf", "multipoint", "navfn"] {
+    // Each strategy in the spread world and in clutter (every obstacle near: the worst case).
+    for strategy in [
+        "vpf",
+        "multipoint",
+        "navfn",
+        "vpf in clutter",
+        "multipoint in clutter",
+        "navfn in clutter",
+    ] {
         let report = text
             .lines()
             .find(|l| l.contains(&format!("selftest: {strategy} periods")))
@@ -139,11 +148,24 @@ fn selftest_meets_the_budgets_on_the_emulated_cortex_m4() {
         let mean = number_after(report, "mean");
         let overruns = number_after(report, "overruns");
         let scanlines = number_after(report, "scanlines extracted");
-        let cells = number_after(report, "map cells");
-        assert_eq!(
-            cells, 32,
-            "{strategy}: the evidence map was not at full capacity"
-        );
+        // The tables were full in every measured period (the least fill over them).
+        let fill = text
+            .lines()
+            .find(|l| l.contains(&format!("selftest: {strategy} least table fill")))
+            .unwrap_or_else(|| panic!("no table fill for {strategy}"));
+        let ghosts = if strategy.starts_with("vpf") { 4 } else { 0 };
+        for (table, full) in [
+            ("obstacles", 32),
+            ("agents", 8),
+            ("map cells", 32),
+            ("ghost goal-points", ghosts),
+        ] {
+            assert_eq!(
+                number_after(fill, table),
+                full,
+                "{strategy}: the {table} table was not full: {fill}"
+            );
+        }
         assert!(
             max <= 100_000,
             "{strategy}: step cost {max} instructions over budget"

@@ -141,10 +141,24 @@ impl Shape {
     /// Signed distance from `p` to the surface in metres: > 0 outside, < 0 inside.
     pub fn signed_distance(&self, p: Vec2) -> f32 {
         match self {
-            Shape::Circle(c) => (p - c.center).norm() - c.radius,
+            Shape::Circle(c) => c.signed_distance(p),
             Shape::Rectangle(r) => r.signed_distance(p),
             Shape::Ellipse(e) => e.signed_distance(p),
             Shape::Polygon(g) => g.signed_distance(p),
+        }
+    }
+
+    /// The signed distance r at `p` (bit for bit [`Shape::signed_distance`]) and its gradient
+    /// ∇r there, analytic: a unit vector for the exact distances (circle, rectangle, polygon;
+    /// outward, also inside), the derivative of the estimate for the ellipse. Where r has no
+    /// gradient (the centre of a circle, equidistant sides inside a rectangle) one of the
+    /// one-sided ones is given. One evaluation, for the far field (`planner::gradient`).
+    pub fn distance_gradient(&self, p: Vec2) -> (f32, Vec2) {
+        match self {
+            Shape::Circle(c) => c.distance_gradient(p),
+            Shape::Rectangle(r) => r.distance_gradient(p),
+            Shape::Ellipse(e) => e.distance_gradient(p),
+            Shape::Polygon(g) => g.distance_gradient(p),
         }
     }
 
@@ -180,10 +194,16 @@ impl Shape {
         match self {
             Shape::Circle(c) => c.radius,
             Shape::Rectangle(r) => r.half.norm(),
-            Shape::Ellipse(Ellipse(r)) => r.half.x.max(r.half.y),
+            Shape::Ellipse(Ellipse(r)) => crate::math::max(r.half.x, r.half.y),
+            // One square root: √ is monotonic and correctly rounded, so the root of the
+            // largest square is the largest root, bit for bit.
             Shape::Polygon(g) => {
                 let c = g.centroid();
-                g.vertices().iter().fold(0.0, |m, v| m.max((*v - c).norm()))
+                let far2 = g
+                    .vertices()
+                    .iter()
+                    .fold(0.0, |m, v| crate::math::max((*v - c).norm2(), m));
+                crate::math::sqrt(far2)
             }
         }
     }
@@ -201,6 +221,23 @@ impl Shape {
 }
 
 impl Circle {
+    /// Seed 000 eq. 12's r: the distance to the centre less r₀.
+    #[inline(always)]
+    pub(crate) fn signed_distance(&self, p: Vec2) -> f32 {
+        (p - self.center).norm() - self.radius
+    }
+
+    fn distance_gradient(&self, p: Vec2) -> (f32, Vec2) {
+        let d = p - self.center;
+        let len = d.norm();
+        let n = if len > 0.0 {
+            d * (1.0 / len)
+        } else {
+            Vec2::new(1.0, 0.0)
+        };
+        (len - self.radius, n)
+    }
+
     /// Centre.
     pub fn center(&self) -> Vec2 {
         self.center
@@ -234,12 +271,32 @@ impl Rectangle {
     /// Seed 000 eq. 10–11: outside, r = ‖disc ⊙ (|q| − [a b]ᵀ)‖ with disc the element-wise
     /// `|q| > [a b]ᵀ`, i.e. the Euclidean distance to the box. Inside (where the paper's r is 0)
     /// we return minus the depth, the distance to the nearest side.
-    fn signed_distance(&self, p: Vec2) -> f32 {
+    #[inline(always)]
+    pub(crate) fn signed_distance(&self, p: Vec2) -> f32 {
         let q = self.local(p);
         let d = Vec2::new(q.x.abs() - self.half.x, q.y.abs() - self.half.y);
         let outside = Vec2::new(max(d.x, 0.0), max(d.y, 0.0)).norm();
         let inside = min(max(d.x, d.y), 0.0);
         outside + inside
+    }
+
+    /// Outside, the unit vector from the nearest point of the box; inside, the normal of the
+    /// nearest side. Both in the box's frame, turned back by φ.
+    fn distance_gradient(&self, p: Vec2) -> (f32, Vec2) {
+        let q = self.local(p);
+        let d = Vec2::new(q.x.abs() - self.half.x, q.y.abs() - self.half.y);
+        let o = Vec2::new(max(d.x, 0.0), max(d.y, 0.0));
+        let outside = o.norm();
+        let inside = min(max(d.x, d.y), 0.0);
+        let sign = |v: f32| if v < 0.0 { -1.0 } else { 1.0 };
+        let local = if outside > 0.0 {
+            Vec2::new(sign(q.x) * o.x, sign(q.y) * o.y) * (1.0 / outside)
+        } else if d.x > d.y {
+            Vec2::new(sign(q.x), 0.0)
+        } else {
+            Vec2::new(0.0, sign(q.y))
+        };
+        (outside + inside, local.rotate_cs(self.cos, self.sin))
     }
 
     /// Centre.
@@ -261,7 +318,8 @@ impl Ellipse {
     /// estimate d ≈ k₀(k₀ − 1)/k₁ with k₀ = ‖q ⊘ s‖, k₁ = ‖q ⊘ s²‖ (s the semi-axes): exact on
     /// the surface and along both axes, linear and increasing along every ray from the centre
     /// (so the repulsion stays monotonic), and two square roots instead of an iteration.
-    fn signed_distance(&self, p: Vec2) -> f32 {
+    #[inline(always)]
+    pub(crate) fn signed_distance(&self, p: Vec2) -> f32 {
         let r = &self.0;
         let q = r.local(p);
         let (a, b) = (r.half.x, r.half.y);
@@ -270,8 +328,26 @@ impl Ellipse {
         if k1 > 1e-12 {
             k0 * (k0 - 1.0) / k1
         } else {
-            -a.min(b)
+            -min(a, b)
         }
+    }
+
+    /// The estimate's own gradient: with Q₁ = q ⊘ s², Q₂ = q ⊘ s⁴ (so ∇k₀ = Q₁/k₀ and
+    /// ∇k₁ = Q₂/k₁), ∇d = (2k₀ − 1)·Q₁/(k₀k₁) − d·Q₂/k₁², turned back by φ.
+    fn distance_gradient(&self, p: Vec2) -> (f32, Vec2) {
+        let r = &self.0;
+        let q = r.local(p);
+        let (a, b) = (r.half.x, r.half.y);
+        let k0 = Vec2::new(q.x / a, q.y / b).norm();
+        let q1 = Vec2::new(q.x / (a * a), q.y / (b * b));
+        let k1 = q1.norm();
+        if k1 <= 1e-12 || k0 <= 0.0 {
+            return (-min(a, b), Vec2::new(1.0, 0.0).rotate_cs(r.cos, r.sin));
+        }
+        let d = k0 * (k0 - 1.0) / k1;
+        let q2 = Vec2::new(q1.x / (a * a), q1.y / (b * b));
+        let g = q1 * ((2.0 * k0 - 1.0) / (k0 * k1)) - q2 * (d / (k1 * k1));
+        (d, g.rotate_cs(r.cos, r.sin))
     }
 
     /// The ellipse's centre, semi-axes and rotation, as a rectangle frame.
@@ -339,25 +415,143 @@ impl Polygon {
 
     /// Exact signed distance: the nearest edge segment gives the magnitude; the point is inside
     /// when it lies left of every (counter-clockwise) edge.
-    fn signed_distance(&self, p: Vec2) -> f32 {
-        let v = self.vertices();
+    ///
+    /// Outside, only the segments of the edges the point lies strictly outside of are measured:
+    /// the nearest point q lies on one of them. (If q is inside an edge, p is outside that
+    /// edge's line. If q is a vertex, the direction u = (p − q)/|p − q| lies strictly inside
+    /// the cone of its two edges' outward normals, which are less than π apart, so u makes an
+    /// angle below π/2 with at least one of them — p is outside that edge's line — and that
+    /// edge's segment holds q.) Each edge first costs one cross product; a far point faces
+    /// about half of them. Inside (rare on the sample circle) every segment is measured, as
+    /// before. A nearest vertex is then measured from one of its edges only, which may round
+    /// its distance differently (by the rounding of the coordinates) from the lesser of both.
+    #[inline(always)]
+    pub(crate) fn signed_distance(&self, p: Vec2) -> f32 {
         let mut best2 = f32::INFINITY;
         let mut inside = true;
-        for (i, inv) in self.inv_len2.iter().take(v.len()).enumerate() {
-            let (a, b) = edge(v, i);
-            let e = b - a;
-            let w = p - a;
-            let t = min(max(w.dot(e) * inv, 0.0), 1.0);
-            best2 = min((w - e * t).norm2(), best2);
-            inside &= e.cross(w) >= 0.0;
-        }
-        let d = sqrt(best2);
+        self.each_edge(p, |e, w, inv| {
+            if e.cross(w) < 0.0 {
+                inside = false;
+                best2 = min(segment_distance2(e, w, inv), best2);
+            }
+        });
         if inside {
-            -d
+            self.each_edge(p, |e, w, inv| {
+                best2 = min(segment_distance2(e, w, inv), best2)
+            });
+            -sqrt(best2)
         } else {
-            d
+            sqrt(best2)
         }
     }
+
+    /// [`Polygon::signed_distance`] with the edge vectors of [`Polygon::edges`] given, for
+    /// many points (the same numbers, bit for bit).
+    #[inline(always)]
+    pub(crate) fn signed_distance_with(&self, edges: &Edges, p: Vec2) -> f32 {
+        let mut best2 = f32::INFINITY;
+        let mut inside = true;
+        self.each_edge_with(edges, p, |e, w, inv| {
+            if e.cross(w) < 0.0 {
+                inside = false;
+                best2 = min(segment_distance2(e, w, inv), best2);
+            }
+        });
+        if inside {
+            self.each_edge_with(edges, p, |e, w, inv| {
+                best2 = min(segment_distance2(e, w, inv), best2)
+            });
+            -sqrt(best2)
+        } else {
+            sqrt(best2)
+        }
+    }
+
+    /// The edge vectors b − a in [`Polygon::each_edge`]'s order.
+    pub(crate) fn edges(&self) -> Edges {
+        let mut edges = [Vec2::ZERO; MAX_POLYGON_VERTICES];
+        let mut k = 0;
+        self.each_edge(Vec2::ZERO, |e, _, _| {
+            if let Some(slot) = edges.get_mut(k) {
+                *slot = e;
+            }
+            k += 1;
+        });
+        edges
+    }
+
+    /// `f(e, w, 1/|e|²)` for each edge from a to b (e = b − a, w = p − a), the closing edge
+    /// first; no modulo on the way round.
+    #[inline(always)]
+    fn each_edge(&self, p: Vec2, mut f: impl FnMut(Vec2, Vec2, f32)) {
+        let n = usize::from(self.len).min(MAX_POLYGON_VERTICES);
+        let v = self.vertices.get(..n).unwrap_or(&[]);
+        let inv = self.inv_len2.get(..n).unwrap_or(&[]);
+        let (Some(&last), Some(&inv_last)) = (v.last(), inv.last()) else {
+            return;
+        };
+        let mut a = last;
+        let mut inv_a = inv_last;
+        for (&b, &inv_b) in v.iter().zip(inv) {
+            f(b - a, p - a, inv_a);
+            a = b;
+            inv_a = inv_b;
+        }
+    }
+
+    /// As [`Polygon::each_edge`], the edge vectors taken from `edges`.
+    #[inline(always)]
+    fn each_edge_with(&self, edges: &Edges, p: Vec2, mut f: impl FnMut(Vec2, Vec2, f32)) {
+        let n = usize::from(self.len).min(MAX_POLYGON_VERTICES);
+        let v = self.vertices.get(..n).unwrap_or(&[]);
+        let inv = self.inv_len2.get(..n).unwrap_or(&[]);
+        let (Some(&last), Some(&inv_last)) = (v.last(), inv.last()) else {
+            return;
+        };
+        let mut a = last;
+        let mut inv_a = inv_last;
+        for ((&b, &inv_b), &e) in v.iter().zip(inv).zip(edges) {
+            f(e, p - a, inv_a);
+            a = b;
+            inv_a = inv_b;
+        }
+    }
+
+    /// The nearest edge's segment gives r and the unit vector from its nearest point.
+    fn distance_gradient(&self, p: Vec2) -> (f32, Vec2) {
+        let r = self.signed_distance(p);
+        let mut best = (f32::INFINITY, Vec2::new(1.0, 0.0), Vec2::ZERO);
+        self.each_edge(p, |e, w, inv| {
+            let t = min(max(w.dot(e) * inv, 0.0), 1.0);
+            let from = w - e * t;
+            let d2 = from.norm2();
+            if d2 < best.0 {
+                best = (d2, from, e);
+            }
+        });
+        let (d2, from, e) = best;
+        let len = sqrt(d2);
+        if len > 0.0 {
+            let n = from * (1.0 / len);
+            (r, if r < 0.0 { -n } else { n })
+        } else {
+            // On the surface: the edge's outward normal (right of a counter-clockwise edge).
+            let n = Vec2::new(e.y, -e.x)
+                .normalized(0.0)
+                .unwrap_or(Vec2::new(1.0, 0.0));
+            (r, n)
+        }
+    }
+}
+
+/// A polygon's edge vectors ([`Polygon::edges`]).
+pub(crate) type Edges = [Vec2; MAX_POLYGON_VERTICES];
+
+/// Squared distance from p to the segment from a along e (w = p − a, `inv` = 1/|e|²).
+#[inline(always)]
+fn segment_distance2(e: Vec2, w: Vec2, inv: f32) -> f32 {
+    let t = min(max(w.dot(e) * inv, 0.0), 1.0);
+    (w - e * t).norm2()
 }
 
 /// Edge `i` of a closed polygon: (vᵢ, vᵢ₊₁ mod n).
@@ -447,6 +641,101 @@ mod tests {
         ];
         assert_eq!(Shape::polygon(&line), Err(ShapeError::NotConvex));
         assert_eq!(Shape::polygon(&line[..2]), Err(ShapeError::VertexCount));
+    }
+
+    /// Random shapes of every kind about `c`, from `rng`.
+    fn random_shape(rng: &mut crate::math::XorShift32, c: Vec2) -> Shape {
+        let mut u = || (rng.next_u32() >> 8) as f32 / (1u32 << 24) as f32;
+        let size = Vec2::new(0.2 + 3.0 * u(), 0.2 + 3.0 * u());
+        let angle = 6.3 * u();
+        match (u() * 4.0) as u32 {
+            0 => Shape::circle(c, size.x).unwrap(),
+            1 => Shape::rectangle(c, size, angle).unwrap(),
+            2 => Shape::ellipse(c, size, angle).unwrap(),
+            _ => {
+                // A convex polygon: 3–8 points at increasing angles on a jittered circle.
+                let n = 3 + (u() * 6.0) as usize;
+                let start = 6.3 * u();
+                let mut pts = [Vec2::ZERO; MAX_POLYGON_VERTICES];
+                for (k, pt) in pts.iter_mut().take(n).enumerate() {
+                    let a = start + core::f32::consts::TAU * (k as f32 + 0.4 * u()) / n as f32;
+                    *pt = c + Vec2::from_angle(a) * size.x;
+                }
+                Shape::polygon(&pts[..n]).unwrap_or(Shape::circle(c, size.x).unwrap())
+            }
+        }
+    }
+
+    #[test]
+    fn polygon_distance_over_facing_edges_is_the_distance_over_all_edges() {
+        let mut rng = crate::math::XorShift32::new(11);
+        let mut polygons = 0;
+        for _ in 0..2000 {
+            let Shape::Polygon(g) = random_shape(&mut rng, Vec2::new(1.0, -2.0)) else {
+                continue;
+            };
+            polygons += 1;
+            for k in 0..50 {
+                let r = 0.05 * (rng.next_u32() % 200) as f32;
+                let p = Vec2::new(1.0, -2.0) + Vec2::from_angle(0.37 * k as f32) * r;
+                // Every segment measured (the definition).
+                let v = g.vertices();
+                let mut best2 = f32::INFINITY;
+                let mut inside = true;
+                for (i, inv) in g.inv_len2.iter().take(v.len()).enumerate() {
+                    let (a, b) = edge(v, i);
+                    let (e, w) = (b - a, p - a);
+                    best2 = best2.min(segment_distance2(e, w, *inv));
+                    inside &= e.cross(w) >= 0.0;
+                }
+                let want = if inside { -best2.sqrt() } else { best2.sqrt() };
+                // The same number but in the last bit: a vertex nearest p is measured from
+                // one of its edges where the definition takes the lesser of both roundings.
+                // (w − e differs from p − b by the rounding of coordinates of size |p|.)
+                let got = g.signed_distance(p);
+                assert_eq!(got, g.signed_distance_with(&g.edges(), p));
+                let scale = v.iter().fold(p.norm(), |m, a| m.max(a.norm()));
+                assert!(
+                    (got - want).abs() <= 4.0 * f32::EPSILON * scale,
+                    "{g:?} at {p:?}: {got} vs {want}"
+                );
+            }
+        }
+        assert!(polygons > 300);
+    }
+
+    #[test]
+    fn distance_gradient_is_the_distance_and_its_slope() {
+        let mut rng = crate::math::XorShift32::new(5);
+        for _ in 0..2000 {
+            let c = Vec2::new(3.0, 4.0);
+            let s = random_shape(&mut rng, c);
+            let a = 0.001 * (rng.next_u32() % 6283) as f32;
+            let dist = 0.01 * (rng.next_u32() % 2000) as f32;
+            let p = c + Vec2::from_angle(a) * dist;
+            let (r, g) = s.distance_gradient(p);
+            assert_eq!(
+                r.to_bits(),
+                s.signed_distance(p).to_bits(),
+                "{s:?} at {p:?}"
+            );
+            if !matches!(s, Shape::Ellipse(_)) {
+                assert!((g.norm() - 1.0).abs() < 1e-4, "{s:?} at {p:?}: {g:?}");
+            }
+            // Central differences agree where the distance is smooth (not on a ridge inside,
+            // nor at a corner's edge): skip points near where r has a kink.
+            let h = 1e-3;
+            let fd = Vec2::new(
+                s.signed_distance(p + Vec2::new(h, 0.0)) - s.signed_distance(p - Vec2::new(h, 0.0)),
+                s.signed_distance(p + Vec2::new(0.0, h)) - s.signed_distance(p - Vec2::new(0.0, h)),
+            ) * (0.5 / h);
+            if r > 0.05 {
+                assert!(
+                    (fd - g).norm() < 2e-2 * g.norm().max(0.1),
+                    "{s:?} at {p:?}: {g:?} vs {fd:?}"
+                );
+            }
+        }
     }
 
     #[test]

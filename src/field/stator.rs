@@ -73,6 +73,17 @@ impl Stator {
         }
     }
 
+    /// f′(r) = df/dr: −2A⁺/r³·e^{A⁺/r²} (the derivative of eq. 9's PDF), and −f′(r_c) on
+    /// the continuation below r_c. Negative: the potential falls with distance.
+    pub fn slope(&self, r: f32) -> f32 {
+        if r > self.r_c {
+            let x = self.a_plus / (r * r);
+            -2.0 * x / r * exp(x)
+        } else {
+            -self.slope_c
+        }
+    }
+
     /// The rotor's distance weight h(r) = 1 − e^{−A⁺/r²} ∈ (0, 1]: 1 at and inside the surface,
     /// ≈ A⁺/r² far away, so the rotor reaches exactly as far as this stator does.
     pub fn reach(&self, r: f32) -> f32 {
@@ -129,6 +140,16 @@ mod tests {
                 (got - exact).abs() <= 3e-6 * exact,
                 "r {r}: {got} vs {exact}"
             );
+        }
+    }
+
+    #[test]
+    fn slope_is_the_derivative() {
+        let s = Stator::new(2.5);
+        for r in [0.3f32, 0.5, 1.0, 3.0, 12.0] {
+            let h = 1e-3 * r;
+            let fd = (s.potential(r + h) - s.potential(r - h)) / (2.0 * h);
+            assert!((s.slope(r) - fd).abs() <= 1e-3 * fd.abs(), "r {r}");
         }
     }
 

@@ -369,10 +369,11 @@ impl BackgroundTask {
         );
     }
 
-    /// Queues a sighting as the background would (for the self-test).
+    /// Queues a sighting as the background would (for the self-test); false when the queue is
+    /// full (the sighting is not queued).
     #[cfg(feature = "selftest")]
-    pub fn push_sighting(&mut self, s: Sighting) {
-        let _ = self.queues.sightings.enqueue(s);
+    pub fn push_sighting(&mut self, s: Sighting) -> bool {
+        self.queues.sightings.enqueue(s).is_ok()
     }
 
     /// Decodes `bytes` as if received (for the self-test).

@@ -96,8 +96,47 @@ pub struct Stats {
     /// Largest cost of a whole period (requests, sightings, evidence-map snapshot, fail-safes,
     /// planner step, guard, frames), in the board's unit.
     pub max_period: u32,
-    /// Evidence-map cells the planner took in the last period.
-    pub map_cells: u32,
+    /// How full the planner's tables were: the least over the periods counted, so that a full
+    /// fill says every counted period ran at full tables.
+    pub least_fill: Fill,
+}
+
+/// How full the planner's tables were in a period (for the self-test's report: the budgets are
+/// stated at full tables).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Fill {
+    /// Obstacles in the field (those not left to the evidence map).
+    pub obstacles: u8,
+    /// Other vehicles.
+    pub agents: u8,
+    /// Evidence-map cells the planner took.
+    pub map_cells: u8,
+    /// Ghost goal-points stacked.
+    pub ghosts: u8,
+}
+
+impl Fill {
+    /// The fill of `runtime`'s tables now.
+    pub fn of(runtime: &vpf::guidance::Periodic) -> Fill {
+        let world = runtime.world();
+        let obstacles = world.obstacles().iter().filter(|o| !world.left_to_map(o));
+        Fill {
+            obstacles: obstacles.count() as u8,
+            agents: world.agents().len() as u8,
+            map_cells: world.map_cells().len() as u8,
+            ghosts: runtime.planner().ghosts().len() as u8,
+        }
+    }
+
+    /// The least of each.
+    pub fn least(self, o: Fill) -> Fill {
+        Fill {
+            obstacles: self.obstacles.min(o.obstacles),
+            agents: self.agents.min(o.agents),
+            map_cells: self.map_cells.min(o.map_cells),
+            ghosts: self.ghosts.min(o.ghosts),
+        }
+    }
 }
 
 /// The evidence map: written by the background, read by the periodic task (atomic cells and a

@@ -197,7 +197,12 @@ impl PeriodicTask {
         st.sum_cost = st.sum_cost.saturating_add(u64::from(cost));
         st.overruns = st.overruns.saturating_add(u32::from(overrun));
         st.max_period = st.max_period.max(period_cost);
-        st.map_cells = self.runtime.world().map_cells().len() as u32;
+        let fill = super::Fill::of(self.runtime);
+        st.least_fill = if st.periods == 1 {
+            fill
+        } else {
+            st.least_fill.least(fill)
+        };
         // A new period from the parameters: reprogram the timer (absolute from here on).
         let period = self.runtime.period_ms();
         if !lockstep && period != self.timer_period_ms {

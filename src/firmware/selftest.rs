@@ -1,27 +1,31 @@
 //! The on-target self-test (`--features selftest`): measures what the budgets are about and
 //! exits with the verdict. Run on QEMU with `-icount shift=0` so costs are instructions.
 //!
-//! 1. Loads the world to full capacity (32 obstacles of every shape, 8 agents, a formation) and
-//!    gives the planner a mission and navigation through the same queues the UART feeds.
+//! 1. Loads the world to full capacity (32 obstacles of every shape, 8 agents, a formation, the
+//!    evidence map's 32 cells and, for the VPF, 4 ghost goal-points) and gives the planner a
+//!    mission and navigation through the same queues the UART feeds.
 //! 2. Floods the background: the idle loop extracts synthetic sonar scanlines without pause,
 //!    so the periodic task always preempts a busy extractor.
 //! 3. Runs [`PERIODS`] periods with each strategy in turn (VPF, multipoint, navigation
-//!    function), switched by a `Params` message as a host would, and reports per strategy the
-//!    planner step cost (max and mean), the whole period's worst cost (map snapshot and guard
-//!    included), deadline overruns, scanlines processed and the background's cost per scanline
-//!    and per navigation frame (the route layer replans on those); then the
-//!    stack high-water mark. A fourth flood (VPF) brings its pings as Ping360 `device_data`
+//!    function) in two worlds — spread out ahead as far as a sonar sees, and in clutter with
+//!    every obstacle within 9 m (the VPF's worst case: it samples every one) —, switched by a
+//!    `Params` message as a host would, after [`WARMUP_PERIODS`] unmeasured ones, and reports per strategy the planner step cost (max and mean), the
+//!    whole period's worst cost (map snapshot and guard included), deadline overruns,
+//!    scanlines processed and the background's cost per scanline and per navigation frame (the
+//!    route layer replans on those), and the least fill of the tables over the measured
+//!    periods; then the stack high-water mark. It exits successfully only if no strategy
+//!    overran, every measured period ran at full tables and every worst step was within
+//!    [`STEP_BUDGET`]. Half the obstacles of the spread world move, so the prediction of moving obstacles is in the measured path.
+//! 4. A further flood (VPF, the spread world) brings its pings as Ping360 `device_data`
 //!    through the Ping360 driver and its navigation as MAVLink (ATTITUDE, LOCAL_POSITION_NED)
 //!    through the MAVLink line's decoder, so their paths are measured and in the stack's
-//!    high-water mark; every period also sends the MAVLink set-point and what else is due. It exits successfully only if no strategy overran and every worst
-//!    step was within [`STEP_BUDGET`]. Half the obstacles move, so the prediction of moving
-//!    obstacles is in the measured path.
+//!    high-water mark; every period also sends the MAVLink set-point and what else is due.
 
 use vpf::field::Shape;
 use vpf::guidance::Sighting;
 use vpf::link::{Message, NavRepr, Payload};
 use vpf::sonar::Scanline;
-use vpf::world::{Agent, Obstacle, Origin, MAX_AGENTS, MAX_OBSTACLES};
+use vpf::world::{Agent, Obstacle, Origin, MAX_AGENTS, MAX_MAP_CELLS, MAX_OBSTACLES};
 use vpf::{Mission, NavState, Params, Strategy, Vec2};
 
 use super::background::{BackgroundTask, Exchange};
@@ -37,28 +41,68 @@ const SCAN_FRAME: usize =
     vpf::link::frame_buffer_len(vpf::link::sensors::SCANLINE_HEAD_LEN + FLOOD_BINS);
 const PARAMS_FRAME: usize = vpf::link::frame_buffer_len(vpf::link::control::PARAMS_LEN);
 
-/// Periods to run.
+/// Periods measured per strategy.
 pub const PERIODS: u32 = 50;
+/// Periods run before measuring, per strategy: the evidence map fills, moving obstacles are
+/// predicted and (VPF) the ghost goal-point stack builds up, so that every measured period
+/// runs at full tables (the report gives the least fill over the measured periods).
+pub const WARMUP_PERIODS: u32 = 20;
 /// The planner step budget, instructions (shared/DESIGN.md).
 pub const STEP_BUDGET: u32 = 100_000;
 
 /// Runs the self-test; never returns.
 pub fn run(idle: &mut BackgroundTask, x: &mut impl Exchange, params: Params) -> ! {
-    board::log(b"selftest: full tables, sonar flood, 50 periods per strategy\n");
-    load_world(idle, x);
+    board::log(b"selftest: full tables, sonar flood, 50 periods per strategy and world\n");
     link_costs(idle, x);
     let mut ok = true;
-    for strategy in [Strategy::Vpf, Strategy::Multipoint, Strategy::Navfn] {
-        set_strategy(idle, x, Params { strategy, ..params });
+    let strategies = [Strategy::Vpf, Strategy::Multipoint, Strategy::Navfn];
+    for (strategy, clutter) in strategies
+        .iter()
+        .map(|&s| (s, false))
+        .chain(strategies.iter().map(|&s| (s, true)))
+    {
+        let p = Params { strategy, ..params };
+        // VPF: a vehicle held so hard by friction (μ at its largest) that its planned speed
+        // stays below the stall speed (at its largest, v_max) is stalled every `stall_time_s`
+        // (at its least), by the static field (whose force is far below μ·v_max here), so
+        // ghost goal-points stack to `max_ghosts` in a few periods (000 §III); with λ = 0 and
+        // α = 1 (eq. 17) each lies as far off as its target, so none is ever reached and the
+        // full stack's top, replaced at each stall, stays put in distance. Only the top ghost
+        // is in the field (it replaces the goal-point), so the depth changes no cost; it is
+        // loaded because the budget names it. These settings cost the same at any value.
+        let p = if strategy == Strategy::Vpf {
+            Params {
+                mu: 10.0,
+                stall_speed: p.v_max,
+                stall_time_s: 0.1,
+                ghost_lambda: 0.0,
+                ghost_alpha: 1.0,
+                ..p
+            }
+        } else {
+            p
+        };
+        set_strategy(idle, x, p);
+        // Loaded again per phase: the upserts (same ids) replace the obstacles and refresh the
+        // agents, which age out.
+        load_world(idle, x, clutter);
         let _ = x.take_stats();
-        let flood = flood(idle, x, None);
-        ok &= report(strategy, &flood, x);
+        let _ = flood(idle, x, WARMUP_PERIODS, None);
+        let _ = x.take_stats();
+        let flood = flood(idle, x, PERIODS, None);
+        let ghosts = if strategy == Strategy::Vpf {
+            p.max_ghosts
+        } else {
+            0
+        };
+        ok &= report(strategy, clutter, &flood, x, ghosts);
     }
-    // The Ping360's path: the same flood, its pings as `device_data` through the driver.
+    // The Ping360's path: the spread world's flood, its pings as `device_data` through the driver.
     set_strategy(idle, x, params);
+    load_world(idle, x, false);
     let _ = x.take_stats();
     let mut sonar = PingStats::default();
-    flood(idle, x, Some(&mut sonar));
+    flood(idle, x, PERIODS, Some(&mut sonar));
     let s = x.take_stats();
     report_ping360(idle, params.strategy, &s, &sonar);
     ok &= s.overruns == 0 && s.periods >= PERIODS && s.max_cost <= STEP_BUDGET;
@@ -168,7 +212,6 @@ fn link_costs(idle: &mut BackgroundTask, x: &mut impl Exchange) {
     board::log(line.bytes());
 }
 
-/// [`PERIODS`] periods of sonar flood; returns the scanlines fed.
 /// What the background did during a flood.
 struct Flood {
     scanlines: u32,
@@ -239,11 +282,12 @@ fn set_strategy(idle: &mut BackgroundTask, x: &mut impl Exchange, p: Params) {
     }
 }
 
-/// [`PERIODS`] periods of sonar flood: scanline messages on the control link, or with `sonar`
+/// `periods` periods of sonar flood: scanline messages on the control link, or with `sonar`
 /// Ping360 `device_data` through its driver.
 fn flood(
     idle: &mut BackgroundTask,
     x: &mut impl Exchange,
+    periods: u32,
     mut sonar: Option<&mut PingStats>,
 ) -> Flood {
     let mut bins = [0u8; FLOOD_BINS];
@@ -255,7 +299,7 @@ fn flood(
         measured: 0,
         max_nav_cost: 0,
     };
-    while x.stats().periods < PERIODS {
+    while x.stats().periods < periods {
         // Keep navigation fresh (the periodic task holds on stale navigation), and serve the
         // UART as the firmware would.
         if ping.is_multiple_of(8) {
@@ -391,13 +435,15 @@ fn send_nav_mavlink(idle: &mut BackgroundTask, x: &mut impl Exchange) {
     }
 }
 
-/// Full tables, through the same request and sighting queues as the UART path.
+/// Full tables, through the same request and sighting queues as the UART path: the mission
+/// (with a formation), [`MAX_OBSTACLES`] obstacles of every shape and [`MAX_AGENTS`] other
+/// vehicles ([`obstacle`] says where). The sighting queue holds fewer than that and a period
+/// takes what it holds, so when it is full the load waits for a period to drain it.
 ///
-/// Note (measured): the sighting queue holds 16 and nothing runs a period while these are
-/// pushed, so the table receives the first 16 obstacles and no agent (the rest are dropped).
-/// Loaded in full (waiting for a period whenever the queue is full), the VPF step measured
-/// 113 680 instructions max, over [`STEP_BUDGET`].
-fn load_world(idle: &mut BackgroundTask, x: &mut impl Exchange) {
+/// The obstacles are charted: a sensed one would be evicted by the nearer features the sonar
+/// flood extracts (the table's overflow policy, `World::upsert_obstacle_or_evict`), and a
+/// still feature is left to the evidence map, which would empty the field being measured.
+fn load_world(idle: &mut BackgroundTask, x: &mut impl Exchange, clutter: bool) {
     let mission = Mission {
         goal: Vec2::new(80.0, 0.0),
         formation: Some(vpf::planner::Formation {
@@ -413,45 +459,85 @@ fn load_world(idle: &mut BackgroundTask, x: &mut impl Exchange) {
             idle.feed(f, x);
         }
     }
-    for i in 0..MAX_OBSTACLES {
-        let c = Vec2::new(10.0 + 7.0 * (i % 8) as f32, -20.0 + 9.0 * (i / 8) as f32);
-        let shape = match i % 4 {
-            0 => Shape::circle(c, 1.5),
-            1 => Shape::rectangle(c, Vec2::new(2.0, 1.0), 0.3),
-            2 => Shape::ellipse(c, Vec2::new(2.0, 1.0), -0.4),
-            _ => {
-                let mut hex = [Vec2::ZERO; 6];
-                for (k, v) in hex.iter_mut().enumerate() {
-                    *v = c + Vec2::from_angle(k as f32 * 1.047) * 1.5;
-                }
-                Shape::polygon(&hex)
-            }
-        };
-        // Every other obstacle crosses at 0.5 m/s.
-        let v = Vec2::new(0.0, if i % 2 == 0 { 0.5 } else { 0.0 });
-        if let Ok(o) = shape.and_then(|s| {
-            Obstacle::new(i as u16, s, 2.5, Origin::Sensed, 0)
-                .and_then(|o| o.moving(v))
-                .map_err(|_| vpf::field::ShapeError::NonFinite)
-        }) {
-            idle.push_sighting(Sighting::Obstacle(o));
+    let now = x.now_ms();
+    let obstacles =
+        (0..MAX_OBSTACLES).filter_map(|i| obstacle(i, now, clutter).map(Sighting::Obstacle));
+    let agents = (0..MAX_AGENTS).filter_map(|i| {
+        let p = Vec2::new(-5.0 - 3.0 * i as f32, 4.0);
+        Agent::new(i as u16, p, Vec2::ZERO, now)
+            .ok()
+            .map(Sighting::Agent)
+    });
+    for s in obstacles.chain(agents) {
+        while !idle.push_sighting(s) {
+            next_period(idle, x);
         }
     }
-    for i in 0..MAX_AGENTS {
-        let p = Vec2::new(-5.0 - 3.0 * i as f32, 4.0);
-        if let Ok(a) = Agent::new(i as u16, p, Vec2::ZERO, 0) {
-            idle.push_sighting(Sighting::Agent(a));
+    next_period(idle, x);
+}
+
+/// Obstacle `i` of the self-test's world: a circle, a rectangle, an ellipse or a hexagon.
+///
+/// - Spread (`clutter` false): a grid 10–59 m ahead, 20 m either side, as a sonar's table
+///   holds obstacles out to its range; every other one crosses at 0.5 m/s.
+/// - Clutter: all 32 within 2–9 m of the vehicle (rings of 8 at 3, 5, 7 and 9 m), still, so
+///   that the VPF samples every one on its circle (none is far enough to be linearised,
+///   `planner::gradient::far_gradient`): the step's worst case.
+fn obstacle(i: usize, now_ms: u64, clutter: bool) -> Option<Obstacle> {
+    let (c, scale, v) = if clutter {
+        let ring = (i / 8) as f32;
+        let a = (i % 8) as f32 * 0.785 + ring * 0.2;
+        (Vec2::from_angle(a) * (3.0 + 2.0 * ring), 0.5, 0.0)
+    } else {
+        let c = Vec2::new(10.0 + 7.0 * (i % 8) as f32, -20.0 + 9.0 * (i / 8) as f32);
+        (c, 1.0, if i.is_multiple_of(2) { 0.5 } else { 0.0 })
+    };
+    let shape = match i % 4 {
+        0 => Shape::circle(c, 1.5 * scale),
+        1 => Shape::rectangle(c, Vec2::new(2.0, 1.0) * scale, 0.3),
+        2 => Shape::ellipse(c, Vec2::new(2.0, 1.0) * scale, -0.4),
+        _ => {
+            let mut hex = [Vec2::ZERO; 6];
+            for (k, v) in hex.iter_mut().enumerate() {
+                *v = c + Vec2::from_angle(k as f32 * 1.047) * (1.5 * scale);
+            }
+            Shape::polygon(&hex)
         }
+    }
+    .ok()?;
+    Obstacle::new(i as u16, shape, 2.5, Origin::Charted, now_ms)
+        .and_then(|o| o.moving(Vec2::new(0.0, v)))
+        .ok()
+}
+
+/// Serves the background until the periodic task has run one more period.
+fn next_period(idle: &mut BackgroundTask, x: &mut impl Exchange) {
+    let start = x.stats().periods;
+    while x.stats().periods == start {
+        idle.poll(x);
     }
 }
 
-/// Prints one strategy's line; true if it met the budget.
-fn report(strategy: Strategy, flood: &Flood, x: &mut impl Exchange) -> bool {
+/// Prints one strategy's lines; true if it met the budget at full tables (`ghosts`: the
+/// depth the ghost goal-point stack was loaded to, 0 for a strategy without them).
+fn report(
+    strategy: Strategy,
+    clutter: bool,
+    flood: &Flood,
+    x: &mut impl Exchange,
+    ghosts: u8,
+) -> bool {
+    let name = |line: &mut Line| {
+        line.push(b"selftest: ");
+        line.push(strategy.name().as_bytes());
+        if clutter {
+            line.push(b" in clutter");
+        }
+    };
     let s = x.take_stats();
     let mean = s.sum_cost / u64::from(s.periods.max(1));
     let mut line = Line::new();
-    line.push(b"selftest: ");
-    line.push(strategy.name().as_bytes());
+    name(&mut line);
     line.push(b" periods ");
     line.num(u64::from(s.periods));
     line.push(b", step cost max ");
@@ -460,8 +546,6 @@ fn report(strategy: Strategy, flood: &Flood, x: &mut impl Exchange) -> bool {
     line.num(mean);
     line.push(b" instructions, whole period max ");
     line.num(u64::from(s.max_period));
-    line.push(b", map cells ");
-    line.num(u64::from(s.map_cells));
     line.push(b", overruns ");
     line.num(u64::from(s.overruns));
     line.push(b", scanlines extracted ");
@@ -474,7 +558,32 @@ fn report(strategy: Strategy, flood: &Flood, x: &mut impl Exchange) -> bool {
     line.num(u64::from(flood.max_nav_cost));
     line.push(b")\n");
     board::log(line.bytes());
-    s.overruns == 0 && s.max_cost <= STEP_BUDGET && s.periods >= PERIODS
+    let f = s.least_fill;
+    let mut line = Line::new();
+    name(&mut line);
+    line.push(b" least table fill over those periods: obstacles ");
+    line.num(u64::from(f.obstacles));
+    line.push(b" of ");
+    line.num(MAX_OBSTACLES as u64);
+    line.push(b", agents ");
+    line.num(u64::from(f.agents));
+    line.push(b" of ");
+    line.num(MAX_AGENTS as u64);
+    line.push(b", map cells ");
+    line.num(u64::from(f.map_cells));
+    line.push(b" of ");
+    line.num(MAX_MAP_CELLS as u64);
+    line.push(b", ghost goal-points ");
+    line.num(u64::from(f.ghosts));
+    line.push(b" of ");
+    line.num(u64::from(ghosts));
+    line.push(b"\n");
+    board::log(line.bytes());
+    let full = usize::from(f.obstacles) == MAX_OBSTACLES
+        && usize::from(f.agents) == MAX_AGENTS
+        && usize::from(f.map_cells) == MAX_MAP_CELLS
+        && f.ghosts == ghosts;
+    full && s.overruns == 0 && s.max_cost <= STEP_BUDGET && s.periods >= PERIODS
 }
 
 /// Copies of an object in a measured field: the cost per object is the field's cost less the
@@ -483,7 +592,9 @@ const COPIES: usize = 8;
 
 /// What one object costs in a VPF step: the sampled field (`Field::sampled_forces`, the
 /// vehicle's point and n_γ samples) with [`COPIES`] of it, less the field without it, per
-/// copy; each the least of a few runs, so that a period preempting one does not count.
+/// copy; each the least of a few runs, so that a period preempting one does not count. Near
+/// (2–3 m off: sampled, on the stator's exponential branch) and far (25 m off: linearised,
+/// `planner::gradient::far_gradient`).
 fn report_object_costs() {
     use vpf::field::{GoalPdf, Stator};
     use vpf::planner::gradient::Field;
@@ -491,44 +602,20 @@ fn report_object_costs() {
     let params = Params::default();
     let circle = SampleCircle::new(params.epsilon_m, params.n_gamma);
     let stator = Stator::new(params.a_plus);
-    let shapes: [(&[u8], Option<Shape>); 5] = [
-        (b"circle", Shape::circle(Vec2::new(12.0, 5.0), 1.5).ok()),
-        (
-            b"rectangle",
-            Shape::rectangle(Vec2::new(12.0, 5.0), Vec2::new(2.0, 1.0), 0.3).ok(),
-        ),
-        (
-            b"ellipse",
-            Shape::ellipse(Vec2::new(12.0, 5.0), Vec2::new(2.0, 1.0), -0.4).ok(),
-        ),
-        (b"hexagon", {
-            let mut hex = [Vec2::ZERO; 6];
-            for (k, v) in hex.iter_mut().enumerate() {
-                *v = Vec2::new(12.0, 5.0) + Vec2::from_angle(k as f32 * 1.047) * 1.5;
-            }
-            Shape::polygon(&hex).ok()
-        }),
-        (b"none", None),
-    ];
-    let cells = [Vec2::new(4.0, 1.0); COPIES];
-    let mut agents: heapless::Vec<Agent, COPIES> = heapless::Vec::new();
-    for i in 0..COPIES {
-        if let Ok(a) = Agent::new(i as u16, Vec2::new(-5.0, 4.0), Vec2::ZERO, 0) {
-            let _ = agents.push(a);
-        }
-    }
+    let origin = Vec2::new(0.1, 0.2);
     let shifts = [Vec2::ZERO; COPIES];
     let field = |obstacles: &[Obstacle], agents: &[Agent], map: &[Vec2]| {
         let f = Field {
             obstacles,
             shifts: &shifts,
+            distances: &[],
             agents,
             agent_radius: params.agent_radius_m,
             agent_stator: stator,
             goal: GoalPdf::new(Vec2::new(80.0, 0.0), params.a_minus, params.sigma_m),
             leader: None,
             rotor_gradient: Vec2::ZERO,
-            origin: Vec2::new(0.1, 0.2),
+            origin,
             map,
             map_radius: 0.25,
             map_stator: stator,
@@ -545,26 +632,58 @@ fn report_object_costs() {
     };
     let empty = field(&[], &[], &[]);
     let per = |cost: u32| u64::from(cost.saturating_sub(empty)) / COPIES as u64;
-    let mut line = Line::new();
-    line.push(b"selftest: vpf field cost per object (n_gamma + 1 samples): ");
-    for (name, shape) in shapes {
-        let Some(shape) = shape else { continue };
-        let Ok(o) = Obstacle::new(0, shape, params.a_plus, Origin::Sensed, 0) else {
-            continue;
-        };
-        line.push(name);
-        line.push(b" ");
-        line.num(per(field(&[o; COPIES], &[], &[])));
-        line.push(b", ");
+    for (far, c) in [(false, Vec2::new(3.0, 1.5)), (true, Vec2::new(25.0, 5.0))] {
+        let mut line = Line::new();
+        line.push(if far {
+            b"selftest: vpf field cost per far object (linearised): ".as_slice()
+        } else {
+            b"selftest: vpf field cost per near object (n_gamma + 1 samples): ".as_slice()
+        });
+        let shapes: [(&[u8], Option<Shape>); 4] = [
+            (b"circle", Shape::circle(c, 1.0).ok()),
+            (
+                b"rectangle",
+                Shape::rectangle(c, Vec2::new(1.0, 0.5), 0.3).ok(),
+            ),
+            (
+                b"ellipse",
+                Shape::ellipse(c, Vec2::new(1.0, 0.5), -0.4).ok(),
+            ),
+            (b"hexagon", {
+                let mut hex = [Vec2::ZERO; 6];
+                for (k, v) in hex.iter_mut().enumerate() {
+                    *v = c + Vec2::from_angle(k as f32 * 1.047) * 1.0;
+                }
+                Shape::polygon(&hex).ok()
+            }),
+        ];
+        for (name, shape) in shapes {
+            let Some(shape) = shape else { continue };
+            let Ok(o) = Obstacle::new(0, shape, params.a_plus, Origin::Sensed, 0) else {
+                continue;
+            };
+            line.push(name);
+            line.push(b" ");
+            line.num(per(field(&[o; COPIES], &[], &[])));
+            line.push(b", ");
+        }
+        let mut agents: heapless::Vec<Agent, COPIES> = heapless::Vec::new();
+        for i in 0..COPIES {
+            if let Ok(a) = Agent::new(i as u16, c, Vec2::ZERO, 0) {
+                let _ = agents.push(a);
+            }
+        }
+        line.push(b"agent ");
+        line.num(per(field(&[], &agents, &[])));
+        if !far {
+            line.push(b", map cell ");
+            line.num(per(field(&[], &[], &[c; COPIES])));
+            line.push(b"; goal-point alone ");
+            line.num(u64::from(empty));
+        }
+        line.push(b"\n");
+        board::log(line.bytes());
     }
-    line.push(b"agent ");
-    line.num(per(field(&[], &agents, &[])));
-    line.push(b", map cell ");
-    line.num(per(field(&[], &[], &cells)));
-    line.push(b"; goal-point alone ");
-    line.num(u64::from(empty));
-    line.push(b"\n");
-    board::log(line.bytes());
 }
 
 /// Bytes of stack ever used: cortex-m-rt paints the stack with 0xCCCC_CCCC at boot

@@ -619,7 +619,7 @@ impl Periodic {
         // The firmware sends only frames to the host: COBS, never longer than this.
         let mut buf = [0u8; MAX_COBS_FRAME];
         self.seq = self.seq.wrapping_add(1);
-        let sent = match msg.emit_frame(self.seq, &mut buf) {
+        let sent = match msg.emit_frame_to_host(self.seq, &mut buf) {
             Ok(n) => buf.get(..n).is_some_and(tx),
             Err(_) => false,
         };

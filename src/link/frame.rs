@@ -180,8 +180,8 @@ pub const fn frame_buffer_len(payload_len: usize) -> usize {
 }
 
 /// Writes a complete frame — coded (a message type to the firmware) or COBS (to the host) —
-/// into `out` and returns its length, delimiter included. `payload` writes the payload into the buffer it is given and returns the number of
-/// bytes written (e.g. `|buf| repr.emit(buf)`).
+/// into `out` and returns its length, delimiter included. `payload` writes the payload into the
+/// buffer it is given and returns the number of bytes written (e.g. `|buf| repr.emit(buf)`).
 ///
 /// Works within `out` alone: the raw frame is assembled a few bytes in and encoded towards the
 /// front, so no scratch buffer is needed. `out` should be at least
@@ -193,6 +193,42 @@ pub fn encode_frame<F>(
     seq: u16,
     payload: F,
     out: &mut [u8],
+) -> Result<usize, Error>
+where
+    F: FnOnce(&mut [u8]) -> Result<usize, Error>,
+{
+    match msg_type.direction() {
+        Direction::ToFirmware => encode_with(msg_type, seq, payload, out, coded::encode_in_place),
+        Direction::ToHost => encode_with(msg_type, seq, payload, out, cobs::encode_in_place),
+    }
+}
+
+/// [`encode_frame`] for the firmware, which sends only frames to the host: COBS alone, so the
+/// image carries no encoder of coded frames; a message type to the firmware is refused with
+/// [`Error::WrongDirection`].
+pub fn encode_frame_to_host<F>(
+    msg_type: MessageType,
+    seq: u16,
+    payload: F,
+    out: &mut [u8],
+) -> Result<usize, Error>
+where
+    F: FnOnce(&mut [u8]) -> Result<usize, Error>,
+{
+    if msg_type.direction() != Direction::ToHost {
+        return Err(Error::WrongDirection(msg_type.code()));
+    }
+    encode_with(msg_type, seq, payload, out, cobs::encode_in_place)
+}
+
+/// The frame's raw bytes assembled at `out[start ..]` and encoded to the front by `encode`
+/// (`(buf, start, raw_len) -> wire length`), then the delimiter.
+fn encode_with<F>(
+    msg_type: MessageType,
+    seq: u16,
+    payload: F,
+    out: &mut [u8],
+    encode: fn(&mut [u8], usize, usize) -> Result<usize, Error>,
 ) -> Result<usize, Error>
 where
     F: FnOnce(&mut [u8]) -> Result<usize, Error>,
@@ -217,10 +253,7 @@ where
         .and_then(|r| r.first_chunk_mut::<CRC_LEN>())
         .ok_or(Error::BufferTooSmall)?;
     *crc_dst = crc.to_le_bytes();
-    let encoded = match msg_type.direction() {
-        Direction::ToFirmware => coded::encode_in_place(out, start, covered + CRC_LEN)?,
-        Direction::ToHost => cobs::encode_in_place(out, start, covered + CRC_LEN)?,
-    };
+    let encoded = encode(out, start, covered + CRC_LEN)?;
     *out.get_mut(encoded).ok_or(Error::BufferTooSmall)? = DELIMITER;
     Ok(encoded + 1)
 }
@@ -384,6 +417,28 @@ mod tests {
         let mut out = [0u8; 20];
         let r = encode_frame(MessageType::Log, 0, |b| Ok(b.len() + 5), &mut out);
         assert_eq!(r, Err(Error::BufferTooSmall));
+    }
+
+    #[test]
+    fn the_firmwares_encoder_sends_to_the_host_only() {
+        let mut a = [0u8; MAX_FRAME];
+        let mut b = [0u8; MAX_FRAME];
+        let payload = |buf: &mut [u8]| {
+            buf.get_mut(..3)
+                .ok_or(Error::BufferTooSmall)?
+                .copy_from_slice(&[1, 0, 2]);
+            Ok(3)
+        };
+        let n = encode_frame(MessageType::Log, 5, payload, &mut a).unwrap();
+        assert_eq!(
+            encode_frame_to_host(MessageType::Log, 5, payload, &mut b),
+            Ok(n)
+        );
+        assert_eq!(a[..n], b[..n]);
+        assert_eq!(
+            encode_frame_to_host(MessageType::Tick, 5, payload, &mut b),
+            Err(Error::WrongDirection(0x08))
+        );
     }
 
     #[test]

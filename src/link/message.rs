@@ -23,7 +23,9 @@ use super::coded;
 use super::control::{
     ChartClearRepr, ChartObstacleRepr, TickRepr, MISSION_LEN_WITH_FORMATION, PARAMS_LEN,
 };
-use super::frame::{encode_frame, split_frame, Direction, Header, MessageType};
+use super::frame::{
+    encode_frame, encode_frame_to_host, split_frame, Direction, Header, MessageType,
+};
 use super::mission::{MissionCountRepr, MissionItemRepr, SurveyRepr};
 use super::payload::Payload;
 use super::report::{CommandRepr, LogRepr, ReplyRepr, TelemetryRepr, COMMAND_LEN, TELEMETRY_LEN};
@@ -143,6 +145,12 @@ impl<'a> Message<'a> {
     /// [`MAX_FRAME`] bytes always suffice); returns its length, delimiter included.
     pub fn emit_frame(&self, seq: u16, out: &mut [u8]) -> Result<usize, Error> {
         encode_frame(self.message_type(), seq, |buf| self.emit(buf), out)
+    }
+
+    /// [`Message::emit_frame`] for a sender of frames to the host only (the firmware): COBS
+    /// alone, [`Error::WrongDirection`] for a message to the firmware.
+    pub fn emit_frame_to_host(&self, seq: u16, out: &mut [u8]) -> Result<usize, Error> {
+        encode_frame_to_host(self.message_type(), seq, |buf| self.emit(buf), out)
     }
 
     /// Parses a decoded frame: header ‖ payload ‖ CRC, COBS already removed (what the

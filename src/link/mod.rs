@@ -73,7 +73,10 @@ pub use control::{
 };
 pub use counters::{Ping360Counters, TelemetryCounters};
 pub use decoder::{Decoder, Outcome, RxCounters};
-pub use frame::{encode_frame, frame_buffer_len, split_frame, Direction, Header, MessageType};
+pub use frame::{
+    encode_frame, encode_frame_to_host, frame_buffer_len, split_frame, Direction, Header,
+    MessageType,
+};
 pub use message::Message;
 pub use mission::{MissionCountRepr, MissionItemRepr, SurveyRepr};
 pub use payload::Payload;

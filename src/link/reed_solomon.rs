@@ -32,23 +32,19 @@ pub const MAX_DATA: usize = MAX_BLOCK - PARITY;
 /// x⁸ + x⁴ + x³ + x² + 1, the field's primitive polynomial.
 const PRIMITIVE: u16 = 0x11D;
 
-/// Powers and logarithms of α. `exp` repeats after 255 entries, so that a sum of two logarithms
-/// indexes it without a reduction; then zeros, for [`ZERO_LOG`].
+/// Powers and logarithms of α. `exp` repeats after 255 entries (α²⁵⁵ = 1), so that a sum of
+/// two logarithms indexes it without a reduction.
 struct Tables {
-    exp: [u8; 768],
+    exp: [u8; 512],
     log: [u8; 256],
 }
-
-/// Stands for log(0) in sums that index `exp`: any such sum (512 ..= 512 + 254) lands on a
-/// zero.
-const ZERO_LOG: usize = 512;
 
 // Evaluated only at compile time (the initializers of `GF` and `GENERATOR_LOGS`): an index out
 // of bounds here fails the build, never the firmware.
 #[allow(clippy::indexing_slicing)]
 const fn tables() -> Tables {
     let mut t = Tables {
-        exp: [0; 768],
+        exp: [0; 512],
         log: [0; 256],
     };
     let mut x: u16 = 1;
@@ -71,7 +67,7 @@ const fn tables() -> Tables {
 
 static GF: Tables = tables();
 
-/// αⁱ for any i < 512; 0 for 512 ≤ i < 768.
+/// αⁱ for i < 512 (every sum of two logarithms; 0 beyond, never reached).
 fn exp(i: usize) -> u8 {
     GF.exp.get(i).copied().unwrap_or(0)
 }
@@ -170,17 +166,20 @@ pub fn parity(data: impl IntoIterator<Item = u8>) -> [u8; PARITY] {
     let mut reg = 0u128;
     for d in data {
         let feedback = d ^ reg as u8;
-        // A zero feedback adds nothing: its "logarithm" indexes the table's zero half.
-        let f = if feedback == 0 {
-            ZERO_LOG
-        } else {
-            log(feedback)
-        };
-        let Some(row) = GF.exp.get(f..).and_then(|r| r.first_chunk::<256>()) else {
+        // Shift by one byte, then add feedback · g(x): nothing for a zero feedback.
+        reg >>= 8;
+        if feedback == 0 {
+            continue;
+        }
+        // αᶠ⁺ᵍ for f = log(feedback) ≤ 254 and every g: the 256 powers from αᶠ on.
+        let Some(row) = GF
+            .exp
+            .get(log(feedback)..)
+            .and_then(|r| r.first_chunk::<256>())
+        else {
             continue;
         };
-        // Shift by one byte, then add feedback · g(x).
-        let mut next = (reg >> 8).to_le_bytes();
+        let mut next = reg.to_le_bytes();
         for (n, &g) in next.iter_mut().zip(GENERATOR_LOGS.iter()) {
             *n ^= row.get(usize::from(g)).copied().unwrap_or(0);
         }

@@ -55,16 +55,28 @@
 //! **Cost per call**, for N arc points, K periphery points and R obstacles within reach
 //! (bounding circle within r + d_t of the vehicle; farther ones cost one norm and are skipped
 //! exactly, since none of their points can reach an arc point):
-//! - R·K ray–boundary intersections (one `sin_cos` each, plus one division per edge for a
-//!   polygon) — no `signed_distance` evaluation;
+//! - R·K ray–boundary intersections (K `sin_cos` per call, one per rectangle or ellipse, plus
+//!   one division per edge for a polygon) — no `signed_distance` evaluation;
 //! - at most N·K·R squared distances, of which those within d_t take a square root and a
-//!   division;
+//!   division (about 27 instructions a pair on the Cortex-M4F);
 //! - N `signed_distance` evaluations per obstacle within reach whose periphery is coarse (see
 //!   below; none with the defaults for obstacles up to 10 m in radius), so at most N·R;
 //! - N norms and divisions for the attraction.
 //!
-//! At the capacities (N = 32, K = 16) and 16 obstacles in reach that is 8192 distance terms.
-//! Stack: about 32·(8 + 4) + 16·8 bytes of arrays.
+//! Stack: about 32·(8 + 4) + 16·(8 + 8) bytes of arrays.
+//!
+//! **Region of interest, held to a budget (our departure).** Seed 003 §3 selects "the
+//! obstacles within this region" of interest, the sonar's detection range and span, and
+//! leaves its size open. Evaluated over every obstacle within reach, the sum is N·(K·R + M)
+//! pairs for M map cells: at full tables in clutter (32 obstacles and 8 vehicles within 9 m,
+//! 32 cells; N = 25, K = 9) 9800 pairs, 330 000 instructions, over the step budget. The
+//! planner therefore narrows the region ([`region_of_interest`], before any shape is built)
+//! to at most [`MAX_PAIRS`] pairs: everything within reach while that fits, else the nearest
+//! distance bands ((r + d_t)/16 deep) whole and, in the first band that does not fit,
+//! sources in table order while they fit. What is left out is the farthest: its terms are the
+//! smallest ((1/d_o − 1/d_t)² falls from 0.14 at 2 m to 0.002 at 6 m with d_t = 8 m), and the
+//! region is chosen afresh at every arc step, so an obstacle left out enters it as the vehicle
+//! closes in. [`choose`] itself evaluates eq. 4–8 over whatever it is given.
 //!
 //! **Coarse peripheries (our addition).** Between two neighbouring periphery points, up to
 //! πρ/(K − 1) apart on an obstacle of bounding radius ρ, the repulsion dips; once that spacing
@@ -81,6 +93,16 @@ use crate::math::{max, min, sin_cos, wrap_angle, Vec2, PI};
 /// Most arc points N (the capacity of [`choose`]'s stack arrays; a larger [`ArcConfig::points`]
 /// is clamped to it) and most periphery points K per obstacle (likewise).
 pub use crate::params::{MAX_ARC_POINTS, MAX_PERIPHERY_POINTS};
+
+/// Most (arc point, obstacle point) pairs one call of [`choose`] evaluates: the bound on its
+/// cost at any table size (see the module notes, "Region of interest").
+pub const MAX_PAIRS: usize = 1600;
+/// Distance bands, each (r + d_t)/[`BANDS`] deep, in which [`choose`] narrows its region of
+/// interest to [`MAX_PAIRS`].
+const BANDS: usize = 16;
+/// Obstacle points a coarse periphery's nearest-point term counts for in [`MAX_PAIRS`]: its N
+/// signed distances cost about as much as this many points' N pairs.
+const COARSE_POINTS: usize = 4;
 
 /// Floor on d_o in eq. 5 of seed 003, m: closer than this the repulsion stops growing, so an
 /// arc point on a periphery point (or a vehicle inside an obstacle) gives a large finite
@@ -227,29 +249,68 @@ pub struct ArcChoice {
 /// one point). For a circle these are the paper's equiangular points on the semicircle facing
 /// the vehicle. A viewer at the centre faces +x.
 pub fn periphery(shape: &Shape, viewer: Vec2, k: u8, out: &mut [Vec2]) -> usize {
-    let n = (k as usize).min(MAX_PERIPHERY_POINTS).min(out.len());
-    let c = shape.center();
-    if n == 0 || !viewer.is_finite() || !c.is_finite() {
-        return 0;
-    }
-    let toward = (viewer - c).normalized(1e-6).unwrap_or(Vec2::new(1.0, 0.0));
+    let mut rays = [(0.0, 0.0); MAX_PERIPHERY_POINTS];
+    let n = facing_rays((k as usize).min(out.len()), &mut rays);
+    periphery_along(shape, viewer, rays.get(..n).unwrap_or(&[]), out)
+}
+
+/// (sin φ_j, cos φ_j) of the K equiangular ray offsets of [`periphery`] (φ over −90° ..= +90°,
+/// or 0 alone), written to the front of `rays`; returns how many: min(k,
+/// [`MAX_PERIPHERY_POINTS`]). The same for every obstacle, so [`choose`] computes them once.
+fn facing_rays(k: usize, rays: &mut [(f32, f32); MAX_PERIPHERY_POINTS]) -> usize {
+    let n = k.min(MAX_PERIPHERY_POINTS);
     let step = if n > 1 { PI / (n - 1) as f32 } else { 0.0 };
     let first = if n > 1 { -0.5 * PI } else { 0.0 };
-    for (j, slot) in out.iter_mut().take(n).enumerate() {
-        let (s, co) = sin_cos(first + step * j as f32);
-        let dir = toward.rotate_cs(co, s);
-        *slot = c + dir * boundary_distance(shape, c, dir);
+    for (j, slot) in rays.iter_mut().take(n).enumerate() {
+        *slot = sin_cos(first + step * j as f32);
     }
     n
 }
 
+/// [`periphery`] along the ray offsets `rays` (from [`facing_rays`]).
+fn periphery_along(shape: &Shape, viewer: Vec2, rays: &[(f32, f32)], out: &mut [Vec2]) -> usize {
+    let c = shape.center();
+    if rays.is_empty() || !viewer.is_finite() || !c.is_finite() {
+        return 0;
+    }
+    let toward = (viewer - c).normalized(1e-6).unwrap_or(Vec2::new(1.0, 0.0));
+    let frame = Frame::of(shape);
+    let mut n = 0;
+    for (&(s, co), slot) in rays.iter().zip(out.iter_mut()) {
+        let dir = toward.rotate_cs(co, s);
+        *slot = c + dir * boundary_distance(shape, &frame, c, dir);
+        n += 1;
+    }
+    n
+}
+
+/// The rotation of a rectangle's or an ellipse's own axes, (sin, cos), computed once per
+/// shape for all its periphery points; (0, 1) for the other shapes.
+struct Frame {
+    sin: f32,
+    cos: f32,
+}
+
+impl Frame {
+    fn of(shape: &Shape) -> Frame {
+        let angle = match shape {
+            Shape::Rectangle(r) => r.angle(),
+            Shape::Ellipse(e) => e.frame().angle(),
+            _ => 0.0,
+        };
+        let (sin, cos) = sin_cos(angle);
+        Frame { sin, cos }
+    }
+}
+
 /// Distance from the centre `c` of `shape` along the unit direction `dir` to its boundary, in
-/// closed form. The centre is inside every shape (a convex polygon's vertex average is interior).
-fn boundary_distance(shape: &Shape, c: Vec2, dir: Vec2) -> f32 {
+/// closed form (`frame`: the shape's axes, [`Frame::of`]). The centre is inside every shape (a
+/// convex polygon's vertex average is interior).
+fn boundary_distance(shape: &Shape, frame: &Frame, c: Vec2, dir: Vec2) -> f32 {
+    let (s, co) = (frame.sin, frame.cos);
     match shape {
         Shape::Circle(ci) => ci.radius(),
         Shape::Rectangle(r) => {
-            let (s, co) = sin_cos(r.angle());
             let l = dir.rotate_cs(co, -s);
             let h = r.half_size();
             // The ray leaves the box through the side it reaches first.
@@ -267,7 +328,6 @@ fn boundary_distance(shape: &Shape, c: Vec2, dir: Vec2) -> f32 {
         }
         Shape::Ellipse(e) => {
             let f = e.frame();
-            let (s, co) = sin_cos(f.angle());
             let l = dir.rotate_cs(co, -s);
             let h = f.half_size();
             // (t·l.x/a)² + (t·l.y/b)² = 1.
@@ -314,18 +374,146 @@ pub fn periphery_is_coarse(radius: f32, k: usize, dt: f32) -> bool {
     k < 2 || PI * radius > 0.5 * dt * (k - 1) as f32
 }
 
-/// Adds one obstacle point `p` (relative to the vehicle) to each arc point's Σ(1/d_o − 1/d_t)²
-/// (eq. 5–6), for the arc points within d_t of it. Points beyond `reach` (r + d_t) are skipped.
-fn accumulate(p: Vec2, arc: &[Vec2], rep: &mut [f32], reach: f32, dt2: f32, inv_dt: f32) {
-    if !p.is_finite() || p.norm2() > reach * reach {
-        return;
-    }
+/// Adds the obstacle points `points` (relative to the vehicle) to each arc point's
+/// Σ(1/d_o − 1/d_t)² (eq. 5–6), for the pairs within d_t. Each arc point's sum takes the points
+/// in their order, so the sums do not depend on how the points are batched.
+fn accumulate(points: &[Vec2], arc: &[Vec2], rep: &mut [f32], dt2: f32, inv_dt: f32) {
     for (a, acc) in arc.iter().zip(rep.iter_mut()) {
-        let d2 = (p - *a).norm2();
-        if d2 <= dt2 {
-            *acc += repulsion(crate::math::sqrt(d2), inv_dt);
+        let mut sum = *acc;
+        for p in points {
+            let d2 = (*p - *a).norm2();
+            if d2 <= dt2 {
+                sum += repulsion(crate::math::sqrt(d2), inv_dt);
+            }
+        }
+        *acc = sum;
+    }
+}
+
+/// An obstacle point relative to the vehicle that can reach an arc point: finite and within
+/// `reach` (r + d_t) of the vehicle; with its distance.
+fn within_reach(p: Vec2, reach: f32) -> Option<f32> {
+    let d2 = p.norm2();
+    (p.is_finite() && d2 <= reach * reach).then(|| crate::math::sqrt(d2))
+}
+
+/// Obstacle points an obstacle counts for in [`MAX_PAIRS`]: K, and with a coarse periphery
+/// [`COARSE_POINTS`] more for its N signed distances.
+fn obstacle_points_counted(radius: f32, k: usize, dt: f32) -> usize {
+    if periphery_is_coarse(radius, k, dt) {
+        k + COARSE_POINTS
+    } else {
+        k
+    }
+}
+
+/// Which obstacles and obstacle points [`region_of_interest`] selected: bit i for the i-th
+/// of each kind it was given.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Selection {
+    obstacles: u64,
+    points: u64,
+}
+
+impl Selection {
+    /// Whether the `i`-th obstacle is in the region of interest.
+    pub fn obstacle(&self, i: usize) -> bool {
+        i < MAX_SOURCES && self.obstacles & (1 << i) != 0
+    }
+    /// Whether the `i`-th obstacle point is in the region of interest.
+    pub fn point(&self, i: usize) -> bool {
+        i < MAX_SOURCES && self.points & (1 << i) != 0
+    }
+}
+
+/// Most obstacles, and most obstacle points, [`region_of_interest`] considers; further ones
+/// are left out (the world's tables hold 32 obstacles and 8 vehicles, and 32 map cells).
+pub const MAX_SOURCES: usize = 64;
+
+/// The region of interest of seed 003 §3 ("this region is defined by the detection range …
+/// of the sonar sensor. The obstacles within this region are only selected"), held to
+/// [`MAX_PAIRS`] (see the module notes): `obstacles` are the bounding circles (centre,
+/// radius) of the obstacles [`choose`] would be given, `points` the obstacle points, both
+/// relative to nothing (world frame) and iterated twice.
+///
+/// Everything within reach (bounding circle within r + d_t of `position`) is taken when its
+/// pairs fit [`MAX_PAIRS`]. Otherwise the region shrinks: sources are taken by distance band
+/// ((r + d_t)/[`BANDS`] deep), nearest band first, whole bands while they fit; in the first
+/// band that does not, obstacles then points in the order given while they fit; nothing
+/// farther. An obstacle counts K points (more with a coarse periphery), an obstacle point
+/// one, each N pairs. A source that is not finite is not selected ([`choose`] refuses it).
+pub fn region_of_interest(
+    cfg: &ArcConfig,
+    position: Vec2,
+    obstacles: impl Iterator<Item = (Vec2, f32)> + Clone,
+    points: impl Iterator<Item = Vec2> + Clone,
+) -> Selection {
+    let n = cfg.arc_points();
+    let k = cfg.periphery_points();
+    let dt = cfg.influence_m;
+    let reach = cfg.arc_m + dt;
+    // The band of a source whose nearest point is `gap` ≤ reach metres from the vehicle;
+    // `as` saturates (a negative gap, inside an obstacle, is band 0).
+    let band = |gap: f32| ((gap * (BANDS as f32 / reach)) as usize).min(BANDS - 1);
+    let obstacle_gap = |(c, radius): (Vec2, f32)| {
+        let gap = (c - position).norm() - radius;
+        (gap <= reach).then_some(gap)
+    };
+    let point_gap = |p: Vec2| within_reach(p - position, reach);
+
+    // How many pairs each band holds.
+    let mut load = [0usize; BANDS];
+    for o in obstacles.clone().take(MAX_SOURCES) {
+        if let (Some(gap), true) = (obstacle_gap(o), o.1.is_finite()) {
+            if let Some(l) = load.get_mut(band(gap)) {
+                *l += obstacle_points_counted(o.1, k, dt) * n;
+            }
         }
     }
+    for p in points.clone().take(MAX_SOURCES) {
+        if let Some(l) = point_gap(p).and_then(|gap| load.get_mut(band(gap))) {
+            *l += n;
+        }
+    }
+    // The first band that does not fit whole, and the pairs left for it.
+    let mut last_band = BANDS;
+    let mut spare = 0;
+    let mut pairs = 0;
+    for (b, &l) in load.iter().enumerate() {
+        if pairs + l > MAX_PAIRS {
+            last_band = b;
+            spare = MAX_PAIRS - pairs;
+            break;
+        }
+        pairs += l;
+    }
+    let mut take = |gap: f32, cost: usize| {
+        let b = band(gap);
+        if b < last_band {
+            true
+        } else if b == last_band && cost <= spare {
+            spare -= cost;
+            true
+        } else {
+            false
+        }
+    };
+    let mut sel = Selection::default();
+    for (i, o) in obstacles.enumerate().take(MAX_SOURCES) {
+        if let (Some(gap), true) = (obstacle_gap(o), o.1.is_finite()) {
+            if take(gap, obstacle_points_counted(o.1, k, dt) * n) {
+                sel.obstacles |= 1 << i;
+            }
+        }
+    }
+    for (i, p) in points.enumerate().take(MAX_SOURCES) {
+        if let Some(gap) = point_gap(p) {
+            if take(gap, n) {
+                sel.points |= 1 << i;
+            }
+        }
+    }
+    sel
 }
 
 /// Evaluates U_tot at every arc point (seed 003 eq. 4–7) and returns the point of least
@@ -370,25 +558,48 @@ pub fn choose(
     let reach = r + dt;
     let dt2 = dt * dt;
     let inv_dt = 1.0 / dt;
-    let mut points = [Vec2::ZERO; MAX_PERIPHERY_POINTS];
     let arc_n = arc.get(..n).unwrap_or(&arc);
     if cfg.eta > 0.0 {
-        for shape in obstacles {
+        // The bounding circle's gap to the vehicle, if within reach: no periphery point of an
+        // obstacle whose bounding circle is beyond r + d_t can come within d_t of an arc
+        // point. (An offset that overflows to ∞ is beyond; all operands are finite, so no
+        // NaN.) `None` for a shape that is not finite.
+        let gap = |shape: &Shape| {
             let centre = shape.center();
             let radius = shape.bounding_radius();
             if !centre.is_finite() || !radius.is_finite() {
                 return None;
             }
-            // No periphery point of an obstacle whose bounding circle is beyond r + d_t can
-            // come within d_t of an arc point. (Also skips offsets that overflow to ∞; all
-            // operands are finite, so no NaN.)
-            if (centre - position).norm() - radius > reach {
+            let gap = (centre - position).norm() - radius;
+            Some((gap <= reach).then_some((gap, radius)))
+        };
+        let mut rays = [(0.0, 0.0); MAX_PERIPHERY_POINTS];
+        let m = facing_rays(k, &mut rays);
+        let rays = rays.get(..m).unwrap_or(&[]);
+        let mut points = [Vec2::ZERO; MAX_PERIPHERY_POINTS];
+        for shape in obstacles {
+            let Some((_, radius)) = gap(&shape)? else {
                 continue;
+            };
+            let m = periphery_along(&shape, position, rays, &mut points);
+            // Each p_j relative to the vehicle, those beyond reach left out.
+            let mut near = 0;
+            for j in 0..m {
+                let p = points.get(j).copied().unwrap_or(Vec2::ZERO) - position;
+                if within_reach(p, reach).is_some() {
+                    if let Some(slot) = points.get_mut(near) {
+                        *slot = p;
+                        near += 1;
+                    }
+                }
             }
-            let m = periphery(&shape, position, k as u8, &mut points);
-            for p in points.iter().take(m) {
-                accumulate(*p - position, arc_n, &mut rep, reach, dt2, inv_dt);
-            }
+            accumulate(
+                points.get(..near).unwrap_or(&[]),
+                arc_n,
+                &mut rep,
+                dt2,
+                inv_dt,
+            );
             // Coarse periphery (see the module notes): the nearest boundary point joins the p_j.
             if periphery_is_coarse(radius, k, dt) {
                 for (a, acc) in arc.iter().zip(rep.iter_mut()).take(n) {
@@ -399,13 +610,31 @@ pub fn choose(
                 }
             }
         }
-    }
 
-    // Obstacle points given as such (evidence-map cells): each is one p_j of eq. 5.
-    if cfg.eta > 0.0 {
+        // Obstacle points given as such (evidence-map cells): each is one p_j of eq. 5,
+        // batched.
+        let mut batch = 0;
         for p in obstacle_points {
-            accumulate(p - position, arc_n, &mut rep, reach, dt2, inv_dt);
+            let p = p - position;
+            if within_reach(p, reach).is_none() {
+                continue;
+            }
+            if let Some(slot) = points.get_mut(batch) {
+                *slot = p;
+                batch += 1;
+            }
+            if batch == points.len() {
+                accumulate(&points, arc_n, &mut rep, dt2, inv_dt);
+                batch = 0;
+            }
         }
+        accumulate(
+            points.get(..batch).unwrap_or(&[]),
+            arc_n,
+            &mut rep,
+            dt2,
+            inv_dt,
+        );
     }
 
     // The goal, relative to the vehicle; halved if the difference overflows, then moved in
@@ -1223,6 +1452,63 @@ mod tests {
         assert!(clear > 2.5, "came within {clear} m of an obstacle");
         // About the straight-line 205 m plus detours.
         assert!(steps < 300, "{steps} steps");
+    }
+
+    #[test]
+    fn region_of_interest_takes_everything_in_reach_when_it_fits() {
+        extern crate std;
+        use std::vec::Vec;
+        let cfg = ArcConfig::default();
+        let obstacles = [
+            (Vec2::new(3.0, 0.0), 1.0),
+            (Vec2::new(0.0, -6.0), 2.0),
+            (Vec2::new(30.0, 0.0), 1.0), // beyond r + d_t
+            (Vec2::new(f32::NAN, 0.0), 1.0),
+        ];
+        let points = [Vec2::new(2.0, 2.0), Vec2::new(0.0, 20.0)];
+        let sel = region_of_interest(
+            &cfg,
+            Vec2::ZERO,
+            obstacles.iter().copied(),
+            points.iter().copied(),
+        );
+        let taken: Vec<bool> = (0..4).map(|i| sel.obstacle(i)).collect();
+        assert_eq!(taken, [true, true, false, false]);
+        assert!(sel.point(0) && !sel.point(1));
+    }
+
+    #[test]
+    fn region_of_interest_holds_the_pair_budget_nearest_first() {
+        extern crate std;
+        use std::vec::Vec;
+        let cfg = ArcConfig::default();
+        let (n, k) = (cfg.arc_points(), cfg.periphery_points());
+        // 40 small obstacles from 1.5 m to 9 m, in a shuffled order, and 32 points at 4–5 m.
+        let gap = |i: usize| 1.5 + 7.5 * ((i * 17) % 40) as f32 / 40.0;
+        let obstacles: Vec<(Vec2, f32)> = (0..40)
+            .map(|i| (Vec2::from_angle(i as f32 * 0.7) * (gap(i) + 0.5), 0.5))
+            .collect();
+        let points: Vec<Vec2> = (0..32)
+            .map(|i| Vec2::from_angle(i as f32 * 0.2) * (4.0 + i as f32 / 32.0))
+            .collect();
+        let sel = region_of_interest(
+            &cfg,
+            Vec2::ZERO,
+            obstacles.iter().copied(),
+            points.iter().copied(),
+        );
+        let taken_o: Vec<usize> = (0..40).filter(|&i| sel.obstacle(i)).collect();
+        let taken_p = (0..32).filter(|&i| sel.point(i)).count();
+        let pairs = (taken_o.len() * k + taken_p) * n;
+        assert!(pairs <= MAX_PAIRS, "{pairs} pairs");
+        // Nothing left out is nearer, by a band, than something taken.
+        let band = (cfg.arc_m + cfg.influence_m) / BANDS as f32;
+        let farthest_taken = taken_o.iter().map(|&i| gap(i)).fold(0.0, f32::max);
+        for i in (0..40).filter(|i| !taken_o.contains(i)) {
+            assert!(gap(i) > farthest_taken - band - 1e-4, "obstacle {i}");
+        }
+        // And the budget is used: the next source would not have fitted.
+        assert!(pairs + k * n > MAX_PAIRS, "{pairs} pairs");
     }
 
     #[test]

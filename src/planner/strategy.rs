@@ -9,13 +9,14 @@
 //! mission's formation (001 §3.2) is the VPF's virtual leader; the alternatives fly to the
 //! mission goal and give other vehicles a wide berth.
 
-use super::multipoint::{self, ArcConfig};
+use super::multipoint::{self, ArcConfig, Selection};
 use super::navfn::{self, NavfnError, SphereWorld};
 use super::{Context, Motion, Planner};
 use crate::field::Shape;
 use crate::math::{max, min, sqrt, Vec2};
 use crate::params::Params;
 use crate::planner::Command;
+use crate::world::Obstacle;
 
 /// Gain of the alternative strategies' velocity tracking, × 1/T. With the bilinear integrator,
 /// F = g·(v_d − v_c) has real poles (no overshoot) for g·T/2 ≤ 3 − 2√2 ≈ 0.17; 0.3/T (g·T/2 =
@@ -46,15 +47,59 @@ fn arc_config(p: &Params) -> ArcConfig {
 }
 
 impl Context<'_> {
-    /// Obstacles at their predicted positions, then the other vehicles' circles.
-    fn obstacle_shapes(&self, agent_radius: f32) -> impl Iterator<Item = Shape> + '_ {
+    /// The obstacles planned against (those left to the evidence map excepted) with their
+    /// shifts to the predicted positions.
+    fn planned_obstacles(&self) -> impl Iterator<Item = (&Obstacle, Vec2)> + Clone + '_ {
+        let shift = |i: usize| self.shifts.get(i).copied().unwrap_or(Vec2::ZERO);
+        self.world
+            .obstacles()
+            .iter()
+            .enumerate()
+            .filter(|(_, o)| !self.world.left_to_map(o))
+            .map(move |(i, o)| (o, shift(i)))
+    }
+
+    /// The bounding circles (centre, radius) of [`Context::obstacle_shapes`], in its order,
+    /// without building the shapes.
+    fn obstacle_bounds(&self, agent_radius: f32) -> impl Iterator<Item = (Vec2, f32)> + Clone + '_ {
         let agents = self
             .world
             .agents()
             .iter()
-            .filter_map(move |a| Shape::circle(a.position, agent_radius).ok());
-        self.predicted_shapes().chain(agents)
+            .map(move |a| (a.position, agent_radius));
+        self.planned_obstacles()
+            .map(|(o, shift)| (o.shape.center() + shift, o.shape.bounding_radius()))
+            .chain(agents)
     }
+
+    /// Obstacles at their predicted positions, then the other vehicles' circles: those
+    /// `selection` holds (multipoint's region of interest).
+    fn obstacle_shapes(
+        &self,
+        agent_radius: f32,
+        selection: Selection,
+    ) -> impl Iterator<Item = Shape> + '_ {
+        let agents = self
+            .world
+            .agents()
+            .iter()
+            .map(move |a| (a.position, agent_radius));
+        let obstacles = self.planned_obstacles().map(Placed::Obstacle);
+        obstacles
+            .chain(agents.map(Placed::Circle))
+            .enumerate()
+            .filter(move |&(i, _)| selection.obstacle(i))
+            .filter_map(|(_, p)| match p {
+                Placed::Obstacle((o, shift)) => Some(o.shape.translated(shift)),
+                Placed::Circle((c, r)) => Shape::circle(c, r).ok(),
+            })
+    }
+}
+
+/// A source of [`Context::obstacle_shapes`] before its shape is built.
+enum Placed<'a> {
+    Obstacle((&'a Obstacle, Vec2)),
+    Circle((Vec2, f32)),
 }
 
 impl Planner {
@@ -79,14 +124,25 @@ impl Planner {
                 periods_left: 0,
             };
         } else if arc.periods_left == 0 || reached {
+            let cfg = arc_config(prm);
+            let cells = cx.world.map_cells().iter().copied();
+            let selection = multipoint::region_of_interest(
+                &cfg,
+                p,
+                cx.obstacle_bounds(prm.agent_radius_m),
+                cells.clone(),
+            );
             let choice = multipoint::choose(
-                &arc_config(prm),
+                &cfg,
                 p,
                 cx.nav.heading,
                 speed,
                 goal,
-                cx.obstacle_shapes(prm.agent_radius_m),
-                cx.world.map_cells().iter().copied(),
+                cx.obstacle_shapes(prm.agent_radius_m, selection),
+                cells
+                    .enumerate()
+                    .filter(|&(i, _)| selection.point(i))
+                    .map(|(_, c)| c),
             );
             *arc = ArcState {
                 target: choice.map(|c| c.point),

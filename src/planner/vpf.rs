@@ -18,9 +18,6 @@ use crate::world::MAX_OBSTACLES;
 /// One rotor normal per obstacle, and one for the evidence map.
 const MAX_NORMALS: usize = MAX_OBSTACLES + 1;
 
-/// Step of the central differences for obstacle normals, m.
-const NORMAL_STEP_M: f32 = 0.01;
-
 /// Reach σ_c of the cruise goal-point, m: where eq. 13's steepest drop across ε,
 /// A⁻·ε·e^{−1/2}/σ_c (at distance σ_c from its centre), balances friction at v_max, μ·v_max —
 /// so a vehicle pulled by it settles at v_max. Never more than the paper's σ (with no
@@ -132,20 +129,27 @@ impl Planner {
             Some((f, f.leader_pdf(p, vl)))
         });
 
+        // Each obstacle's distance r and its gradient ∇r at the vehicle (the obstacle at its
+        // predicted position), once: the rotor's normals and the field's far test share them.
+        let mut distances: Vec<(f32, Vec2), MAX_OBSTACLES> = Vec::new();
+        for (o, &shift) in world.obstacles().iter().zip(cx.shifts) {
+            // Same capacity as the obstacle table: never full.
+            let _ = distances.push(o.shape.distance_gradient(p - shift));
+        }
         // The rotor terms: one normal per obstacle, and one for the map (one obstacle: its
-        // normal points away from the nearest believed cell).
+        // normal points away from the nearest believed cell). The normal is ∇r/|∇r| (for the
+        // exact distances ∇r is already a unit vector).
         let mut normals: Vec<(Vec2, f32), MAX_NORMALS> = Vec::new();
         if prm.a_rotor > 0.0 {
-            for (o, &shift) in world.obstacles().iter().zip(cx.shifts) {
+            for ((o, &(r, g)), &shift) in world.obstacles().iter().zip(&distances).zip(cx.shifts) {
                 if world.left_to_map(o) {
                     continue;
                 }
-                let x = p - shift;
-                let r = o.shape.signed_distance(x);
-                let _ = normals.push((
-                    o.shape.outward_normal(x, r, NORMAL_STEP_M),
-                    o.stator().reach(r),
-                ));
+                let n = g
+                    .normalized(1e-9)
+                    .or_else(|| (p - shift - o.shape.center()).normalized(1e-9))
+                    .unwrap_or(Vec2::new(1.0, 0.0));
+                let _ = normals.push((n, o.stator().reach(r)));
             }
             if let Some((c, d)) = crate::world::nearest_cell(world.map_cells(), p) {
                 if let Some(n) = (p - c).normalized(1e-6) {
@@ -170,6 +174,7 @@ impl Planner {
         let field = Field {
             obstacles: world.obstacles(),
             shifts: cx.shifts,
+            distances: &distances,
             agents: world.agents(),
             agent_radius: prm.agent_radius_m,
             agent_stator: self.agent_stator,
