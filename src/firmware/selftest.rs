@@ -151,8 +151,8 @@ fn report_stack() {
 }
 
 /// The link's own cost, in the background: a scanline frame of 400 bins (428 raw bytes, two
-/// Reed–Solomon blocks, 465 bytes on the wire) decoded as it arrived clean, and with 16 wrong
-/// bytes (8 in each block, the most the code corrects) repaired. The frame is refused once
+/// Reed–Solomon blocks, 463 bytes on the wire with its delimiter) decoded as it arrived clean,
+/// and with 16 wrong bytes (8 in each block, the most the code corrects) repaired. The frame is refused once
 /// decoded (its range is 0 m: `rx_bad_payload`), so no extraction is in the measurement; the
 /// least of eight tries, so that a period preempting one does not count. Not inlined: its
 /// frame buffer would otherwise sit under every later measurement's stack.
