@@ -17,7 +17,8 @@
 //!   the Ping360 driver (`sonar::ping360`);
 //! - [`route`]: the background route layer — a wavefront over a coarse grid of what is
 //!   believed, handing the planner its next intermediate goal-point;
-//! - [`link`]: the serial link's wire format (COBS frames, CRC, messages; `docs/protocol.md`),
+//! - [`link`]: the serial link's wire format (coded and COBS frames, CRC, messages;
+//!   `docs/protocol.md`),
 //!   and Blue Robotics' Ping protocol (`link::ping`);
 //! - [`guidance`]: the hardware-independent runtime — periodic task, background decoding and
 //!   extraction, fail-safes, telemetry — that the firmware and the host process run.

@@ -11,9 +11,13 @@
 //! extension, splices of two frames, header version/type/sequence, NaN/±∞/1e30/−0/subnormals
 //! in the float fields at their documented offsets, counts and lengths at 0, max and max + 1,
 //! times at 0 and `u64::MAX`. The CRC is recomputed after the mutation in most cases (so the
-//! payload parsers are reached) and left broken in the others; inputs also include raw
-//! garbage, oversize and non-canonical COBS runs, broken COBS, and frames glued without
-//! delimiters. Each run starts with valid parameters, a mission, a chart and navigation, and
+//! payload parsers are reached) and left broken in the others. Frames are coded as the
+//! protocol's frames to the firmware are (Reed–Solomon parity, whitening, zero substitution;
+//! written here from `docs/protocol.md`, apart from the library), and some are damaged on the
+//! wire: up to 8 wrong bytes per block (corrected), more (uncorrectable), wrong keys, stray
+//! 0x00s, cut or lengthened frames, other valid keys. Inputs also include raw garbage,
+//! oversize runs, COBS frames (the other direction's framing: noise here), and frames glued
+//! without delimiters. Each run starts with valid parameters, a mission, a chart and navigation, and
 //! valid navigation is interleaved so that the planner plans and the vehicle moves.
 //!
 //! After every input, checked:
@@ -125,7 +129,7 @@ impl Rng {
 }
 
 // ---------------------------------------------------------------------------------------------
-// Framing, written from docs/protocol.md (independent of `vpf::link`'s own CRC and COBS)
+// Framing, written from docs/protocol.md (independent of `vpf::link`'s own CRC, COBS and code)
 
 /// CRC-16/CCITT-FALSE.
 fn crc16(data: &[u8]) -> u16 {
@@ -218,8 +222,108 @@ fn fix_crc(raw: &mut [u8]) {
     }
 }
 
+/// GF(2⁸) modulo 0x11D: powers of α = 2 (twice round, so sums of logarithms need no
+/// reduction) and logarithms.
+fn gf_tables() -> ([u8; 510], [u8; 256]) {
+    let (mut exp, mut log) = ([0u8; 510], [0u8; 256]);
+    let mut x = 1u16;
+    for i in 0..255 {
+        exp[i] = x as u8;
+        exp[i + 255] = x as u8;
+        log[x as usize] = i as u8;
+        x <<= 1;
+        if x & 0x100 != 0 {
+            x ^= 0x11D;
+        }
+    }
+    (exp, log)
+}
+
+/// The 16 Reed–Solomon parity bytes of `data` (generator roots α⁰ … α¹⁵), by polynomial
+/// division as docs/protocol.md §12 does it.
+fn rs_parity(data: &[u8]) -> [u8; 16] {
+    let (exp, log) = gf_tables();
+    let mul = |a: u8, b: u8| {
+        if a == 0 || b == 0 {
+            0
+        } else {
+            exp[usize::from(log[a as usize]) + usize::from(log[b as usize])]
+        }
+    };
+    // g(x), highest power first.
+    let mut g = vec![1u8];
+    for &root in &exp[..16] {
+        let mut next = g.clone();
+        next.push(0);
+        for (k, &c) in g.iter().enumerate() {
+            next[k + 1] ^= mul(c, root);
+        }
+        g = next;
+    }
+    let mut rem = [0u8; 16];
+    for &d in data {
+        let f = d ^ rem[0];
+        rem.copy_within(1.., 0);
+        rem[15] = 0;
+        for (r, &gk) in rem.iter_mut().zip(&g[1..]) {
+            *r ^= mul(gk, f);
+        }
+    }
+    rem
+}
+
+/// The PN9 whitening sequence's first `n` bytes (x⁹ + x⁵ + 1, seed all ones, LSB first).
+fn pn9(n: usize) -> Vec<u8> {
+    let mut s = 0x1FFu16;
+    (0..n)
+        .map(|_| {
+            let out = s as u8;
+            for _ in 0..8 {
+                s = (s >> 1) | (((s ^ (s >> 5)) & 1) << 8);
+            }
+            out
+        })
+        .collect()
+}
+
+/// A raw frame's coded form (to the firmware), without the delimiter; `key` picks each chunk's
+/// key among the values that do not occur in it (any is allowed).
+fn code(raw: &[u8], key: impl Fn(&[u8]) -> u8) -> Vec<u8> {
+    let blocks = raw.len().div_ceil(239).max(1);
+    let mut cw = raw.to_vec();
+    for j in 0..blocks {
+        let data: Vec<u8> = raw.iter().skip(j).step_by(blocks).copied().collect();
+        cw.extend(rs_parity(&data));
+    }
+    let white = pn9(cw.len());
+    for (b, w) in cw.iter_mut().zip(white) {
+        *b ^= w;
+    }
+    let mut out = Vec::new();
+    for chunk in cw.chunks(254) {
+        let k = key(chunk);
+        out.push(k);
+        out.extend(chunk.iter().map(|&b| if b == 0 { k } else { b }));
+    }
+    out
+}
+
+/// The largest absent value (the reference encoder's choice).
+fn largest_key(chunk: &[u8]) -> u8 {
+    (1..=255u8)
+        .rev()
+        .find(|v| !chunk.contains(v))
+        .unwrap_or(0xFF)
+}
+
+/// The smallest absent value: also a valid key.
+fn smallest_key(chunk: &[u8]) -> u8 {
+    (1..=255u8).find(|v| !chunk.contains(v)).unwrap_or(1)
+}
+
+/// A raw frame on the wire to the firmware: coded, delimited.
 fn wire(raw: &[u8]) -> Vec<u8> {
-    let mut w = cobs_encode(raw, false);
+    let mut w = code(raw, largest_key);
     w.push(0);
     w
 }
@@ -828,7 +932,7 @@ fn mutate_count(rng: &mut Rng, ty: u8, p: &mut Vec<u8>) {
 // Mutations
 
 /// A frame of a random type, valid or mutated; returns its raw bytes (header ‖ payload ‖ CRC,
-/// before COBS).
+/// before coding).
 fn gen_raw(rng: &mut Rng, ctx: &Ctx<'_>, seq: &mut u16) -> Vec<u8> {
     *seq = seq.wrapping_add(1);
     if !ctx.pool.is_empty() && rng.chance(0.05) {
@@ -995,7 +1099,7 @@ fn gen_input(rng: &mut Rng, ctx: &Ctx<'_>, seq: &mut u16) -> Vec<u8> {
             let n = 2 + rng.below(3);
             for k in 0..n {
                 let raw = gen_raw(rng, ctx, seq);
-                out.extend(cobs_encode(&raw, false));
+                out.extend(code(&raw, largest_key));
                 if k + 1 == n || rng.chance(0.6) {
                     out.push(0);
                 }
@@ -1016,7 +1120,8 @@ fn gen_input(rng: &mut Rng, ctx: &Ctx<'_>, seq: &mut u16) -> Vec<u8> {
             let raw = gen_raw(rng, ctx, seq);
             out.extend(wire(&raw));
         }
-        // Non-canonical COBS: runs of 0x01 decode to zeros (past MAX_RAW), or long full blocks.
+        // Frames in COBS, the framing of the other direction (and of versions up to 6): noise to
+        // the firmware. Non-canonical COBS: runs of 0x01, or long full blocks.
         5 => {
             if rng.chance(0.5) {
                 let n = rng.pick(&[600usize, 663, 664, 665, 666, 667, 700]);
@@ -1029,25 +1134,50 @@ fn gen_input(rng: &mut Rng, ctx: &Ctx<'_>, seq: &mut u16) -> Vec<u8> {
             }
             out.push(0);
         }
-        // COBS damage: a code byte that runs past the end, a stray 0x00, a cut frame.
+        // Damage on the wire: wrong bytes (up to 8 per block are corrected, more are not),
+        // a wrong key, a stray 0x00, a cut frame, a byte too many, another valid key.
         6 => {
             let raw = gen_raw(rng, ctx, seq);
-            let mut enc = cobs_encode(&raw, false);
-            match rng.below(3) {
-                0 => enc[0] = enc[0].saturating_add(1 + rng.below(8) as u8),
-                1 => {
+            let mut enc = code(&raw, largest_key);
+            match rng.below(6) {
+                0 | 1 => {
+                    let hits = rng.pick(&[1usize, 4, 8, 9, 16, 40]);
+                    for _ in 0..hits {
+                        let i = rng.below(enc.len());
+                        let b = enc[i] ^ (1 + rng.below(255) as u8);
+                        if b != 0 {
+                            enc[i] = b;
+                        }
+                    }
+                }
+                2 => {
+                    let at = 255 * rng.below(enc.len().div_ceil(255));
+                    let k = enc[at] ^ (1 << rng.below(8));
+                    if k != 0 {
+                        enc[at] = k;
+                    }
+                }
+                3 => {
                     let i = rng.below(enc.len());
                     enc[i] = 0;
                 }
-                _ => enc.truncate(rng.below(enc.len())),
+                4 => {
+                    if rng.chance(0.5) {
+                        enc.truncate(rng.below(enc.len()));
+                    } else {
+                        let i = rng.below(enc.len() + 1);
+                        enc.insert(i, 1 + rng.below(255) as u8);
+                    }
+                }
+                _ => enc = code(&raw, smallest_key),
             }
             out.extend(enc);
             out.push(0);
         }
-        // A full-block frame in the non-canonical encoding with a trailing 0x01.
+        // A COBS frame in the non-canonical encoding with a trailing 0x01: noise here.
         7 => {
             let raw = gen_raw(rng, ctx, seq);
-            out.extend(cobs_encode(&raw, true));
+            out.extend(cobs_encode(&raw, rng.chance(0.5)));
             out.push(0);
         }
         // Garbage before a frame, with or without a resync delimiter.
@@ -1089,6 +1219,8 @@ fn error_kind(e: &Error) -> &'static str {
     match e {
         Error::Crc => "crc",
         Error::Cobs => "cobs",
+        Error::CodedLength => "coded length",
+        Error::Uncorrectable => "uncorrectable",
         Error::Truncated => "short",
         Error::Oversize => "oversize",
         Error::Version(_) => "version",
@@ -1119,8 +1251,9 @@ struct Stats {
     non_finite_steps: u64,
 }
 
-/// The telemetry's receive counters: frames, crc, oversize, framing, unknown, bad payload.
-type Rx = [u32; 6];
+/// The telemetry's receive counters: frames, crc, oversize, framing, unknown, bad payload,
+/// corrected, uncorrectable.
+type Rx = [u32; 8];
 
 fn rx_of(c: &TelemetryCounters) -> Rx {
     [
@@ -1130,6 +1263,8 @@ fn rx_of(c: &TelemetryCounters) -> Rx {
         c.rx_framing_errors,
         c.rx_unknown,
         c.rx_bad_payload,
+        c.rx_fec_corrected,
+        c.rx_fec_uncorrectable,
     ]
 }
 
@@ -1190,6 +1325,8 @@ impl Model {
             c.bad_payload
                 .saturating_sub(self.wire_params + self.wire_mission + self.wire_nav)
                 .saturating_add(self.ticks_refused),
+            c.corrected,
+            c.uncorrectable,
         ]
     }
 
@@ -1480,7 +1617,7 @@ impl Harness {
                 rx_of(t),
                 *want,
                 "telemetry {k}: receive counters [frames, crc, oversize, framing, unknown, \
-                 bad payload] differ from a standalone decoder's (counters {t:?})"
+                 bad payload, corrected, uncorrectable] differ from a standalone decoder's (counters {t:?})"
             );
         }
         for r in &sent.replies {

@@ -11,8 +11,9 @@ use std::time::{Duration, Instant};
 use vpf::link::{Decoder, Direction, Message, Outcome, TelemetryCounters, MAX_FRAME};
 use vpf::{Mission, Vec2};
 
-/// One garbage frame: COBS for a single byte, shorter than any header, so the decoder refuses
-/// it as a framing error and it can never be taken for a message.
+/// One garbage frame: two bytes (a coded frame's key and one byte), a length no encoder
+/// produces, so the decoder refuses it as a framing error and it can never be taken for a
+/// message.
 const GARBAGE_FRAME: [u8; 3] = [0x02, 0x41, 0x00];
 /// Least garbage to send, bytes, and least time to keep sending it.
 const FLOOD_BYTES: usize = 32 << 20;

@@ -42,6 +42,20 @@ fn link_faults_slow_the_vehicle_but_it_arrives_untouched() {
     }
 }
 
+/// Issue 11's target on the vehicle's own sonar: under bit errors at 10⁻³ a scanline frame
+/// (330 bytes) would arrive corrupted nine times in ten; the coded frames' forward error
+/// correction repairs them, so the vehicle is not slowed to a crawl and arrives.
+#[test]
+fn bit_errors_on_the_own_sonar_are_corrected_and_the_vehicle_arrives() {
+    let run = quiet();
+    let sc = shipped("narrow_gap");
+    let cell = fly(&sc, Kind::BitErrors, &run);
+    let v = &cell.result.expect("the run completes")[0];
+    println!("{} under {}: {v:?}", cell.scenario, Kind::BitErrors.name());
+    assert_eq!(v.collisions, 0, "contact ({:?})", v.min_clearance_m);
+    assert!(v.reached, "not reached ({:?} m)", v.closest_m);
+}
+
 #[test]
 fn lost_navigation_holds_in_time_and_a_quiet_sonar_forgets_nothing() {
     let run = quiet();

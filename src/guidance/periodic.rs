@@ -8,7 +8,8 @@
 //! capacities, and nothing waits: a full transmit queue drops the frame and counts it.
 
 use crate::link::{
-    CommandRepr, CostUnit, Header, Message, ReplyRepr, TelemetryCounters, TelemetryRepr, MAX_FRAME,
+    CommandRepr, CostUnit, Header, Message, ReplyRepr, TelemetryCounters, TelemetryRepr,
+    MAX_COBS_FRAME,
 };
 use crate::math::Vec2;
 use crate::params::Params;
@@ -615,9 +616,10 @@ impl Periodic {
     }
 
     fn send(&mut self, msg: &Message<'_>, tx: &mut impl FnMut(&[u8]) -> bool) {
-        let mut buf = [0u8; MAX_FRAME];
+        // The firmware sends only frames to the host: COBS, never longer than this.
+        let mut buf = [0u8; MAX_COBS_FRAME];
         self.seq = self.seq.wrapping_add(1);
-        let sent = match msg.emit_frame(self.seq, &mut buf) {
+        let sent = match msg.emit_frame_to_host(self.seq, &mut buf) {
             Ok(n) => buf.get(..n).is_some_and(tx),
             Err(_) => false,
         };

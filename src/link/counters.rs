@@ -14,9 +14,10 @@ pub struct TelemetryCounters {
     pub rx_frames: u32,
     /// Frames refused for a CRC mismatch.
     pub rx_crc_errors: u32,
-    /// Frames dropped for exceeding `MAX_FRAME`.
+    /// Frames dropped for exceeding the longest frame of their framing.
     pub rx_oversize: u32,
-    /// Frames refused for bad COBS or being shorter than header and CRC.
+    /// Frames refused for bad COBS, a coded frame's impossible length, or being shorter than
+    /// header and CRC.
     pub rx_framing_errors: u32,
     /// Frames refused for an unknown version, type or direction.
     pub rx_unknown: u32,
@@ -59,6 +60,12 @@ pub struct TelemetryCounters {
     /// Requests dropped without an answer: the request queue and the ring of owed replies were
     /// both full (more requests between two periods than `REQUESTS_PER_PERIOD`).
     pub requests_unanswered: u32,
+    /// Frames whose wrong bytes the forward error correction repaired (version 7, row 37; they
+    /// passed their CRC after it).
+    pub rx_fec_corrected: u32,
+    /// Frames with more wrong bytes than the forward error correction repairs, refused
+    /// (version 7, row 38).
+    pub rx_fec_uncorrectable: u32,
 }
 
 /// Number of counters in [`TelemetryCounters`]'s first block (rows 2 ..= 17); the guard's, the
@@ -113,6 +120,8 @@ impl TelemetryCounters {
             frozen_nav_holds: 0,
             requests_busy: 0,
             requests_unanswered: 0,
+            rx_fec_corrected: 0,
+            rx_fec_uncorrectable: 0,
         }
     }
 
@@ -124,6 +133,8 @@ impl TelemetryCounters {
         self.rx_framing_errors = rx.framing;
         self.rx_unknown = rx.version.saturating_add(rx.unknown_type);
         self.rx_bad_payload = rx.bad_payload;
+        self.rx_fec_corrected = rx.corrected;
+        self.rx_fec_uncorrectable = rx.uncorrectable;
     }
 }
 

@@ -6,22 +6,29 @@
 //!   garbage as soon as it sees a 0x00, so at most the frame the garbage ran into is lost.
 //!   Senders should begin with a 0x00 so that even that one survives.
 //! - Empty frames (0x00 0x00) are ignored and not counted: a sender may flush with extra 0x00s.
-//! - COBS is undone byte by byte; the encoded length is checked before each byte is taken, so
-//!   a frame longer than [`MAX_FRAME`] (or one decoding to more than [`MAX_RAW`] bytes) is
-//!   reported once, as [`Outcome::OverFull`], as soon as the limit is passed, and the rest of
-//!   it up to the next 0x00 is skipped. Nothing past the buffer is ever written.
-//! - At the 0x00, a frame is checked in this order: COBS complete, at least header + CRC,
-//!   CRC, version, type (and direction, if the decoder is given one), payload. The first
+//! - The framing is the direction's: a decoder of frames to the firmware takes coded frames
+//!   ([`super::coded`]), one of frames to the host COBS frames.
+//! - The framing is undone byte by byte; the encoded length is checked before each byte is
+//!   taken, so a frame longer than [`MAX_CODED_FRAME`] or [`MAX_COBS_FRAME`] (or one decoding
+//!   to more than [`MAX_RAW`] bytes) is reported once, as [`Outcome::OverFull`], as soon as the
+//!   limit is passed, and the rest of it up to the next 0x00 is skipped. Nothing past the
+//!   buffer is ever written.
+//! - At the 0x00, a frame is checked in this order: COBS complete (to the host) or a length
+//!   the encoder produces and, unless its CRC matches as it came, at most 8 wrong bytes per
+//!   block, which are corrected (to the firmware), at least header + CRC, CRC, version, type (and direction), payload. The first
 //!   failure is returned as [`Outcome::Error`] and counted in exactly one [`RxCounters`]
-//!   field.
+//!   field; a coded frame whose bytes were corrected and that passed its CRC also counts in
+//!   [`RxCounters::corrected`].
 //!
 //! No input makes it panic, allocate or loop: each byte costs O(1), except the 0x00 that ends
-//! a frame, which costs one CRC and one parse of that frame.
+//! a frame, which costs one CRC, one parse and, for a coded frame, one Reed–Solomon check of
+//! each block (and its correction if it has errors).
 
 use super::cobs::Unstuffer;
-use super::frame::{split_frame, Direction, Header};
+use super::coded;
+use super::frame::{check_crc, split_body, split_frame, Direction, Header};
 use super::message::Message;
-use super::{Error, DELIMITER, MAX_FRAME, MAX_RAW};
+use super::{Error, CRC_LEN, DELIMITER, HEADER_LEN, MAX_COBS_FRAME, MAX_CODED_FRAME, MAX_RAW};
 
 /// What the decoder did with a byte (or a chunk, up to the first event).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -32,8 +39,8 @@ pub enum Outcome<'a> {
     /// A frame ended and was accepted. The message borrows the decoder's buffer, until the
     /// next byte is pushed.
     Frame(Header, Message<'a>),
-    /// The current frame passed [`MAX_FRAME`] and is dropped; bytes are skipped to the next
-    /// 0x00. Counted in [`RxCounters::oversize`].
+    /// The current frame passed its framing's longest ([`MAX_CODED_FRAME`] or
+    /// [`MAX_COBS_FRAME`]) and is dropped; bytes are skipped to the next 0x00. Counted in [`RxCounters::oversize`].
     OverFull,
     /// A frame ended and was refused.
     Error {
@@ -54,10 +61,16 @@ pub struct RxCounters {
     pub frames: u32,
     /// Frames refused for a CRC mismatch.
     pub crc: u32,
-    /// Frames dropped for exceeding [`MAX_FRAME`].
+    /// Frames dropped for exceeding the longest frame.
     pub oversize: u32,
-    /// Frames refused for malformed COBS or for being shorter than header + CRC.
+    /// Frames refused for malformed COBS, a coded frame's impossible length, or for being
+    /// shorter than header + CRC.
     pub framing: u32,
+    /// Coded frames with more wrong bytes than the code corrects (more than 8 in a block).
+    pub uncorrectable: u32,
+    /// Coded frames whose wrong bytes were corrected and which then passed their CRC (not a
+    /// refusal: they are counted in `frames` too if their content was accepted).
+    pub corrected: u32,
     /// Frames refused for an unsupported protocol version.
     pub version: u32,
     /// Frames refused for an unknown message type, or one flowing the other way.
@@ -73,6 +86,7 @@ impl RxCounters {
             self.crc,
             self.oversize,
             self.framing,
+            self.uncorrectable,
             self.version,
             self.unknown_type,
             self.bad_payload,
@@ -85,7 +99,10 @@ impl RxCounters {
         let c = match e {
             Error::Crc => &mut self.crc,
             Error::Oversize => &mut self.oversize,
-            Error::Cobs | Error::Truncated | Error::BufferTooSmall => &mut self.framing,
+            Error::Cobs | Error::CodedLength | Error::Truncated | Error::BufferTooSmall => {
+                &mut self.framing
+            }
+            Error::Uncorrectable => &mut self.uncorrectable,
             Error::Version(_) => &mut self.version,
             Error::UnknownType(_) | Error::WrongDirection(_) => &mut self.unknown_type,
             Error::Length | Error::Field { .. } => &mut self.bad_payload,
@@ -98,14 +115,23 @@ impl RxCounters {
 enum Step {
     Consumed,
     OverFull,
-    Ended(usize),
+    /// A frame ended: its decoded length, whether its CRC has been checked already (then the
+    /// length is the body's, header and payload), and whether the code corrected bytes in it.
+    Ended {
+        len: usize,
+        checked: bool,
+        corrected: bool,
+    },
     Refused(Error),
 }
 
-/// The stream decoder. About 700 bytes; the firmware keeps one per serial port in a static.
+/// The stream decoder. About 730 bytes; the firmware keeps one per serial port in a static.
 #[derive(Clone, Debug)]
 pub struct Decoder {
-    buf: [u8; MAX_RAW],
+    /// The frame's bytes: a COBS frame's raw bytes, decoded as they come, or a coded frame's
+    /// wire bytes, turned into its codeword (raw frame and parity) and corrected in place at
+    /// its end.
+    buf: [u8; MAX_CODED_FRAME - 1],
     /// Decoded bytes of the current frame in `buf`.
     len: usize,
     /// Encoded bytes of the current frame, delimiter excluded.
@@ -113,45 +139,40 @@ pub struct Decoder {
     unstuffer: Unstuffer,
     /// Dropping the rest of an oversize frame.
     skipping: bool,
-    accept: Option<Direction>,
+    /// The direction accepted, which is also the framing: coded to the firmware, COBS to the
+    /// host.
+    accept: Direction,
+    /// `accept` is [`Direction::ToFirmware`].
+    coded: bool,
     counters: RxCounters,
 }
 
-impl Default for Decoder {
-    fn default() -> Self {
-        Decoder::new()
-    }
-}
-
 impl Decoder {
-    /// A decoder accepting messages of either direction.
-    pub const fn new() -> Self {
+    /// A decoder of frames flowing `direction`, in that direction's framing; it refuses
+    /// messages flowing the other way ([`Error::WrongDirection`], counted as unknown): the
+    /// firmware's accepts [`Direction::ToFirmware`] (coded frames), a host's
+    /// [`Direction::ToHost`] (COBS frames).
+    pub const fn accepting(direction: Direction) -> Self {
         Decoder {
-            buf: [0; MAX_RAW],
+            buf: [0; MAX_CODED_FRAME - 1],
             len: 0,
             encoded: 0,
             unstuffer: Unstuffer::new(),
             skipping: false,
-            accept: None,
+            accept: direction,
+            coded: matches!(direction, Direction::ToFirmware),
             counters: RxCounters {
                 frames: 0,
                 crc: 0,
                 oversize: 0,
                 framing: 0,
+                uncorrectable: 0,
+                corrected: 0,
                 version: 0,
                 unknown_type: 0,
                 bad_payload: 0,
             },
         }
-    }
-
-    /// A decoder that refuses messages flowing the other way ([`Error::WrongDirection`],
-    /// counted as unknown): the firmware's accepts [`Direction::ToFirmware`], a host's
-    /// [`Direction::ToHost`].
-    pub const fn accepting(direction: Direction) -> Self {
-        let mut d = Decoder::new();
-        d.accept = Some(direction);
-        d
     }
 
     /// The counters so far.
@@ -187,11 +208,18 @@ impl Decoder {
                 self.reset_frame();
                 return Step::Consumed;
             }
-            let complete = self.unstuffer.finish();
-            let len = self.len;
+            let ended = if self.coded {
+                self.correct()
+            } else {
+                self.unstuffer.finish().map(|()| Step::Ended {
+                    len: self.len,
+                    checked: false,
+                    corrected: false,
+                })
+            };
             self.reset_frame();
-            return match complete {
-                Ok(()) => Step::Ended(len),
+            return match ended {
+                Ok(step) => step,
                 Err(e) => {
                     self.counters.count(&e);
                     Step::Refused(e)
@@ -201,19 +229,32 @@ impl Decoder {
         if self.skipping {
             return Step::Consumed;
         }
-        // The frame with its delimiter must fit in MAX_FRAME: checked before taking the byte.
-        if self.encoded >= MAX_FRAME - 1 {
+        // The frame with its delimiter must fit: checked before taking the byte.
+        if self.coded {
+            // Kept as it came (undone at the frame's end): the buffer holds the longest frame.
+            return match self.buf.get_mut(self.len) {
+                Some(slot) => {
+                    *slot = byte;
+                    self.len += 1;
+                    self.encoded += 1;
+                    Step::Consumed
+                }
+                None => self.overfull(),
+            };
+        }
+        if self.encoded >= MAX_COBS_FRAME - 1 {
             return self.overfull();
         }
         self.encoded += 1;
         match self.unstuffer.push(byte) {
-            Ok(Some(d)) => match self.buf.get_mut(self.len) {
+            // A COBS frame decodes to at most MAX_RAW bytes.
+            Ok(Some(d)) => match self.buf.get_mut(self.len).filter(|_| self.len < MAX_RAW) {
                 Some(slot) => {
                     *slot = d;
                     self.len += 1;
                     Step::Consumed
                 }
-                // Only a non-canonical encoding (runs of 0x01) can decode past MAX_RAW.
+                // Only a non-canonical COBS encoding (runs of 0x01) can decode past MAX_RAW.
                 None => self.overfull(),
             },
             Ok(None) => Step::Consumed,
@@ -222,8 +263,39 @@ impl Decoder {
         }
     }
 
-    /// Parses the `len` decoded bytes in the buffer.
-    fn deliver(&mut self, len: usize) -> Outcome<'_> {
+    /// The end of a coded frame: its length checked; its CRC checked as it came and, if it
+    /// does not match, again after its blocks are corrected in place.
+    fn correct(&mut self) -> Result<Step, Error> {
+        let wire = self.buf.get_mut(..self.len).ok_or(Error::CodedLength)?;
+        let n = coded::unsubstitute_in_place(wire)?;
+        let raw_len = coded::raw_len_of(n).ok_or(Error::CodedLength)?;
+        if raw_len < HEADER_LEN + CRC_LEN {
+            return Err(Error::Truncated);
+        }
+        let len = raw_len - CRC_LEN;
+        // Most frames arrive clean: the CRC (10 operations a byte) says so, and the code (16
+        // table look-ups a byte and more) runs only for those it refuses.
+        let raw = self.buf.get(..raw_len).ok_or(Error::CodedLength)?;
+        if check_crc(raw).is_ok() {
+            return Ok(Step::Ended {
+                len,
+                checked: true,
+                corrected: false,
+            });
+        }
+        let codeword = self.buf.get_mut(..n).ok_or(Error::CodedLength)?;
+        let fixed = coded::correct(codeword, raw_len).map_err(|_| Error::Uncorrectable)?;
+        check_crc(self.buf.get(..raw_len).ok_or(Error::CodedLength)?)?;
+        Ok(Step::Ended {
+            len,
+            checked: true,
+            corrected: fixed > 0,
+        })
+    }
+
+    /// Parses the `len` decoded bytes in the buffer: a raw frame, or (`checked`) the body of
+    /// one whose CRC has been checked; `corrected`: the code corrected some.
+    fn deliver(&mut self, len: usize, checked: bool, corrected: bool) -> Outcome<'_> {
         let Decoder {
             buf,
             counters,
@@ -231,7 +303,12 @@ impl Decoder {
             ..
         } = self;
         let raw = buf.get(..len).unwrap_or(&[]);
-        let (header, payload) = match split_frame(raw) {
+        let split = if checked {
+            split_body(raw)
+        } else {
+            split_frame(raw)
+        };
+        let (header, payload) = match split {
             Ok(hp) => hp,
             Err(error) => {
                 counters.count(&error);
@@ -241,11 +318,13 @@ impl Decoder {
                 };
             }
         };
-        let parsed = match accept {
-            Some(dir) if header.msg_type.direction() != *dir => {
-                Err(Error::WrongDirection(header.msg_type.code()))
-            }
-            _ => Message::parse(header.msg_type, payload),
+        if corrected {
+            counters.corrected = counters.corrected.saturating_add(1);
+        }
+        let parsed = if header.msg_type.direction() == *accept {
+            Message::parse(header.msg_type, payload)
+        } else {
+            Err(Error::WrongDirection(header.msg_type.code()))
         };
         match parsed {
             Ok(message) => {
@@ -267,7 +346,11 @@ impl Decoder {
         match self.step(byte) {
             Step::Consumed => Outcome::Consumed,
             Step::OverFull => Outcome::OverFull,
-            Step::Ended(len) => self.deliver(len),
+            Step::Ended {
+                len,
+                checked,
+                corrected,
+            } => self.deliver(len, checked, corrected),
             Step::Refused(error) => Outcome::Error {
                 header: None,
                 error,
@@ -283,7 +366,8 @@ impl Decoder {
     /// ```
     /// use vpf::link::{Decoder, Outcome};
     /// # fn handle(_: &vpf::link::Message<'_>) {}
-    /// let mut dec = Decoder::new();
+    /// use vpf::link::Direction;
+    /// let mut dec = Decoder::accepting(Direction::ToHost);
     /// let mut chunk: &[u8] = &[0x00, 0x05, 0x01];
     /// while !chunk.is_empty() {
     ///     let (outcome, rest) = dec.feed(chunk);
@@ -300,7 +384,11 @@ impl Decoder {
             match self.step(byte) {
                 Step::Consumed => {}
                 Step::OverFull => return (Outcome::OverFull, rest),
-                Step::Ended(len) => return (self.deliver(len), rest),
+                Step::Ended {
+                    len,
+                    checked,
+                    corrected,
+                } => return (self.deliver(len, checked, corrected), rest),
                 Step::Refused(error) => {
                     return (
                         Outcome::Error {
@@ -320,10 +408,10 @@ impl Decoder {
 mod tests {
     extern crate std;
     use super::*;
-    use crate::link::message::tests::arb_owned;
-    use crate::link::PROTOCOL_VERSION;
+    use crate::link::message::tests::{arb_owned, OwnedMessage};
     use crate::link::{
-        encode_frame, LogLevel, LogRepr, MessageType, Payload, TickRepr, MAX_PAYLOAD,
+        coded, crc::crc16, encode_frame, LogLevel, LogRepr, MessageType, Payload, Problem,
+        TickRepr, MAX_FRAME, MAX_PAYLOAD, PROTOCOL_VERSION,
     };
     use proptest::prelude::*;
     use std::vec::Vec;
@@ -349,21 +437,67 @@ mod tests {
         log
     }
 
+    fn firmware() -> Decoder {
+        Decoder::accepting(Direction::ToFirmware)
+    }
+
+    fn host() -> Decoder {
+        Decoder::accepting(Direction::ToHost)
+    }
+
     fn tick(seq: u16, t: u64) -> Vec<u8> {
         let mut out = [0u8; MAX_FRAME];
         let n = TickRepr { time_ms: t }.emit_frame(seq, &mut out).unwrap();
         out[..n].to_vec()
     }
 
-    /// The Tick frame of frame.rs's vector, byte for byte.
-    const TICK_1000_SEQ_1: [u8; 16] = [
-        0x04, 0x06, 0x08, 0x01, 0x03, 0xe8, 0x03, 0x01, 0x01, 0x01, 0x01, 0x01, 0x03, 0x6d, 0xf4,
-        0x00,
+    /// Header and payload with their CRC.
+    fn raw(bytes: &[u8]) -> Vec<u8> {
+        let mut r = bytes.to_vec();
+        r.extend(crc16(bytes).to_le_bytes());
+        r
+    }
+
+    /// A raw frame in the coded framing, delimited.
+    fn coded_wire(raw: &[u8]) -> Vec<u8> {
+        let mut out = std::vec![0u8; MAX_FRAME + 8];
+        let n = coded::encode(raw, &mut out).unwrap();
+        let mut w = out[..n].to_vec();
+        w.push(0);
+        w
+    }
+
+    /// A raw frame in COBS, delimited.
+    fn cobs_wire(raw: &[u8]) -> Vec<u8> {
+        let mut out = std::vec![0u8; MAX_FRAME];
+        let n = crate::link::cobs::encode(raw, &mut out).unwrap();
+        let mut w = out[..n].to_vec();
+        w.push(0);
+        w
+    }
+
+    /// The Tick of the frame.rs vector (docs/protocol.md §11), coded: raw
+    /// `07 08 01 00 e8 03 00 00 00 00 00 00 18 f7`, computed with the protocol's Python
+    /// reference code.
+    const TICK_1000_SEQ_1: [u8; 32] = [
+        0xff, 0xf8, 0xe9, 0x1c, 0x9a, 0x05, 0x86, 0x33, 0x24, 0xea, 0x7a, 0xd2, 0x39, 0x68, 0x60,
+        0xae, 0x0f, 0xdd, 0xc0, 0xcd, 0xc4, 0x69, 0xbc, 0x6e, 0x7a, 0xbf, 0x5d, 0x09, 0x9c, 0xec,
+        0xe1, 0x00,
     ];
+
+    /// `n` wrong bytes spread over the Tick frame (never 0x00, never the key).
+    fn damaged_tick(n: usize) -> Vec<u8> {
+        let mut t = TICK_1000_SEQ_1.to_vec();
+        for k in 0..n {
+            let i = 1 + (k * 7) % 30;
+            t[i] = if t[i] == 0x5a { 0xa5 } else { 0x5a };
+        }
+        t
+    }
 
     #[test]
     fn decodes_a_known_frame_byte_by_byte() {
-        let mut d = Decoder::new();
+        let mut d = firmware();
         let (last, body) = TICK_1000_SEQ_1.split_last().unwrap();
         for &b in body {
             assert_eq!(d.push(b), Outcome::Consumed);
@@ -375,12 +509,30 @@ mod tests {
             other => panic!("{other:?}"),
         }
         assert_eq!(d.counters().frames, 1);
+        assert_eq!(d.counters().corrected, 0);
         assert_eq!(d.counters().rejected(), 0);
+        assert_eq!(tick(1, 1000), TICK_1000_SEQ_1);
+    }
+
+    #[test]
+    fn eight_wrong_bytes_are_corrected_and_counted_more_are_refused() {
+        let mut d = firmware();
+        let log = run(&mut d, &damaged_tick(8));
+        assert_eq!(log.frames, [(MessageType::Tick, 1)]);
+        assert_eq!(d.counters().corrected, 1);
+        assert_eq!(d.counters().frames, 1);
+        let log = run(&mut d, &damaged_tick(14));
+        assert_eq!(log.errors, [(None, Error::Uncorrectable)]);
+        assert_eq!(d.counters().uncorrectable, 1);
+        assert_eq!(d.counters().rejected(), 1);
+        // A clean frame after it is not counted as corrected.
+        run(&mut d, &TICK_1000_SEQ_1);
+        assert_eq!((d.counters().frames, d.counters().corrected), (2, 1));
     }
 
     #[test]
     fn feed_stops_at_each_event_and_returns_the_rest() {
-        let mut d = Decoder::new();
+        let mut d = firmware();
         let mut stream = std::vec![0x00];
         stream.extend(tick(1, 10));
         stream.extend(tick(2, 20));
@@ -401,42 +553,41 @@ mod tests {
 
     #[test]
     fn every_rejection_is_counted_in_its_own_counter() {
-        let mut d = Decoder::new();
+        let mut d = firmware();
         let mut s = std::vec![0x00, 0x00]; // empty frames: ignored, not counted
-                                           // CRC: flip a payload byte of a good frame (0xe8 → 0xe9; still no zero).
-        let mut bad_crc = TICK_1000_SEQ_1.to_vec();
-        bad_crc[5] = 0xe9;
-        s.extend(&bad_crc);
-        // Framing: a block running past the end, and a frame too short for header + CRC.
-        s.extend([0x05, 0x01, 0x00]);
-        s.extend([0x03, 0x01, 0x02, 0x00]);
+                                           // CRC: a good code around a wrong CRC.
+        let mut bad_crc = raw(&[PROTOCOL_VERSION, 0x08, 1, 0, 0xe8, 3, 0, 0, 0, 0, 0, 0]);
+        bad_crc[5] ^= 0x10;
+        s.extend(coded_wire(&bad_crc));
+        // Framing: a length no encoder makes, and a frame too short for header + CRC.
+        s.extend([0x05, 0x01, 0x02, 0x00]);
+        s.extend(coded_wire(&[1, 2, 3]));
+        // More wrong bytes than the code corrects.
+        s.extend(damaged_tick(14));
         // Version and type, with good CRCs.
         for (v, t) in [(1u8, 0x08u8), (PROTOCOL_VERSION, 0x7e)] {
-            let mut raw = std::vec![v, t, 0, 0];
-            let crc = crate::link::crc::crc16(&raw);
-            raw.extend(crc.to_le_bytes());
-            let mut enc = std::vec![0u8; 16];
-            let n = crate::link::cobs::encode(&raw, &mut enc).unwrap();
-            s.extend(&enc[..n]);
-            s.push(0);
+            s.extend(coded_wire(&raw(&[v, t, 0, 0])));
         }
-        // Payload: a Tick with 7 bytes, and a Log with an unknown level.
-        let mut out = [0u8; 64];
+        // A message of the other direction, coded.
+        s.extend(coded_wire(&raw(&[PROTOCOL_VERSION, 0x84, 0, 0, 1, b'x'])));
+        // Payload: a Tick with 7 bytes, and a Mission with an unknown flag.
+        let mut out = [0u8; MAX_FRAME];
         let n = encode_frame(MessageType::Tick, 9, |b| Ok(b.len().min(7)), &mut out).unwrap();
         s.extend(&out[..n]);
         let n = encode_frame(
-            MessageType::Log,
+            MessageType::Mission,
             10,
             |b| {
-                b[0] = 9;
-                Ok(1)
+                b[..9].fill(0);
+                b[8] = 0x80;
+                Ok(9)
             },
             &mut out,
         )
         .unwrap();
         s.extend(&out[..n]);
-        // Oversize: MAX_FRAME non-zero bytes.
-        s.extend(std::iter::repeat_n(0x55u8, MAX_FRAME));
+        // Oversize: MAX_CODED_FRAME non-zero bytes.
+        s.extend(std::iter::repeat_n(0x55u8, MAX_CODED_FRAME));
         s.push(0);
         // And a good frame at the end, which must survive all of the above.
         s.extend(tick(11, 5));
@@ -449,23 +600,25 @@ mod tests {
             errs,
             [
                 Error::Crc,
-                Error::Cobs,
+                Error::CodedLength,
                 Error::Truncated,
+                Error::Uncorrectable,
                 Error::Version(1),
                 Error::UnknownType(0x7e),
+                Error::WrongDirection(0x84),
                 Error::Length,
-                Error::field(0, crate::link::Problem::UnknownCode),
+                Error::field(2, Problem::UnknownCode),
             ]
         );
         // Payload errors carry the header, so the runtime can reply.
         assert_eq!(
-            log.errors[5].0,
+            log.errors[7].0,
             Some(Header {
                 msg_type: MessageType::Tick,
                 seq: 9
             })
         );
-        assert!(log.errors[..5].iter().all(|e| e.0.is_none()));
+        assert!(log.errors[..6].iter().all(|e| e.0.is_none()));
         assert_eq!(
             *d.counters(),
             RxCounters {
@@ -473,27 +626,55 @@ mod tests {
                 crc: 1,
                 oversize: 1,
                 framing: 2,
+                uncorrectable: 1,
+                corrected: 0,
                 version: 1,
-                unknown_type: 1,
+                unknown_type: 2,
                 bad_payload: 2,
             }
         );
-        assert_eq!(d.counters().rejected(), 8);
+        assert_eq!(d.counters().rejected(), 10);
+    }
+
+    #[test]
+    fn a_host_decoder_counts_cobs_refusals() {
+        let mut d = host();
+        let mut s = Vec::new();
+        let mut bad_crc = raw(&[PROTOCOL_VERSION, 0x84, 0, 0, 1, b'x']);
+        bad_crc[5] ^= 0x01;
+        s.extend(cobs_wire(&bad_crc));
+        s.extend([0x05, 0x01, 0x00]); // a block running past the end
+        s.extend([0x03, 0x01, 0x02, 0x00]); // too short
+        s.extend(cobs_wire(&raw(&[PROTOCOL_VERSION, 0x08, 0, 0]))); // a Tick: wrong way
+        let log = run(&mut d, &s);
+        let errs: Vec<Error> = log.errors.iter().map(|e| e.1).collect();
+        assert_eq!(
+            errs,
+            [
+                Error::Crc,
+                Error::Cobs,
+                Error::Truncated,
+                Error::WrongDirection(0x08)
+            ]
+        );
+        // A coded frame means nothing here: a COBS error or a CRC error, never a frame.
+        let log = run(&mut d, &TICK_1000_SEQ_1);
+        assert!(log.frames.is_empty() && log.errors.len() == 1);
     }
 
     #[test]
     fn oversize_is_reported_as_soon_as_the_limit_is_passed() {
-        let mut d = Decoder::new();
-        // Full 254-byte blocks (code 0xFF, no implied zeros): 666 encoded bytes decode to
-        // 663 = MAX_RAW, so only the encoded bound can trip.
+        // COBS (to the host): full 254-byte blocks (code 0xFF, no implied zeros): 666 encoded
+        // bytes decode to 663 = MAX_RAW, so only the encoded bound can trip.
+        let mut d = host();
         let stream: Vec<u8> = std::iter::repeat_n(
             core::iter::once(0xFF).chain(std::iter::repeat_n(0x55, 254)),
             3,
         )
         .flatten()
         .collect();
-        // MAX_FRAME − 1 encoded bytes plus the delimiter is the largest frame: not oversize.
-        for &b in &stream[..MAX_FRAME - 1] {
+        // MAX_COBS_FRAME − 1 encoded bytes plus the delimiter is the largest frame.
+        for &b in &stream[..MAX_COBS_FRAME - 1] {
             assert_eq!(d.push(b), Outcome::Consumed);
         }
         // One more byte and it is dropped, at once.
@@ -504,11 +685,9 @@ mod tests {
         assert_eq!(d.push(0x00), Outcome::Consumed);
         assert_eq!(d.counters().oversize, 1);
         assert_eq!(d.counters().rejected(), 1);
-        let log = run(&mut d, &tick(3, 3));
-        assert_eq!(log.frames, [(MessageType::Tick, 3)]);
         // The same 666 bytes then a delimiter: a complete-length frame, refused for COBS
         // (its last block is short), not for size.
-        let log = run(&mut d, &stream[..MAX_FRAME - 1]);
+        let log = run(&mut d, &stream[..MAX_COBS_FRAME - 1]);
         assert_eq!(log, Log::default());
         assert_eq!(
             d.push(0),
@@ -517,13 +696,22 @@ mod tests {
                 error: Error::Cobs
             }
         );
+        // Coded (to the firmware): MAX_CODED_FRAME − 1 bytes fit, one more does not.
+        let mut d = firmware();
+        for _ in 0..MAX_CODED_FRAME - 1 {
+            assert_eq!(d.push(0x55), Outcome::Consumed);
+        }
+        assert_eq!(d.push(0x55), Outcome::OverFull);
+        assert_eq!(d.push(0x00), Outcome::Consumed);
+        let log = run(&mut d, &tick(3, 3));
+        assert_eq!(log.frames, [(MessageType::Tick, 3)]);
     }
 
     #[test]
     fn non_canonical_encodings_cannot_overrun_the_buffer() {
         // 0x01 codes decode to one zero each: the decoded length hits MAX_RAW before the
-        // encoded one hits MAX_FRAME.
-        let mut d = Decoder::new();
+        // encoded one hits MAX_COBS_FRAME.
+        let mut d = host();
         let log = run(&mut d, &[0x01; MAX_RAW + 2]);
         assert_eq!(log.overfull, 1);
         assert_eq!(d.push(0), Outcome::Consumed);
@@ -538,7 +726,7 @@ mod tests {
         };
         let mut out = [0u8; MAX_FRAME];
         let n = log_msg.emit_frame(4, &mut out).unwrap();
-        let mut d = Decoder::new();
+        let mut d = host();
         let (o, _) = d.feed(&out[..n]);
         assert_eq!(
             o,
@@ -550,7 +738,7 @@ mod tests {
                 Message::Log(log_msg)
             )
         );
-        // A full-size payload of 0xff bytes (the most COBS overhead) fits in MAX_FRAME.
+        // A full-size payload to the firmware fits in MAX_CODED_FRAME.
         let n = encode_frame(
             MessageType::Scanline,
             5,
@@ -561,40 +749,18 @@ mod tests {
             &mut out,
         )
         .unwrap();
-        assert!(n <= MAX_FRAME);
+        assert_eq!(n, MAX_CODED_FRAME);
+        let mut d = firmware();
         let log = run(&mut d, &out[..n]);
         assert_eq!(log.overfull, 0);
         // Not a valid scanline (bin count 0xffff), but not oversize either.
         assert_eq!(log.errors.len(), 1);
-        assert_eq!(
-            log.errors[0].1,
-            Error::field(4, crate::link::Problem::OutOfRange)
-        );
-    }
-
-    #[test]
-    fn direction_filter() {
-        let mut fw = Decoder::accepting(Direction::ToFirmware);
-        let mut out = [0u8; MAX_FRAME];
-        let n = LogRepr {
-            level: LogLevel::Info,
-            text: "hi",
-        }
-        .emit_frame(1, &mut out)
-        .unwrap();
-        let log = run(&mut fw, &out[..n]);
-        assert_eq!(log.errors[0].1, Error::WrongDirection(0x84));
-        assert_eq!(fw.counters().unknown_type, 1);
-        let log = run(&mut fw, &tick(2, 2));
-        assert_eq!(log.frames.len(), 1);
-        let mut host = Decoder::accepting(Direction::ToHost);
-        let log = run(&mut host, &tick(2, 2));
-        assert_eq!(log.errors[0].1, Error::WrongDirection(0x08));
+        assert_eq!(log.errors[0].1, Error::field(4, Problem::OutOfRange));
     }
 
     #[test]
     fn discard_frame_skips_to_the_next_delimiter() {
-        let mut d = Decoder::new();
+        let mut d = firmware();
         let t = tick(1, 1);
         run(&mut d, &t[..5]);
         d.discard_frame();
@@ -604,19 +770,28 @@ mod tests {
         assert_eq!(log.frames.len(), 1);
     }
 
+    /// The frames of the messages that flow `direction`, and their (type, seq).
     fn encode_all(
-        msgs: &[crate::link::message::tests::OwnedMessage],
+        msgs: &[OwnedMessage],
+        direction: Direction,
     ) -> (Vec<Vec<u8>>, Vec<(MessageType, u16)>) {
         let mut frames = Vec::new();
         let mut ids = Vec::new();
         for (i, o) in msgs.iter().enumerate() {
             let m = o.message();
+            if m.message_type().direction() != direction {
+                continue;
+            }
             let mut out = [0u8; MAX_FRAME];
             let n = m.emit_frame(i as u16, &mut out).unwrap();
             frames.push(out[..n].to_vec());
             ids.push((m.message_type(), i as u16));
         }
         (frames, ids)
+    }
+
+    fn either_way() -> impl Strategy<Value = Direction> {
+        prop_oneof![Just(Direction::ToFirmware), Just(Direction::ToHost)]
     }
 
     proptest! {
@@ -626,16 +801,17 @@ mod tests {
         #[test]
         fn never_panics_and_counts_every_event(
             bytes in proptest::collection::vec(
-                prop_oneof![any::<u8>(), Just(0u8), 1u8..=8], 0..3000)
+                prop_oneof![any::<u8>(), Just(0u8), 1u8..=8], 0..3000),
+            direction in either_way(),
         ) {
-            let mut d = Decoder::new();
+            let mut d = Decoder::accepting(direction);
             let log = run(&mut d, &bytes);
             let c = *d.counters();
             prop_assert_eq!(c.frames as usize, log.frames.len());
             prop_assert_eq!(c.oversize as usize, log.overfull);
             prop_assert_eq!(c.rejected() as usize, log.errors.len() + log.overfull);
             // Through feed, in random chunks, the same events.
-            let mut d2 = Decoder::new();
+            let mut d2 = Decoder::accepting(direction);
             let mut rest: &[u8] = &bytes;
             let mut n_events = 0usize;
             while !rest.is_empty() {
@@ -654,10 +830,12 @@ mod tests {
         fn resyncs_after_garbage_losing_at_most_one_frame(
             garbage in proptest::collection::vec(any::<u8>(), 0..1500),
             tail in proptest::collection::vec(any::<u8>(), 0..200),
-            msgs in proptest::collection::vec(arb_owned(), 1..4),
+            msgs in proptest::collection::vec(arb_owned(), 1..6),
             flush in any::<bool>(),
+            direction in either_way(),
         ) {
-            let (frames, ids) = encode_all(&msgs);
+            let (frames, ids) = encode_all(&msgs, direction);
+            prop_assume!(!ids.is_empty());
             let mut stream = garbage.clone();
             if flush {
                 stream.push(0);
@@ -666,7 +844,7 @@ mod tests {
                 stream.extend(f);
             }
             stream.extend(&tail);
-            let mut d = Decoder::new();
+            let mut d = Decoder::accepting(direction);
             let log = run(&mut d, &stream);
             let got = log.frames;
             // Garbage can only yield a frame by passing the CRC by chance, so accepted frames
@@ -686,16 +864,16 @@ mod tests {
         /// decoder, in chunks of random size.
         #[test]
         fn stream_round_trip(
-            msgs in proptest::collection::vec(arb_owned(), 1..6),
+            msgs in proptest::collection::vec(arb_owned(), 1..8),
             chunk in 1usize..64,
+            direction in either_way(),
         ) {
+            let (frames, ids) = encode_all(&msgs, direction);
             let mut stream = std::vec![0u8];
-            let mut out = [0u8; MAX_FRAME];
-            for (i, o) in msgs.iter().enumerate() {
-                let n = o.message().emit_frame(i as u16, &mut out).unwrap();
-                stream.extend(&out[..n]);
+            for f in &frames {
+                stream.extend(f);
             }
-            let mut d = Decoder::new();
+            let mut d = Decoder::accepting(direction);
             let mut got = 0usize;
             for mut c in stream.chunks(chunk) {
                 while !c.is_empty() {
@@ -703,8 +881,9 @@ mod tests {
                     match o {
                         Outcome::Consumed => {}
                         Outcome::Frame(h, m) => {
-                            prop_assert_eq!(h.seq as usize, got);
-                            prop_assert_eq!(m, msgs[got].message());
+                            let i = usize::from(ids[got].1);
+                            prop_assert_eq!(h.seq as usize, i);
+                            prop_assert_eq!(m, msgs[i].message());
                             got += 1;
                         }
                         other => prop_assert!(false, "unexpected {:?}", other),
@@ -712,7 +891,48 @@ mod tests {
                     c = rest;
                 }
             }
-            prop_assert_eq!(got, msgs.len());
+            prop_assert_eq!(got, ids.len());
+            prop_assert_eq!(d.counters().rejected(), 0);
+        }
+
+        /// (4) Frames to the firmware with up to eight wrong bytes each (none made 0x00, the
+        /// delimiter's business, nor a chunk's key) all arrive, and each one damaged outside
+        /// its parity is counted as corrected (damaged parity alone passes the CRC as it is).
+        #[test]
+        fn damaged_coded_frames_arrive(
+            msgs in proptest::collection::vec(arb_owned(), 1..6),
+            hits in proptest::collection::vec(
+                proptest::collection::vec((any::<usize>(), 1u8..=255), 0..=8), 6),
+        ) {
+            let (frames, ids) = encode_all(&msgs, Direction::ToFirmware);
+            let mut stream = std::vec![0u8];
+            let mut damaged = 0;
+            for (orig, h) in frames.iter().zip(hits.iter()) {
+                let f = orig;
+                let mut f = f.clone();
+                let body = f.len() - 1;
+                for &(pos, e) in h {
+                    let i = pos % body;
+                    if !i.is_multiple_of(coded::CHUNK + 1) && f[i] ^ e != 0 {
+                        f[i] ^= e;
+                    }
+                }
+                // Counted as corrected: frames whose raw part (not only parity) was hit.
+                let unsub = |w: &[u8]| -> Vec<u8> {
+                    let mut cw = w[..w.len() - 1].to_vec();
+                    let n = coded::unsubstitute_in_place(&mut cw).unwrap();
+                    cw.truncate(n);
+                    cw
+                };
+                let (a, b) = (unsub(orig), unsub(&f));
+                let raw_len = coded::raw_len_of(a.len()).unwrap();
+                damaged += usize::from(a[..raw_len] != b[..raw_len]);
+                stream.extend(f);
+            }
+            let mut d = firmware();
+            let log = run(&mut d, &stream);
+            prop_assert_eq!(log.frames, ids);
+            prop_assert_eq!(d.counters().corrected as usize, damaged);
             prop_assert_eq!(d.counters().rejected(), 0);
         }
     }

@@ -1,15 +1,24 @@
-//! Frames: header, payload and CRC, COBS-encoded and ended by 0x00.
+//! Frames: header, payload and CRC, coded (to the firmware) or COBS-encoded (to the host), and
+//! ended by 0x00.
 //!
 //! ```text
 //! decoded ("raw") frame:  version u8 | type u8 | seq u16 LE | payload … | CRC-16 LE
 //!                         └──────────── CRC covers these ──────────────┘
-//! on the wire:            COBS(raw frame) | 0x00
+//! on the wire, to the firmware:  zero-substitute(whiten(raw frame | RS parity)) | 0x00
+//! on the wire, to the host:      COBS(raw frame) | 0x00
 //! ```
+//!
+//! Frames to the firmware carry Reed–Solomon parity ([`super::coded`]): they are the long and
+//! frequent ones (sonar scanlines, 330 bytes, 22 a second), and a receiver that corrects costs
+//! the firmware's background a few tens of thousands of instructions a frame. Frames to the
+//! host stay COBS: the firmware sends them from its periodic task, whose budget does not pay
+//! for encoding parity, and a lost `Command` or `Telemetry` is replaced by the next period's.
 //!
 //! The sequence number counts frames per sender and direction, wrapping at 2¹⁶; receivers use
 //! it to see gaps and to match replies to requests, never to reject a frame.
 
 use super::cobs;
+use super::coded;
 use super::crc::Crc16;
 use super::{Error, CRC_LEN, DELIMITER, HEADER_LEN, MAX_PAYLOAD, PROTOCOL_VERSION};
 
@@ -163,18 +172,19 @@ impl Header {
 }
 
 /// The size of a transmit buffer that [`encode_frame`] can always fill with a payload of
-/// `payload_len` bytes (the encoded frame itself may be a byte or two shorter). For any message,
-/// [`MAX_FRAME`](super::MAX_FRAME) is enough.
+/// `payload_len` bytes, either way (the encoded frame itself may be a few bytes shorter). For
+/// any message, [`MAX_FRAME`](super::MAX_FRAME) is enough.
 pub const fn frame_buffer_len(payload_len: usize) -> usize {
-    cobs::max_encoded_len(HEADER_LEN + payload_len + CRC_LEN) + 2
+    let n = coded::codeword_len(HEADER_LEN + payload_len + CRC_LEN);
+    coded::wire_len(n) + 2
 }
 
-/// Writes a complete frame — COBS(header ‖ payload ‖ CRC) ‖ 0x00 — into `out` and returns its
-/// length. `payload` writes the payload into the buffer it is given and returns the number of
-/// bytes written (e.g. `|buf| repr.emit(buf)`).
+/// Writes a complete frame — coded (a message type to the firmware) or COBS (to the host) —
+/// into `out` and returns its length, delimiter included. `payload` writes the payload into the
+/// buffer it is given and returns the number of bytes written (e.g. `|buf| repr.emit(buf)`).
 ///
-/// Works within `out` alone: the raw frame is assembled near the end and COBS-encoded towards
-/// the front, so no scratch buffer is needed. `out` should be at least
+/// Works within `out` alone: the raw frame is assembled a few bytes in and encoded towards the
+/// front, so no scratch buffer is needed. `out` should be at least
 /// [`frame_buffer_len`]`(payload_len)` bytes ([`MAX_FRAME`](super::MAX_FRAME) fits every
 /// message); a payload longer than [`MAX_PAYLOAD`] is refused with [`Error::Oversize`], since
 /// no receiver would accept it.
@@ -187,7 +197,43 @@ pub fn encode_frame<F>(
 where
     F: FnOnce(&mut [u8]) -> Result<usize, Error>,
 {
-    // COBS output can run ahead of its input by 1 + ⌊n/254⌋ bytes: leave that gap in front.
+    match msg_type.direction() {
+        Direction::ToFirmware => encode_with(msg_type, seq, payload, out, coded::encode_in_place),
+        Direction::ToHost => encode_with(msg_type, seq, payload, out, cobs::encode_in_place),
+    }
+}
+
+/// [`encode_frame`] for the firmware, which sends only frames to the host: COBS alone, so the
+/// image carries no encoder of coded frames; a message type to the firmware is refused with
+/// [`Error::WrongDirection`].
+pub fn encode_frame_to_host<F>(
+    msg_type: MessageType,
+    seq: u16,
+    payload: F,
+    out: &mut [u8],
+) -> Result<usize, Error>
+where
+    F: FnOnce(&mut [u8]) -> Result<usize, Error>,
+{
+    if msg_type.direction() != Direction::ToHost {
+        return Err(Error::WrongDirection(msg_type.code()));
+    }
+    encode_with(msg_type, seq, payload, out, cobs::encode_in_place)
+}
+
+/// The frame's raw bytes assembled at `out[start ..]` and encoded to the front by `encode`
+/// (`(buf, start, raw_len) -> wire length`), then the delimiter.
+fn encode_with<F>(
+    msg_type: MessageType,
+    seq: u16,
+    payload: F,
+    out: &mut [u8],
+    encode: fn(&mut [u8], usize, usize) -> Result<usize, Error>,
+) -> Result<usize, Error>
+where
+    F: FnOnce(&mut [u8]) -> Result<usize, Error>,
+{
+    // Either encoding can run ahead of its input by 1 + ⌊n/254⌋ bytes: leave that gap in front.
     let start = 1 + out.len() / 254;
     let region = out.get_mut(start..).ok_or(Error::BufferTooSmall)?;
     let (head, rest) = region
@@ -207,7 +253,7 @@ where
         .and_then(|r| r.first_chunk_mut::<CRC_LEN>())
         .ok_or(Error::BufferTooSmall)?;
     *crc_dst = crc.to_le_bytes();
-    let encoded = cobs::encode_in_place(out, start, covered + CRC_LEN)?;
+    let encoded = encode(out, start, covered + CRC_LEN)?;
     *out.get_mut(encoded).ok_or(Error::BufferTooSmall)? = DELIMITER;
     Ok(encoded + 1)
 }
@@ -218,18 +264,24 @@ where
 /// version or type: length ([`Error::Truncated`]), CRC ([`Error::Crc`]), version
 /// ([`Error::Version`]), type ([`Error::UnknownType`]).
 pub fn split_frame(raw: &[u8]) -> Result<(Header, &[u8]), Error> {
-    let body_len = raw
-        .len()
-        .checked_sub(CRC_LEN)
-        .filter(|&n| n >= HEADER_LEN)
-        .ok_or(Error::Truncated)?;
-    let (body, crc) = raw.split_at_checked(body_len).ok_or(Error::Truncated)?;
-    let Some(&crc) = crc.first_chunk::<CRC_LEN>() else {
+    split_body(check_crc(raw)?)
+}
+
+/// Checks a decoded frame's length and CRC; its body (header ‖ payload).
+pub(crate) fn check_crc(raw: &[u8]) -> Result<&[u8], Error> {
+    if raw.len() < HEADER_LEN + CRC_LEN {
         return Err(Error::Truncated);
-    };
-    if Crc16::new().update(body).value() != u16::from_le_bytes(crc) {
+    }
+    let (body, crc) = raw.split_last_chunk::<CRC_LEN>().ok_or(Error::Truncated)?;
+    if Crc16::new().update(body).value() != u16::from_le_bytes(*crc) {
         return Err(Error::Crc);
     }
+    Ok(body)
+}
+
+/// Splits a frame's body whose CRC has been checked into its header (version and type
+/// checked) and payload.
+pub(crate) fn split_body(body: &[u8]) -> Result<(Header, &[u8]), Error> {
     let header = Header::parse(body)?;
     let payload = body.get(HEADER_LEN..).ok_or(Error::Truncated)?;
     Ok((header, payload))
@@ -263,31 +315,31 @@ mod tests {
         };
         let mut b = [0u8; 4];
         assert_eq!(h.emit(&mut b), Ok(4));
-        assert_eq!(b, [0x06, 0x08, 0x01, 0x02]);
+        assert_eq!(b, [0x07, 0x08, 0x01, 0x02]);
         assert_eq!(Header::parse(&b), Ok(h));
-        assert_eq!(Header::parse(&[1, 8, 0, 0]), Err(Error::Version(1)));
+        assert_eq!(Header::parse(&[6, 8, 0, 0]), Err(Error::Version(6)));
         assert_eq!(
-            Header::parse(&[6, 0x42, 0, 0]),
+            Header::parse(&[7, 0x42, 0, 0]),
             Err(Error::UnknownType(0x42))
         );
         assert_eq!(Header::parse(&[3, 8, 0]), Err(Error::Truncated));
     }
 
-    /// A Tick frame worked by hand (the example in docs/protocol.md):
-    /// raw = 06 08 01 00 | e8 03 00 00 00 00 00 00 | CRC. The CRC was computed independently
-    /// with Python's `binascii.crc_hqx(raw, 0xFFFF)` = 0xF46D, sent LE as 6d f4.
-    /// COBS: "06 08 01" + zero → 04 06 08 01; "e8 03" + zero → 03 e8 03; five single zeros
-    /// → 01 ×5; the tail "6d f4" → 03 6d f4; then the delimiter 00.
+    /// A Tick frame (the example in docs/protocol.md): raw = 07 08 01 00 | e8 03 00 00 00 00
+    /// 00 00 | CRC, the CRC computed independently with Python's `binascii.crc_hqx(raw,
+    /// 0xFFFF)` = 0xF718, sent LE as 18 f7. A Tick flows to the firmware: the wire bytes are its
+    /// coded frame, from the protocol's Python reference code (docs/protocol.md §12).
     #[test]
     fn tick_frame_vector() {
         let raw = [
-            0x06, 0x08, 0x01, 0x00, 0xe8, 0x03, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x6d, 0xf4,
+            0x07, 0x08, 0x01, 0x00, 0xe8, 0x03, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x18, 0xf7,
         ];
         let wire = [
-            0x04, 0x06, 0x08, 0x01, 0x03, 0xe8, 0x03, 0x01, 0x01, 0x01, 0x01, 0x01, 0x03, 0x6d,
-            0xf4, 0x00,
+            0xff, 0xf8, 0xe9, 0x1c, 0x9a, 0x05, 0x86, 0x33, 0x24, 0xea, 0x7a, 0xd2, 0x39, 0x68,
+            0x60, 0xae, 0x0f, 0xdd, 0xc0, 0xcd, 0xc4, 0x69, 0xbc, 0x6e, 0x7a, 0xbf, 0x5d, 0x09,
+            0x9c, 0xec, 0xe1, 0x00,
         ];
-        let mut out = [0u8; 32];
+        let mut out = [0u8; 40];
         let n = encode_frame(
             MessageType::Tick,
             1,
@@ -311,11 +363,34 @@ mod tests {
         assert_eq!(payload, &raw[4..12]);
     }
 
+    /// A Reply, firmware to host, so COBS (docs/protocol.md §11): raw 07 83 01 00 | 04 07 00 00
+    /// 00 00 | 93 49 (CRC 0x4993 from `binascii.crc_hqx`); COBS "07 83 01" + zero → 04 07 83 01;
+    /// "04 07" + zero → 03 04 07; three single zeros → 01 01 01; the tail → 03 93 49.
+    #[test]
+    fn reply_frame_vector() {
+        let wire = [
+            0x04, 0x07, 0x83, 0x01, 0x03, 0x04, 0x07, 0x01, 0x01, 0x01, 0x03, 0x93, 0x49, 0x00,
+        ];
+        let mut out = [0u8; 32];
+        let n = encode_frame(
+            MessageType::Reply,
+            1,
+            |b| {
+                let d = b.first_chunk_mut::<6>().ok_or(Error::BufferTooSmall)?;
+                *d = [0x04, 0x07, 0, 0, 0, 0];
+                Ok(6)
+            },
+            &mut out,
+        )
+        .unwrap();
+        assert_eq!(&out[..n], &wire);
+    }
+
     #[test]
     fn split_frame_checks_in_order() {
-        assert_eq!(split_frame(&[6, 8, 0, 0, 0]), Err(Error::Truncated));
+        assert_eq!(split_frame(&[7, 8, 0, 0, 0]), Err(Error::Truncated));
         let mut raw = [
-            0x06, 0x08, 0x01, 0x00, 0xe8, 0x03, 0, 0, 0, 0, 0, 0, 0x6d, 0xf4,
+            0x07, 0x08, 0x01, 0x00, 0xe8, 0x03, 0, 0, 0, 0, 0, 0, 0x18, 0xf7,
         ];
         raw[5] ^= 0x10;
         assert_eq!(split_frame(&raw), Err(Error::Crc));
@@ -324,7 +399,7 @@ mod tests {
         let crc = crate::link::crc::crc16(&v1);
         v1.extend(crc.to_le_bytes());
         assert_eq!(split_frame(&v1), Err(Error::Version(1)));
-        let mut t: Vec<u8> = std::vec![6, 0x55, 0, 0];
+        let mut t: Vec<u8> = std::vec![7, 0x55, 0, 0];
         let crc = crate::link::crc::crc16(&t);
         t.extend(crc.to_le_bytes());
         assert_eq!(split_frame(&t), Err(Error::UnknownType(0x55)));
@@ -342,6 +417,28 @@ mod tests {
         let mut out = [0u8; 20];
         let r = encode_frame(MessageType::Log, 0, |b| Ok(b.len() + 5), &mut out);
         assert_eq!(r, Err(Error::BufferTooSmall));
+    }
+
+    #[test]
+    fn the_firmwares_encoder_sends_to_the_host_only() {
+        let mut a = [0u8; MAX_FRAME];
+        let mut b = [0u8; MAX_FRAME];
+        let payload = |buf: &mut [u8]| {
+            buf.get_mut(..3)
+                .ok_or(Error::BufferTooSmall)?
+                .copy_from_slice(&[1, 0, 2]);
+            Ok(3)
+        };
+        let n = encode_frame(MessageType::Log, 5, payload, &mut a).unwrap();
+        assert_eq!(
+            encode_frame_to_host(MessageType::Log, 5, payload, &mut b),
+            Ok(n)
+        );
+        assert_eq!(a[..n], b[..n]);
+        assert_eq!(
+            encode_frame_to_host(MessageType::Tick, 5, payload, &mut b),
+            Err(Error::WrongDirection(0x08))
+        );
     }
 
     #[test]

@@ -1,15 +1,16 @@
 //! Every message in one enum, and whole frames in and out.
 //!
 //! ```
-//! use vpf::link::{Message, Payload, TickRepr, MAX_FRAME};
+//! use vpf::link::{Direction, Message, Payload, TickRepr, MAX_FRAME};
 //!
 //! // Firmware or host: emit a complete frame into a fixed buffer.
 //! let mut tx = [0u8; MAX_FRAME];
 //! let n = TickRepr { time_ms: 1000 }.emit_frame(1, &mut tx).unwrap();
 //! assert_eq!(tx[n - 1], 0x00);
 //!
-//! // Whole encoded frame in hand (e.g. read up to a 0x00): decode it in place.
-//! let (header, msg) = Message::decode_frame(&mut tx[..n]).unwrap();
+//! // Whole encoded frame in hand (e.g. read up to a 0x00): decode it in place. A Tick flows
+//! // to the firmware, so its frame is coded (its framing is its direction's).
+//! let (header, msg) = Message::decode_frame(&mut tx[..n], Direction::ToFirmware).unwrap();
 //! assert_eq!(header.seq, 1);
 //! assert_eq!(msg, Message::Tick(TickRepr { time_ms: 1000 }));
 //! ```
@@ -18,10 +19,13 @@
 
 use super::belief::{BeliefRepr, BELIEF_MAX_LEN};
 use super::cobs;
+use super::coded;
 use super::control::{
     ChartClearRepr, ChartObstacleRepr, TickRepr, MISSION_LEN_WITH_FORMATION, PARAMS_LEN,
 };
-use super::frame::{encode_frame, split_frame, Header, MessageType};
+use super::frame::{
+    encode_frame, encode_frame_to_host, split_frame, Direction, Header, MessageType,
+};
 use super::mission::{MissionCountRepr, MissionItemRepr, SurveyRepr};
 use super::payload::Payload;
 use super::report::{CommandRepr, LogRepr, ReplyRepr, TelemetryRepr, COMMAND_LEN, TELEMETRY_LEN};
@@ -143,6 +147,12 @@ impl<'a> Message<'a> {
         encode_frame(self.message_type(), seq, |buf| self.emit(buf), out)
     }
 
+    /// [`Message::emit_frame`] for a sender of frames to the host only (the firmware): COBS
+    /// alone, [`Error::WrongDirection`] for a message to the firmware.
+    pub fn emit_frame_to_host(&self, seq: u16, out: &mut [u8]) -> Result<usize, Error> {
+        encode_frame_to_host(self.message_type(), seq, |buf| self.emit(buf), out)
+    }
+
     /// Parses a decoded frame: header ‖ payload ‖ CRC, COBS already removed (what the
     /// [`Decoder`](super::Decoder) buffers). See [`split_frame`] for the order of checks.
     pub fn parse_frame(raw: &'a [u8]) -> Result<(Header, Message<'a>), Error> {
@@ -150,10 +160,14 @@ impl<'a> Message<'a> {
         Ok((header, Message::parse(header.msg_type, payload)?))
     }
 
-    /// Decodes one encoded frame in place and parses it: `encoded` is the COBS bytes, with or
-    /// without the final 0x00. The buffer is overwritten by the decoded frame, which the
-    /// message borrows.
-    pub fn decode_frame(encoded: &'a mut [u8]) -> Result<(Header, Message<'a>), Error> {
+    /// Decodes one encoded frame in place and parses it: `encoded` is the frame's bytes, with
+    /// or without the final 0x00, flowing `direction` (coded to the firmware, COBS to the host;
+    /// a coded frame's errors are corrected). The buffer is overwritten by the decoded frame,
+    /// which the message borrows.
+    pub fn decode_frame(
+        encoded: &'a mut [u8],
+        direction: Direction,
+    ) -> Result<(Header, Message<'a>), Error> {
         if encoded.len() > MAX_FRAME {
             return Err(Error::Oversize);
         }
@@ -162,7 +176,10 @@ impl<'a> Message<'a> {
             _ => encoded.len(),
         };
         let body = encoded.get_mut(..body_len).ok_or(Error::Cobs)?;
-        let n = cobs::decode_in_place(body)?;
+        let n = match direction {
+            Direction::ToFirmware => coded::decode_in_place(body)?.0,
+            Direction::ToHost => cobs::decode_in_place(body)?,
+        };
         if n > MAX_RAW {
             return Err(Error::Oversize);
         }
@@ -245,24 +262,24 @@ pub(crate) mod tests {
     use std::vec::Vec;
 
     /// The worked example of docs/protocol.md: Mission {goal (10, −5), no formation}, seq 7.
-    /// CRC from Python's binascii.crc_hqx(raw, 0xFFFF) = 0x6980 (independent of this crate).
+    /// CRC from Python's binascii.crc_hqx(raw, 0xFFFF) = 0x2CE3, and the coded frame from the
+    /// protocol's Python reference code (its Reed–Solomon parity checked against `reedsolo`),
+    /// both independent of this crate.
     #[test]
     fn worked_example_mission_frame() {
         let raw = [
-            0x06, 0x04, 0x07, 0x00, // version 6, Mission, seq 7
+            0x07, 0x04, 0x07, 0x00, // version 7, Mission, seq 7
             0x00, 0x00, 0x20, 0x41, // goal_x 10.0
             0x00, 0x00, 0xa0, 0xc0, // goal_y -5.0
             0x00, // flags: no formation
-            0x80, 0x69, // CRC-16 LE
+            0xe3, 0x2c, // CRC-16 LE
         ];
         let wire = [
-            0x04, 0x06, 0x04, 0x07, // "06 04 07" then a zero
-            0x01, // another zero
-            0x01, // another zero
-            0x03, 0x20, 0x41, // "20 41" then a zero
-            0x01, // zero
-            0x03, 0xa0, 0xc0, // "a0 c0" then a zero (the flags)
-            0x03, 0x80, 0x69, // "80 69", end of frame
+            0xff, // the chunk's key: 0xff does not occur in the whitened codeword
+            // raw frame and parity 12 0d 1e 7f 94 49 bb 8a 44 47 d6 19 c3 5e 7e 77, XOR PN9
+            0xf8, 0xe5, 0x1a, 0x9a, 0xed, 0x85, 0x13, 0x65, 0xea, 0x7a, 0x72, 0xf9, 0x70, 0x74,
+            0x7b, 0x18, 0x59, 0x63, 0x52, 0x4c, 0x24, 0xb6, 0x30, 0xcb, 0x20, 0x8f, 0xde, 0x61,
+            0xe1, 0x4a, 0xbd, //
             0x00, // delimiter
         ];
         let m = Message::Mission(Mission {
@@ -276,9 +293,30 @@ pub(crate) mod tests {
         assert_eq!((h.msg_type, h.seq), (MessageType::Mission, 7));
         assert_eq!(back, m);
         let mut copy = wire;
-        assert_eq!(Message::decode_frame(&mut copy).unwrap().1, m);
+        assert_eq!(
+            Message::decode_frame(&mut copy, Direction::ToFirmware)
+                .unwrap()
+                .1,
+            m
+        );
         let mut no_delim = wire;
-        assert_eq!(Message::decode_frame(&mut no_delim[..16]).unwrap().1, m);
+        assert_eq!(
+            Message::decode_frame(&mut no_delim[..32], Direction::ToFirmware)
+                .unwrap()
+                .1,
+            m
+        );
+        // Eight wrong bytes, corrected.
+        let mut damaged = wire;
+        for i in [1, 4, 9, 13, 17, 22, 26, 31] {
+            damaged[i] ^= 0x21;
+        }
+        assert_eq!(
+            Message::decode_frame(&mut damaged, Direction::ToFirmware)
+                .unwrap()
+                .1,
+            m
+        );
     }
 
     #[test]
@@ -295,11 +333,26 @@ pub(crate) mod tests {
             &mut out,
         )
         .unwrap();
-        assert_eq!(Message::decode_frame(&mut out[..n]), Err(Error::Length));
+        let to_fw = Direction::ToFirmware;
+        assert_eq!(
+            Message::decode_frame(&mut out[..n], to_fw),
+            Err(Error::Length)
+        );
         let mut garbage = [0x05, 1, 2, 0];
-        assert_eq!(Message::decode_frame(&mut garbage), Err(Error::Cobs));
+        assert_eq!(
+            Message::decode_frame(&mut garbage, Direction::ToHost),
+            Err(Error::Cobs)
+        );
+        let mut garbage = [0x05, 1, 2, 0];
+        assert_eq!(
+            Message::decode_frame(&mut garbage, to_fw),
+            Err(Error::CodedLength)
+        );
         let mut long = [1u8; MAX_FRAME + 1];
-        assert_eq!(Message::decode_frame(&mut long), Err(Error::Oversize));
+        assert_eq!(
+            Message::decode_frame(&mut long, to_fw),
+            Err(Error::Oversize)
+        );
         assert_eq!(Message::parse_frame(&[1, 2, 3]), Err(Error::Truncated));
     }
 
@@ -324,7 +377,7 @@ pub(crate) mod tests {
         let mut out = [0u8; MAX_FRAME];
         let n = m.emit_frame(0xffff, &mut out).unwrap();
         assert!(n <= MAX_FRAME);
-        let (_, back) = Message::decode_frame(&mut out[..n]).unwrap();
+        let (_, back) = Message::decode_frame(&mut out[..n], Direction::ToFirmware).unwrap();
         assert_eq!(back, m);
         // A full scanline fits too.
         let bins = [0u8; MAX_BINS];
@@ -336,16 +389,23 @@ pub(crate) mod tests {
             bins: &bins,
         });
         let n = s.emit_frame(1, &mut out).unwrap();
-        assert_eq!(Message::decode_frame(&mut out[..n]).unwrap().1, s);
+        assert_eq!(
+            Message::decode_frame(&mut out[..n], Direction::ToFirmware)
+                .unwrap()
+                .1,
+            s
+        );
     }
 
     #[test]
     fn messages_are_small_enough_for_an_interrupt_stack() {
         // A Message is passed by value on the firmware's stack: keep it near a Shape's size. The
-        // largest is a Telemetry (136 B with its mission and Ping360 blocks); the stack's
-        // high-water mark is measured by the self-test (`tests/qemu.rs`).
-        assert!(core::mem::size_of::<Message<'_>>() <= 136);
-        assert!(core::mem::size_of::<crate::link::Decoder>() <= MAX_RAW + 64);
+        // largest is a Telemetry (144 B with its mission and Ping360 blocks and the two
+        // forward-error-correction counters); the stack's high-water mark is measured by the
+        // self-test (`tests/qemu.rs`).
+        assert!(core::mem::size_of::<Message<'_>>() <= 144);
+        // The decoder holds a coded frame's codeword: the raw frame and 48 parity bytes.
+        assert!(core::mem::size_of::<crate::link::Decoder>() <= crate::link::MAX_CODEWORD + 72);
     }
 
     #[test]
@@ -466,7 +526,8 @@ pub(crate) mod tests {
             prop_assert!(m.payload_len() <= MAX_PAYLOAD);
             prop_assert_eq!(out[n - 1], 0);
             prop_assert!(!out[..n - 1].contains(&0));
-            let (h, back) = Message::decode_frame(&mut out[..n]).unwrap();
+            let dir = m.message_type().direction();
+            let (h, back) = Message::decode_frame(&mut out[..n], dir).unwrap();
             prop_assert_eq!(h.seq, seq);
             prop_assert_eq!(h.msg_type, m.message_type());
             prop_assert_eq!(back, m);
@@ -479,7 +540,10 @@ pub(crate) mod tests {
             let m = o.message();
             let mut out = [0u8; MAX_FRAME];
             let n = m.emit_frame(1, &mut out).unwrap();
-            let raw_len = cobs::decode_in_place(&mut out[..n - 1]).unwrap();
+            let raw_len = match m.message_type().direction() {
+                Direction::ToFirmware => coded::decode_in_place(&mut out[..n - 1]).unwrap().0,
+                Direction::ToHost => cobs::decode_in_place(&mut out[..n - 1]).unwrap(),
+            };
             let raw = &mut out[..raw_len];
             let i = pos.index(raw_len);
             raw[i] ^= flip;

@@ -1,5 +1,5 @@
 //! Waypoint missions over the link, host → firmware: `MissionCount`, `MissionItem` and `Survey`
-//! (protocol version 6). Each is a request, answered with a [`ReplyRepr`](super::ReplyRepr).
+//! (since protocol version 6). Each is a request, answered with a [`ReplyRepr`](super::ReplyRepr).
 //!
 //! A waypoint mission goes up in small messages, as MAVLink's mission protocol does
 //! (`MISSION_COUNT`, then one `MISSION_ITEM_INT` per waypoint): a queued request is a slot of
@@ -583,8 +583,9 @@ pub(crate) mod tests {
         assert_eq!(with(33, 10.0), Err(Error::field(9, Problem::Invalid)));
     }
 
-    /// Test vectors of docs/protocol.md §11. CRCs from Python's
-    /// `binascii.crc_hqx(raw, 0xFFFF)`, computed apart from this crate.
+    /// Test vectors of docs/protocol.md §11: coded frames computed apart from this crate, with
+    /// the protocol's Python reference code (§12: `binascii.crc_hqx` for the CRC, its
+    /// Reed–Solomon parity checked against `reedsolo`).
     #[test]
     fn worked_examples_of_the_mission_upload() {
         let cases: [(Message<'_>, u16, &str); 3] = [
@@ -595,7 +596,7 @@ pub(crate) mod tests {
                     formation: None,
                 }),
                 8,
-                "04 06 09 08 02 02 01 01 01 01 01 03 e9 49 00",
+                "fe f8 e8 15 9a ef 85 33 24 ea 7a d2 99 e1 f7 db e4 ff cb f6 65 df 3c 26 a5 c8 0e d5 65 eb 00",
             ),
             (
                 Message::MissionItem(MissionItemRepr {
@@ -606,7 +607,7 @@ pub(crate) mod tests {
                         .unwrap(),
                 }),
                 9,
-                "04 06 0a 09 02 01 01 03 20 42 01 03 20 41 01 01 02 40 01 01 04 3f 49 75 00",
+                "ff f8 eb 14 9a ec 85 33 04 a8 7a d2 19 31 97 57 0a 14 7d 2d d8 52 b2 1a 14 5d f2 29 50 75 cc e9 59 b5 20 2c 39 a1 4f b8 00",
             ),
             (
                 Message::Survey(SurveyRepr {
@@ -623,7 +624,7 @@ pub(crate) mod tests {
                     formation: None,
                 }),
                 10,
-                "04 06 0b 0a 01 01 01 01 01 01 01 01 01 01 03 20 42 01 03 a0 41 01 01 01 01 01 03 20 41 01 01 02 40 01 01 01 01 01 01 01 01 01 03 ed ff 00",
+                "ff f8 ea 17 9a ed 85 33 24 ea 7a d2 39 70 97 77 48 54 7d 8d 99 6d 0d ba 8f 67 59 e7 e3 bf 34 ca 58 30 53 93 df 92 ec a7 15 8a dc ca bf 02 47 b8 cb 5b eb c0 b1 56 5e 56 87 3e c1 19 bd 00",
             ),
         ];
         for (m, seq, wire) in cases {
@@ -632,7 +633,8 @@ pub(crate) mod tests {
             let hex: Vec<std::string::String> =
                 out[..n].iter().map(|b| std::format!("{b:02x}")).collect();
             assert_eq!(hex.join(" "), wire, "{m:?}");
-            assert_eq!(Message::decode_frame(&mut out[..n]).unwrap().1, m);
+            let back = Message::decode_frame(&mut out[..n], crate::link::Direction::ToFirmware);
+            assert_eq!(back.unwrap().1, m);
         }
     }
 

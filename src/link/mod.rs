@@ -11,8 +11,12 @@
 //!
 //! **Layers** (one file each):
 //! - [`crc`]: CRC-16/CCITT-FALSE (poly 0x1021, init 0xFFFF, check 0x29B1), table-free;
-//! - [`cobs`]: Consistent Overhead Byte Stuffing, so 0x00 can delimit frames;
-//! - [`frame`]: header (version, type, sequence), payload and CRC, COBS-encoded, 0x00-ended;
+//! - [`cobs`]: Consistent Overhead Byte Stuffing, so 0x00 can delimit frames (to the host);
+//! - [`reed_solomon`]: RS(255, 239) over GF(2⁸), the forward error correction;
+//! - [`coded`]: the coded frame to the firmware: Reed–Solomon parity, whitening, zero
+//!   substitution, so that up to 8 wrong bytes per 239 are corrected on the way;
+//! - [`frame`]: header (version, type, sequence), payload and CRC, coded (to the firmware) or
+//!   COBS-encoded (to the host), 0x00-ended;
 //! - [`decoder`]: the stream decoder: bytes in, one [`Outcome`] per byte or chunk, resync on
 //!   the next 0x00, a counter for every rejection;
 //! - [`layout`]: [`Field`](layout::Field), a named row of a message's layout; each message file's
@@ -25,9 +29,11 @@
 //! - [`payload`]: the [`Payload`] trait every message implements (parse, emit, length);
 //! - [`message`]: [`Message`], every message in one enum, and whole-frame parse/emit.
 //!
-//! **Frame** on the wire: `COBS(header ‖ payload ‖ CRC) ‖ 0x00`, where the header is
+//! **Frame** on the wire: to the firmware `zero-substitute(whiten(header ‖ payload ‖ CRC ‖
+//! parity)) ‖ 0x00`, to the host `COBS(header ‖ payload ‖ CRC) ‖ 0x00`, where the header is
 //! `version u8, type u8, sequence u16`, the CRC covers header and payload, and every number is
-//! little-endian (floats are IEEE-754 `f32`).
+//! little-endian (floats are IEEE-754 `f32`). The message type's direction says which framing a
+//! frame has.
 //!
 //! **Validation.** Every parse checks lengths exactly, refuses NaN and infinities, unknown enum
 //! codes and out-of-range values with a typed [`Error`] naming the field (its row in the layout
@@ -42,6 +48,7 @@
 pub mod belief;
 pub mod cobs;
 mod codec;
+pub mod coded;
 pub mod control;
 pub mod counters;
 pub mod crc;
@@ -55,6 +62,7 @@ pub mod mission;
 pub mod modes;
 pub mod payload;
 pub mod ping;
+pub mod reed_solomon;
 pub mod report;
 pub mod sensors;
 pub mod shape;
@@ -65,7 +73,10 @@ pub use control::{
 };
 pub use counters::{Ping360Counters, TelemetryCounters};
 pub use decoder::{Decoder, Outcome, RxCounters};
-pub use frame::{encode_frame, frame_buffer_len, split_frame, Direction, Header, MessageType};
+pub use frame::{
+    encode_frame, encode_frame_to_host, frame_buffer_len, split_frame, Direction, Header,
+    MessageType,
+};
 pub use message::Message;
 pub use mission::{MissionCountRepr, MissionItemRepr, SurveyRepr};
 pub use payload::Payload;
@@ -80,7 +91,7 @@ use crate::params::Params;
 
 /// The protocol version this module speaks, first byte of every header. Frames with another
 /// version are refused (and counted): a new version is a new, incompatible layout.
-pub const PROTOCOL_VERSION: u8 = 6;
+pub const PROTOCOL_VERSION: u8 = 7;
 /// The frame delimiter. COBS guarantees it appears nowhere inside a frame.
 pub const DELIMITER: u8 = 0x00;
 /// Length of the frame header: version u8, message type u8, sequence u16.
@@ -99,10 +110,21 @@ pub const MAX_LOG_LEN: usize = 96;
 pub const MAX_PAYLOAD: usize = message::max_payload_len();
 /// Longest decoded frame: header, payload and CRC. The decoder's buffer has this size.
 pub const MAX_RAW: usize = HEADER_LEN + MAX_PAYLOAD + CRC_LEN;
-/// Longest frame on the wire, COBS overhead and the 0x00 delimiter included. A frame whose
-/// bytes exceed it is dropped as soon as they do (counted as oversize), and the decoder skips
-/// to the next 0x00. It is also a transmit buffer size that fits every message.
-pub const MAX_FRAME: usize = cobs::max_encoded_len(MAX_RAW) + 1;
+/// Longest codeword of a frame to the firmware: the raw frame and its Reed–Solomon parity.
+pub const MAX_CODEWORD: usize = coded::codeword_len(MAX_RAW);
+/// Longest frame to the host on the wire, COBS overhead and the 0x00 delimiter included. A
+/// frame whose bytes exceed it is dropped as soon as they do (counted as oversize), and the
+/// decoder skips to the next 0x00.
+pub const MAX_COBS_FRAME: usize = cobs::max_encoded_len(MAX_RAW) + 1;
+/// Longest frame to the firmware on the wire: the codeword, its keys and the delimiter. Longer
+/// ones are dropped as [`MAX_COBS_FRAME`] says.
+pub const MAX_CODED_FRAME: usize = coded::wire_len(MAX_CODEWORD) + 1;
+/// Longest frame on the wire either way: a transmit buffer size that fits every message.
+pub const MAX_FRAME: usize = if MAX_CODED_FRAME > MAX_COBS_FRAME {
+    MAX_CODED_FRAME
+} else {
+    MAX_COBS_FRAME
+};
 
 /// What is wrong with a field.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -166,6 +188,11 @@ pub enum Error {
     /// The COBS encoding is malformed (a block runs past the end of the frame, or a 0x00 is
     /// inside it).
     Cobs,
+    /// A coded frame (to the firmware) of a length the encoder cannot produce.
+    CodedLength,
+    /// A coded frame with more wrong bytes than the Reed–Solomon code corrects (more than 8 in
+    /// a block).
+    Uncorrectable,
     /// The CRC does not match the frame's contents.
     Crc,
     /// The frame exceeds [`MAX_FRAME`] on the wire or [`MAX_RAW`] decoded, or a payload
@@ -202,6 +229,8 @@ impl core::fmt::Display for Error {
             Error::BufferTooSmall => f.write_str("output buffer too small"),
             Error::Truncated => f.write_str("frame shorter than header and CRC"),
             Error::Cobs => f.write_str("malformed COBS encoding"),
+            Error::CodedLength => f.write_str("coded frame of an impossible length"),
+            Error::Uncorrectable => f.write_str("more errors than the code corrects"),
             Error::Crc => f.write_str("CRC mismatch"),
             Error::Oversize => f.write_str("frame or payload too long"),
             Error::Version(v) => write!(f, "unsupported protocol version {v}"),
@@ -228,7 +257,11 @@ mod tests {
         assert_eq!(MAX_PAYLOAD, 9 + 8 * 81);
         assert_eq!(MAX_RAW, 663);
         // 663 raw bytes: one code byte, two more for the 254-byte blocks, one delimiter.
-        assert_eq!(MAX_FRAME, 667);
+        assert_eq!(MAX_COBS_FRAME, 667);
+        // 663 raw bytes: three blocks of 16 parity bytes, three chunk keys, one delimiter.
+        assert_eq!(MAX_CODEWORD, 711);
+        assert_eq!(MAX_CODED_FRAME, 715);
+        assert_eq!(MAX_FRAME, 715);
     }
 
     #[test]

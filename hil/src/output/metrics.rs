@@ -192,8 +192,8 @@ pub struct StepCost {
 }
 
 /// The counters that indicate trouble, by name, with their values (all of them; zero ones
-/// included).
-fn trouble(c: &TelemetryCounters) -> [(&'static str, u32); 16] {
+/// included). Frames the forward error correction repaired are there too: a noisy link.
+fn trouble(c: &TelemetryCounters) -> [(&'static str, u32); 18] {
     [
         ("rx_crc_errors", c.rx_crc_errors),
         ("rx_oversize", c.rx_oversize),
@@ -211,6 +211,8 @@ fn trouble(c: &TelemetryCounters) -> [(&'static str, u32); 16] {
         ("frozen_nav_holds", c.frozen_nav_holds),
         ("requests_busy", c.requests_busy),
         ("requests_unanswered", c.requests_unanswered),
+        ("rx_fec_corrected", c.rx_fec_corrected),
+        ("rx_fec_uncorrectable", c.rx_fec_uncorrectable),
     ]
 }
 
@@ -717,7 +719,7 @@ mod tests {
         let json = serde_json::to_value(&m).unwrap();
         assert_eq!(json["counters"]["rx_frames"], 7);
         assert_eq!(json["counters"]["deadline_overruns"], 2);
-        assert_eq!(json["counters"].as_object().unwrap().len(), 20);
+        assert_eq!(json["counters"].as_object().unwrap().len(), 22);
         assert!(m.to_string().contains("deadline_overruns 2"));
     }
 

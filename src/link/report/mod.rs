@@ -108,6 +108,8 @@ pub mod field {
         pub const PING360_MALFORMED: Field = Field::new(35, 120, "u32", "ping360_malformed");
         pub const PING360_BYTES_SKIPPED: Field =
             Field::new(36, 124, "u32", "ping360_bytes_skipped");
+        pub const RX_FEC_CORRECTED: Field = Field::new(37, 128, "u32", "rx_fec_corrected");
+        pub const RX_FEC_UNCORRECTABLE: Field = Field::new(38, 132, "u32", "rx_fec_uncorrectable");
         /// Every row, in order.
         pub const ALL: &[Field] = &[
             TIME_MS,
@@ -147,6 +149,8 @@ pub mod field {
             PING360_CHECKSUM_ERRORS,
             PING360_MALFORMED,
             PING360_BYTES_SKIPPED,
+            RX_FEC_CORRECTED,
+            RX_FEC_UNCORRECTABLE,
         ];
     }
 
@@ -304,6 +308,8 @@ pub(crate) mod tests {
                 frozen_nav_holds: 18,
                 requests_busy: 19,
                 requests_unanswered: 20,
+                rx_fec_corrected: 37,
+                rx_fec_uncorrectable: 38,
                 ..TelemetryCounters::from_array(core::array::from_fn(|i| i as u32 + 1))
             },
             mission: MissionProgress {
@@ -331,8 +337,10 @@ pub(crate) mod tests {
         for i in 21..=26u8 {
             want.extend([i, 0, 0, 0]);
         }
+        // Rows 37, 38: frames corrected 37, uncorrectable 38.
+        want.extend([37, 0, 0, 0, 38, 0, 0, 0]);
         assert_eq!(want.len(), TELEMETRY_LEN);
-        assert_eq!(TELEMETRY_LEN, 128);
+        assert_eq!(TELEMETRY_LEN, 136);
         let mut out = [0u8; TELEMETRY_LEN];
         assert_eq!(t.emit(&mut out), Ok(TELEMETRY_LEN));
         assert_eq!(&out[..], &want[..]);
@@ -383,10 +391,13 @@ pub(crate) mod tests {
             version: 4,
             unknown_type: 5,
             bad_payload: 6,
+            uncorrectable: 7,
+            corrected: 8,
         };
         let mut c = TelemetryCounters::default();
         c.set_rx(&rx);
         assert_eq!(&c.to_array()[..6], &[10, 2, 1, 3, 9, 6]);
+        assert_eq!((c.rx_fec_corrected, c.rx_fec_uncorrectable), (8, 7));
     }
 
     #[test]
@@ -633,7 +644,7 @@ pub(crate) mod tests {
             r in arb_reply(),
             (level, text) in arb_log(),
         ) {
-            let mut out = [0u8; 128];
+            let mut out = [0u8; 136];
             let n = c.emit(&mut out).unwrap();
             prop_assert_eq!(n, c.payload_len());
             prop_assert_eq!(CommandRepr::parse(&out[..n]), Ok(c));

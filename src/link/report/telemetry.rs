@@ -39,9 +39,10 @@ impl CostUnit {
     }
 }
 
-/// `Telemetry` payload length: 98 bytes, the mission progress block (rows 28 ..= 30, 6 bytes)
-/// and the Ping360 block (rows 31 ..= 36).
-pub const TELEMETRY_LEN: usize = 104 + 4 * Ping360Counters::COUNT;
+/// `Telemetry` payload length: 98 bytes, the mission progress block (rows 28 ..= 30, 6 bytes),
+/// the Ping360 block (rows 31 ..= 36) and the forward error correction's two counters (rows
+/// 37, 38).
+pub const TELEMETRY_LEN: usize = 104 + 4 * Ping360Counters::COUNT + 8;
 /// The row of the first mission-progress field.
 pub const TELEMETRY_MISSION_ROW: u8 = telemetry::MISSION_WAYPOINT.row;
 /// Row of the first Ping360 counter in `Telemetry`.
@@ -49,7 +50,7 @@ pub const TELEMETRY_PING360_ROW: u8 = telemetry::PING360_DATA.row;
 
 /// `Telemetry` (0x82): health and counters, sent periodically.
 ///
-/// Layout (128 bytes): 0 `time_ms` u64 · 1 `step_cost` u32 · 2..=17 the sixteen u32 counters
+/// Layout (136 bytes): 0 `time_ms` u64 · 1 `step_cost` u32 · 2..=17 the sixteen u32 counters
 /// of [`TelemetryCounters`] in declaration order · 18 `mode` u8 · 19 `hold_reason` u8 ·
 /// 20 `obstacles` u8 (table fill, ≤ `MAX_OBSTACLES`) · 21 `agents` u8 (≤ `MAX_AGENTS`) ·
 /// 22 `ghost_depth` u8 (≤ `MAX_GHOSTS`) · 23 `cost_unit` u8 ([`CostUnit`]) ·
@@ -58,7 +59,8 @@ pub const TELEMETRY_PING360_ROW: u8 = telemetry::PING360_DATA.row;
 /// 28 `mission_waypoint` u8 (the waypoint flown to, 0-based; = count once complete) ·
 /// 29 `mission_waypoints` u8 (count, ≤ `MAX_WAYPOINTS`; 0: no mission) · 30 `mission_to_go_m`
 /// f32 (m along the remaining waypoints, finite, ≥ 0) · 31..=36 the Ping360 port's six u32
-/// counters of [`Ping360Counters`] in declaration order (all 0 where no Ping360 is driven).
+/// counters of [`Ping360Counters`] in declaration order (all 0 where no Ping360 is driven) ·
+/// 37 `rx_fec_corrected` u32 · 38 `rx_fec_uncorrectable` u32 (version 7).
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct TelemetryRepr {
@@ -137,6 +139,8 @@ impl<'a> Payload<'a> for TelemetryRepr {
         for c in ping360.iter_mut() {
             *c = r.u32()?;
         }
+        let rx_fec_corrected = r.u32()?;
+        let rx_fec_uncorrectable = r.u32()?;
         r.finish()?;
         let t = TelemetryRepr {
             time_ms,
@@ -152,6 +156,8 @@ impl<'a> Payload<'a> for TelemetryRepr {
                 frozen_nav_holds,
                 requests_busy,
                 requests_unanswered,
+                rx_fec_corrected,
+                rx_fec_uncorrectable,
                 ..TelemetryCounters::from_array(counters)
             },
             mission,
@@ -194,6 +200,9 @@ impl<'a> Payload<'a> for TelemetryRepr {
         w.u8(self.mission.count)?;
         w.f32(self.mission.to_go_m)?;
         self.ping360.to_array().iter().try_for_each(|&c| w.u32(c))?;
+        // Version 7: the forward error correction's counters (rows 37, 38).
+        w.u32(self.counters.rx_fec_corrected)?;
+        w.u32(self.counters.rx_fec_uncorrectable)?;
         Ok(w.len())
     }
 }
