@@ -22,8 +22,9 @@ use crate::firmware::{self, Firmware, Reply, Target};
 use crate::output::{self, FrameLog, RunOutput, Summary};
 use crate::ping360::sim::{self as ping360_sim, SimPing360};
 use crate::scenario::{RunMode, Scenario, Sensing, SonarInterface, Window};
+use crate::sim::contacts::{self, OtherVehicle};
 use crate::sim::nav::{NavConfig, NavSensor};
-use crate::sim::sonar::{self as sonar_sim, OtherVehicle, Sonar, SonarConfig};
+use crate::sim::sonar::{Sonar, SonarConfig};
 use crate::sim::vehicle::{new_model, ModelKind, VehicleModel};
 use crate::types::{SetPoints, VehicleRecord, VehicleState, WaypointMark, P2};
 use crate::upload::{self, Uploader};
@@ -631,7 +632,7 @@ fn send_contacts(
     others: &[OtherVehicle],
     range: f64,
 ) -> Result<(), RunError> {
-    let found = sonar_sim::contacts(t, truth, obstacles, others, range);
+    let found = contacts::contacts(t, truth, obstacles, others, range);
     for chunk in found.chunks(vpf::link::MAX_CONTACTS) {
         let m = Message::Contacts(ContactsRepr {
             time_ms: t_ms,

@@ -18,7 +18,7 @@
 
 use std::collections::BTreeSet;
 
-use crate::sim::sonar::OtherVehicle;
+use crate::sim::contacts::OtherVehicle;
 use crate::types::{SimObstacle, SimShape, P2};
 
 /// Shortest time between two kept snapshots, s.

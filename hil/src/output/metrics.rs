@@ -34,7 +34,7 @@ use serde::Serialize;
 
 use super::belief::Perception;
 use super::RunOutput;
-use crate::sim::sonar::OtherVehicle;
+use crate::sim::contacts::OtherVehicle;
 use crate::sim::vehicle::wrap_pi;
 use crate::types::{waypoint_arrivals, Sample, VehicleRecord, WaypointMark, P2};
 use vpf::link::TelemetryCounters;

@@ -13,7 +13,8 @@
 //! - [`nav`]: the navigation sensor — the firmware's `NavState` from the truth, with seeded
 //!   Gaussian noise at a fixed rate, sample-and-hold;
 //! - [`sonar`]: a Tritech Micron-like mechanically scanned sonar producing the firmware's
-//!   scanlines ([`Ping`]), and pre-extracted [`contacts`] for scenarios that bypass it;
+//!   scanlines ([`Ping`]);
+//! - [`contacts`]: pre-extracted contacts for scenarios that bypass the sonar;
 //! - [`rng`]: the seeded generator behind every noise source.
 //!
 //! Everything is deterministic: the same configuration, seeds and call sequence give the same
@@ -41,6 +42,7 @@
 //! }
 //! ```
 
+pub mod contacts;
 pub mod current;
 pub mod flatfish;
 pub mod geometry;
@@ -49,13 +51,12 @@ pub mod rng;
 pub mod sonar;
 pub mod vehicle;
 
+pub use contacts::{contacts, OtherVehicle};
 pub use current::Current;
 pub use flatfish::{FlatFish, FLATFISH, FLATFISH_GAINS};
 pub use nav::{NavConfig, NavSensor};
 pub use rng::Rng;
-pub use sonar::{
-    contacts, relative_bearing, OtherVehicle, Ping, Sector, Sonar, SonarConfig, SonarConfigError,
-};
+pub use sonar::{relative_bearing, Ping, Sector, Sonar, SonarConfig, SonarConfigError};
 pub use vehicle::{
     new_model, wrap_pi, Autopilot, AutopilotGains, HullParams, Kinematic, ModelKind, PidGains,
     TwinThruster, UnknownModel, VehicleModel, VideoRay, VideoRayParams, VIDEORAY_PRO3,
