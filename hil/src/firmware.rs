@@ -8,7 +8,7 @@
 
 use std::fs::File;
 use std::io::{BufRead, BufReader, Read, Write};
-use std::os::fd::{AsFd, AsRawFd, FromRawFd};
+use std::os::fd::{AsFd, FromRawFd};
 
 use nix::errno::Errno;
 use nix::poll::{poll, PollFd, PollFlags, PollTimeout};
@@ -387,9 +387,8 @@ impl Firmware {
     /// With `sonar`, the board's UART1 (its Ping360 port) is a pty
     /// ([`Firmware::take_sonar_port`]).
     pub fn start_qemu_ethernet(elf: &Path, lockstep: bool, sonar: bool) -> std::io::Result<Self> {
-        use std::os::unix::process::CommandExt;
+        use command_fds::{CommandFdExt, FdMapping};
         let (ours, theirs) = std::os::unix::net::UnixDatagram::pair()?;
-        let fd = theirs.as_raw_fd();
         let serials: &[&str] = if sonar {
             &["-serial", "null", "-serial", "pty"]
         } else {
@@ -397,23 +396,15 @@ impl Firmware {
         };
         let mut cmd = Self::qemu_command(elf, lockstep, serials);
         cmd.args(["-nic", "socket,fd=3,model=lan9118"]);
-        // SAFETY: between fork and exec only async-signal-safe calls (dup2, fcntl) on
-        // descriptors this process owns; the child's descriptor 3 is the socket's other end.
-        unsafe {
-            cmd.pre_exec(move || {
-                let rc = if fd == 3 {
-                    libc::fcntl(3, libc::F_SETFD, 0)
-                } else {
-                    libc::dup2(fd, 3)
-                };
-                if rc < 0 {
-                    return Err(std::io::Error::last_os_error());
-                }
-                Ok(())
-            });
-        }
+        // The child's descriptor 3 is the socket's other end (dup2'd between fork and exec).
+        cmd.fd_mappings(vec![FdMapping {
+            parent_fd: theirs.into(),
+            child_fd: 3,
+        }])
+        .map_err(std::io::Error::other)?;
         let mut child = cmd.spawn()?;
-        drop(theirs);
+        // The command holds the other end; this side keeps only its own.
+        drop(cmd);
         let stdout = child
             .stdout
             .take()
@@ -633,7 +624,7 @@ impl Firmware {
             Ok(n) => n,
             Err(e) if e.kind() == std::io::ErrorKind::WouldBlock => 0,
             // A pty whose other side has not opened yet reads EIO: nothing yet.
-            Err(e) if e.raw_os_error() == Some(libc::EIO) => {
+            Err(e) if e.raw_os_error() == Some(Errno::EIO as i32) => {
                 std::thread::sleep(Duration::from_millis(10));
                 0
             }

@@ -217,7 +217,7 @@ impl SimPing360 {
         let n = match self.port.read(&mut buf) {
             Ok(n) => n,
             Err(e) if e.kind() == std::io::ErrorKind::WouldBlock => 0,
-            Err(e) if e.raw_os_error() == Some(libc::EIO) => 0,
+            Err(e) if e.raw_os_error() == Some(nix::errno::Errno::EIO as i32) => 0,
             Err(e) => return Err(e),
         };
         let mut rest = &buf[..n];
