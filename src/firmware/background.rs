@@ -274,25 +274,13 @@ impl BackgroundTask {
     /// there were any.
     #[cfg_attr(feature = "selftest", allow(dead_code))]
     pub fn poll_mavlink(&mut self, exchange: &mut impl Exchange) -> bool {
-        let now = exchange.now_ms();
-        let BackgroundTask {
-            background,
-            router,
-            queues,
-            mav,
-            ..
-        } = self;
-        let mut outlet = Outlet {
-            queues,
-            exchange: &mut *exchange,
+        let mut buf = [0u8; 64];
+        let n = self.mav.take(&mut buf);
+        let Some(bytes) = buf.get(..n).filter(|b| !b.is_empty()) else {
+            return false;
         };
-        mav.poll(
-            now,
-            background,
-            &mut outlet,
-            Some(&EVIDENCE),
-            Some(&mut **router),
-        )
+        self.feed_mavlink(bytes, exchange);
+        true
     }
 
     /// Feeds up to 64 bytes from the sonar to its driver; `true` if there were any.
@@ -344,8 +332,7 @@ impl BackgroundTask {
         self.mav.counters().0
     }
 
-    /// Feeds MAVLink bytes as if received on its UART (for the self-test).
-    #[cfg(feature = "selftest")]
+    /// Feeds MAVLink bytes, as received on its UART (the self-test feeds its own).
     pub fn feed_mavlink(&mut self, bytes: &[u8], exchange: &mut impl Exchange) {
         let now = exchange.now_ms();
         let BackgroundTask {

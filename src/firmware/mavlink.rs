@@ -67,16 +67,8 @@ impl MavPort {
         self.inbox.ready()
     }
 
-    /// Feeds up to 64 received bytes at firmware time `now_ms`; `true` if there were any.
-    pub fn poll(
-        &mut self,
-        now_ms: u64,
-        background: &mut Background,
-        sink: &mut impl BackgroundOutputs,
-        map: Option<&EvidenceMap>,
-        router: Option<&mut Router>,
-    ) -> bool {
-        let mut buf = [0u8; 64];
+    /// Takes up to `buf.len()` received bytes.
+    pub fn take(&mut self, buf: &mut [u8]) -> usize {
         let mut n = 0;
         for slot in buf.iter_mut() {
             match self.inbox.dequeue() {
@@ -87,11 +79,7 @@ impl MavPort {
                 None => break,
             }
         }
-        let Some(bytes) = buf.get(..n).filter(|b| !b.is_empty()) else {
-            return false;
-        };
-        self.feed(bytes, now_ms, background, sink, map, router);
-        true
+        n
     }
 
     /// Bytes from the line into the inbound half.
