@@ -217,7 +217,7 @@ pub(crate) fn encode_in_place(
     let blocks = blocks(raw_len);
     for index in 0..blocks {
         let data = block_data(raw_len, blocks, index);
-        let p = reed_solomon::parity(
+        let p = reed_solomon::parity_by_table(
             (0..data).map(|i| region.get(index + i * blocks).copied().unwrap_or(0)),
         );
         let at = raw_len + PARITY * index;
