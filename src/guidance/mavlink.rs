@@ -86,8 +86,10 @@ pub enum MavMission {
     },
 }
 
-/// Mean Earth radius for the local tangent plane round the origin, m (WGS-84's equatorial).
-pub const EARTH_RADIUS_M: f64 = 6_378_137.0;
+/// Earth radius for the local tangent plane round the origin, m (WGS-84's equatorial).
+pub const EARTH_RADIUS_M: f32 = 6_378_137.0;
+/// Metres of a great circle per 1e-7 degree (MAVLink's integer latitude and longitude unit).
+const METRES_PER_E7_DEGREE: f32 = EARTH_RADIUS_M * core::f32::consts::PI / 180.0 * 1e-7;
 /// `MAV_CMD_NAV_WAYPOINT`, the one mission command taken.
 pub const NAV_WAYPOINT: u32 = 16;
 
@@ -280,7 +282,8 @@ fn nav_state(p: &LOCAL_POSITION_NED_DATA) -> Option<NavState> {
 /// A mission item as a waypoint: `MAV_CMD_NAV_WAYPOINT` only; in `MAV_FRAME_LOCAL_NED`
 /// (x, y in 1e-4 m) or a global frame (1e-7 degrees) converted on the tangent plane at the
 /// autopilot's `GPS_GLOBAL_ORIGIN` (an equirectangular projection: under 1 cm of error per
-/// kilometre of the ±100 km the planner takes). `param2` is the acceptance radius, m (0: the
+/// kilometre of the ±100 km the planner takes; in `f32`, the M4F's precision, whose rounding
+/// at 100 km is under 1 cm). `param2` is the acceptance radius, m (0: the
 /// planner's `arrival_radius`). Altitude is not used (ArduSub keeps its depth).
 pub fn waypoint(
     i: &MISSION_ITEM_INT_DATA,
@@ -291,7 +294,7 @@ pub fn waypoint(
     }
     let (north, east) = match i.frame as u32 {
         // MAV_FRAME_LOCAL_NED
-        1 => (f64::from(i.x) * 1e-4, f64::from(i.y) * 1e-4),
+        1 => (i.x as f32 * 1e-4, i.y as f32 * 1e-4),
         // MAV_FRAME_GLOBAL, _RELATIVE_ALT, _INT, _RELATIVE_ALT_INT, _TERRAIN_ALT, _TERRAIN_ALT_INT
         0 | 3 | 5 | 6 | 10 | 11 => {
             let Some((lat0, lon0)) = origin else {
@@ -303,16 +306,18 @@ pub fn waypoint(
             if i.y.abs() > 1_800_000_000 {
                 return Err(MavMissionResult::MAV_MISSION_INVALID_PARAM6_Y);
             }
-            let rad = |d: i64| d as f64 * 1e-7 * core::f64::consts::PI / 180.0;
+            // Differences taken in integers, so f32 (the M4F's FPU) only scales them.
             let dlon = (i64::from(i.y) - i64::from(lon0) + 1_800_000_000).rem_euclid(3_600_000_000)
                 - 1_800_000_000;
-            let north = rad(i64::from(i.x) - i64::from(lat0)) * EARTH_RADIUS_M;
-            let east = rad(dlon) * EARTH_RADIUS_M * libm::cos(rad(i64::from(lat0)));
+            let dlat = i64::from(i.x) - i64::from(lat0);
+            let lat0_rad = (lat0 as f32 * 1e-7).to_radians();
+            let north = dlat as f32 * METRES_PER_E7_DEGREE;
+            let east = dlon as f32 * METRES_PER_E7_DEGREE * crate::math::cos(lat0_rad);
             (north, east)
         }
         _ => return Err(MavMissionResult::MAV_MISSION_UNSUPPORTED_FRAME),
     };
-    let p = Vec2::new(east as f32, north as f32);
+    let p = Vec2::new(east, north);
     if !p.is_finite() || p.x.abs() > MAX_COORD_M || p.y.abs() > MAX_COORD_M {
         return Err(MavMissionResult::MAV_MISSION_INVALID_PARAM5_X);
     }
