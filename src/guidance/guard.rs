@@ -42,7 +42,9 @@
 //! of approach instead: each is carried from its last sighting to now on its velocity, and a
 //! motion is blocked when, held for [`CPA_HORIZON_S`], it brings the two closer than the hull
 //! (and closer than they are now) — the velocity-obstacle test of Fiorini and Shiller
-//! (*Motion planning in dynamic environments using velocity obstacles*, IJRR 1998). A mover
+//! (*Motion planning in dynamic environments using velocity obstacles*, IJRR 1998). A sonar
+//! mover is taken at the largest extent its track has seen, not its last fit, which shrinks
+//! when the target crosses against the sweep ([`Tracks::extent`]). A mover
 //! can run into a vehicle that stops, so stopping is checked the same way, and when every
 //! motion above is blocked and stopping is too, the guard **evades**: the clear heading nearest
 //! the commanded one, all round, at the fastest speed it may ask for (the present speed plus
@@ -53,10 +55,11 @@
 //! every [`SAMPLE_M`] along the segment for the table's still obstacles near enough to matter,
 //! and one closest-approach per mover.
 
+use super::tracks::Tracks;
 use crate::math::{cos, max, min, sin, wrap_angle, Vec2};
 use crate::params::Params;
 use crate::planner::{Command, Mode, NavState};
-use crate::world::{World, MAX_AGENTS, MAX_MAP_CELLS, MAX_OBSTACLES};
+use crate::world::{Origin, World, MAX_AGENTS, MAX_MAP_CELLS, MAX_OBSTACLES};
 
 /// Spacing of the clearance samples along the segment for table obstacles, m.
 pub const SAMPLE_M: f32 = 0.25;
@@ -350,15 +353,18 @@ fn with_motion(mut cmd: Command, heading: f32, speed: f32, verdict: Verdict) -> 
     cmd
 }
 
-/// Checks `cmd` for the vehicle at `nav` at time `now_ms` against `world` (see the module
-/// notes) and returns the command to send with the verdict; an evasion asks for no more than
-/// `speed_cap` m/s. Holds pass through unchanged.
+/// Checks `cmd` for the vehicle at `nav` at time `now_ms` against `world`, sonar movers at
+/// the largest extent their `tracks` have seen (see the module notes), and returns the
+/// command to send with the verdict; an evasion asks for no more than `speed_cap` m/s. Holds
+/// pass through unchanged.
+#[allow(clippy::too_many_arguments)] // the period's inputs, each borrowed as the caller has it
 pub fn check(
     cfg: &GuardConfig,
     prm: &Params,
     now_ms: u64,
     nav: &NavState,
     world: &World,
+    tracks: &Tracks,
     cmd: Command,
     speed_cap: f32,
 ) -> (Command, Verdict) {
@@ -390,10 +396,15 @@ pub fn check(
         .filter(|o| o.velocity != Vec2::ZERO)
     {
         // Room for every obstacle and agent: never full.
+        // A sonar mover's last fit may be a sliver of it: take its largest sighting.
+        let r = o.shape.bounding_radius();
         let _ = movers.push(Mover {
             center: o.shape.center() + o.velocity * age(o.seen_ms),
             velocity: o.velocity,
-            radius: o.shape.bounding_radius(),
+            radius: match o.origin {
+                Origin::Sonar => tracks.extent(o.id).map_or(r, |e| max(r, e)),
+                _ => r,
+            },
         });
     }
     for a in world.agents().iter().filter(|a| a.velocity != Vec2::ZERO) {
@@ -552,7 +563,7 @@ mod tests {
     use super::*;
     use crate::field::Shape;
     use crate::planner::{HoldReason, PidSetpoints};
-    use crate::world::{Obstacle, Origin};
+    use crate::world::Obstacle;
 
     fn cmd(psi: f32, v: f32) -> Command {
         Command {
@@ -592,6 +603,7 @@ mod tests {
             0,
             &nav(Vec2::ZERO),
             &w,
+            &Tracks::default(),
             cmd(0.0, 1.0),
             1.0,
         );
@@ -608,6 +620,7 @@ mod tests {
             0,
             &nav(Vec2::ZERO),
             &w,
+            &Tracks::default(),
             cmd(0.0, 1.0),
             1.0,
         );
@@ -626,6 +639,7 @@ mod tests {
             0,
             &nav(Vec2::new(1.0, 0.0)),
             &w,
+            &Tracks::default(),
             cmd(0.0, 1.0),
             1.0,
         );
@@ -647,6 +661,7 @@ mod tests {
             0,
             &nav(Vec2::ZERO),
             &w,
+            &Tracks::default(),
             cmd(0.0, 1.0),
             1.0,
         );
@@ -666,11 +681,21 @@ mod tests {
             0,
             &nav(Vec2::ZERO),
             &w,
+            &Tracks::default(),
             cmd(crate::math::PI, 1.0),
             1.0,
         );
         assert_eq!(away, Verdict::Clear);
-        let (_, into) = check(&g, &p, 0, &nav(Vec2::ZERO), &w, cmd(0.0, 0.5), 1.0);
+        let (_, into) = check(
+            &g,
+            &p,
+            0,
+            &nav(Vec2::ZERO),
+            &w,
+            &Tracks::default(),
+            cmd(0.0, 0.5),
+            1.0,
+        );
         assert_ne!(into, Verdict::Clear);
     }
 
@@ -686,6 +711,7 @@ mod tests {
             0,
             &nav(Vec2::ZERO),
             &w,
+            &Tracks::default(),
             cmd(0.0, 1.0),
             1.0,
         );
@@ -699,6 +725,7 @@ mod tests {
             0,
             &nav(Vec2::ZERO),
             &w,
+            &Tracks::default(),
             cmd(0.0, 1.0),
             1.0,
         );
@@ -717,13 +744,33 @@ mod tests {
         let g = GuardConfig::default();
         let p = Params::default();
         assert_eq!(
-            check(&g, &p, 0, &nav(Vec2::ZERO), &w, cmd(0.0, 1.0), 1.0).1,
+            check(
+                &g,
+                &p,
+                0,
+                &nav(Vec2::ZERO),
+                &w,
+                &Tracks::default(),
+                cmd(0.0, 1.0),
+                1.0
+            )
+            .1,
             Verdict::Clear
         );
         w.upsert_obstacle(still.moving(Vec2::new(0.0, 1.4)).unwrap())
             .unwrap();
         assert_ne!(
-            check(&g, &p, 0, &nav(Vec2::ZERO), &w, cmd(0.0, 1.0), 1.0).1,
+            check(
+                &g,
+                &p,
+                0,
+                &nav(Vec2::ZERO),
+                &w,
+                &Tracks::default(),
+                cmd(0.0, 1.0),
+                1.0
+            )
+            .1,
             Verdict::Clear
         );
     }
@@ -750,25 +797,101 @@ mod tests {
         let g = GuardConfig::default();
         let p = Params::default();
         let w = mover(Vec2::new(6.0, -6.0), Vec2::new(0.0, 1.0), 0);
-        let (out, v) = check(&g, &p, 0, &nav(Vec2::new(1.0, 0.0)), &w, cmd(0.0, 1.0), 1.0);
+        let (out, v) = check(
+            &g,
+            &p,
+            0,
+            &nav(Vec2::new(1.0, 0.0)),
+            &w,
+            &Tracks::default(),
+            cmd(0.0, 1.0),
+            1.0,
+        );
         assert_eq!(v, Verdict::Turned);
         assert!(out.v_set > 0.0 && out.psi_set.abs() > 0.2, "{out:?}");
         // Aimed straight at the vehicle: stopping is no way out either.
         let w = mover(Vec2::new(0.0, -6.0), Vec2::new(0.0, 1.0), 0);
-        let (out, v) = check(&g, &p, 0, &nav(Vec2::ZERO), &w, cmd(0.0, 0.0), 1.0);
+        let (out, v) = check(
+            &g,
+            &p,
+            0,
+            &nav(Vec2::ZERO),
+            &w,
+            &Tracks::default(),
+            cmd(0.0, 0.0),
+            1.0,
+        );
         assert_eq!(v, Verdict::Turned);
         assert!(out.v_set > 0.0, "{out:?}");
         // Moving away, or passing well astern: nothing to do.
         let w = mover(Vec2::new(6.0, -6.0), Vec2::new(0.0, -1.0), 0);
         assert_eq!(
-            check(&g, &p, 0, &nav(Vec2::ZERO), &w, cmd(0.0, 1.0), 1.0).1,
+            check(
+                &g,
+                &p,
+                0,
+                &nav(Vec2::ZERO),
+                &w,
+                &Tracks::default(),
+                cmd(0.0, 1.0),
+                1.0
+            )
+            .1,
             Verdict::Clear
         );
         let w = mover(Vec2::new(-8.0, -6.0), Vec2::new(0.0, 1.0), 0);
         assert_eq!(
-            check(&g, &p, 0, &nav(Vec2::ZERO), &w, cmd(0.0, 1.0), 1.0).1,
+            check(
+                &g,
+                &p,
+                0,
+                &nav(Vec2::ZERO),
+                &w,
+                &Tracks::default(),
+                cmd(0.0, 1.0),
+                1.0
+            )
+            .1,
             Verdict::Clear
         );
+    }
+
+    #[test]
+    fn a_sonar_mover_is_judged_at_its_largest_sighting() {
+        use crate::sonar::{Feature, FeatureKind};
+        // Crossing at 0.8 m/s to pass 1.5 m from the centre of a vehicle holding 1 m/s ahead,
+        // its fits shrinking from 1.6 m to 0.3 m over four sweeps: by the last fit it clears
+        // the hull; by its largest it does not.
+        let mut w = World::new();
+        let mut tracks = Tracks::default();
+        for (k, r) in [1.6f32, 1.2, 0.7, 0.3].into_iter().enumerate() {
+            let t = 9.0 * k as f32;
+            let f = Feature {
+                center: Vec2::new(6.0, -2.88 - 0.8 * (27.0 - t)),
+                radius: r,
+                kind: FeatureKind::Circle { radius: r },
+                confidence: 0.9,
+                time_ms: 9000 * k as u64,
+                beams: 6,
+            };
+            let cfg = crate::guidance::TrackConfig::default();
+            tracks.admit(&cfg, 2.5, &mut w, &f, Vec2::ZERO);
+        }
+        let (g, p) = (GuardConfig::default(), Params::default());
+        let moving = nav(Vec2::new(1.0, 0.0));
+        let last_fit = check(
+            &g,
+            &p,
+            27_000,
+            &moving,
+            &w,
+            &Tracks::default(),
+            cmd(0.0, 1.0),
+            1.0,
+        );
+        assert_eq!(last_fit.1, Verdict::Clear);
+        let largest = check(&g, &p, 27_000, &moving, &w, &tracks, cmd(0.0, 1.0), 1.0);
+        assert_ne!(largest.1, Verdict::Clear, "{:?}", largest.0);
     }
 
     #[test]
@@ -778,12 +901,32 @@ mod tests {
         let p = Params::default();
         let w = mover(Vec2::new(6.0, -14.0), Vec2::new(0.0, 1.0), 0);
         assert_ne!(
-            check(&g, &p, 8000, &nav(Vec2::ZERO), &w, cmd(0.0, 1.0), 1.0).1,
+            check(
+                &g,
+                &p,
+                8000,
+                &nav(Vec2::ZERO),
+                &w,
+                &Tracks::default(),
+                cmd(0.0, 1.0),
+                1.0
+            )
+            .1,
             Verdict::Clear
         );
         // The same sighting, had it been made just now, is no threat within the horizon.
         assert_eq!(
-            check(&g, &p, 0, &nav(Vec2::ZERO), &w, cmd(0.0, 1.0), 1.0).1,
+            check(
+                &g,
+                &p,
+                0,
+                &nav(Vec2::ZERO),
+                &w,
+                &Tracks::default(),
+                cmd(0.0, 1.0),
+                1.0
+            )
+            .1,
             Verdict::Clear
         );
     }
@@ -799,6 +942,7 @@ mod tests {
                 0,
                 &nav(Vec2::ZERO),
                 &w,
+                &Tracks::default(),
                 hold,
                 1.0
             )
@@ -816,6 +960,7 @@ mod tests {
                 0,
                 &nav(Vec2::ZERO),
                 &w,
+                &Tracks::default(),
                 cmd(0.0, 1.0),
                 1.0
             )

@@ -476,6 +476,7 @@ impl Periodic {
                     now_ms,
                     &state,
                     &self.world,
+                    &self.tracks,
                     c,
                     bound.unwrap_or(params.v_max),
                 );

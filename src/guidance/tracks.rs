@@ -15,7 +15,9 @@
 //! - an unrated track may have moved at up to `gate_speed_mps` in any direction, once at least
 //!   `revisit_ms` have passed: a scanning head sees a target again only a sweep later, so a
 //!   feature a second or two after a track's update is a *different* object further round the
-//!   sweep, and must not be pulled into a neighbour's gate.
+//!   sweep, and must not be pulled into a neighbour's gate. The allowance grows for up to two
+//!   sweeps (`UNRATED_GAP_S`), so a target missed on one sweep is still gated when it is seen
+//!   again.
 //!
 //! The feature then updates that obstacle (the new feature's shape; refreshed `seen_ms`);
 //! otherwise it becomes a new sensed obstacle with a fresh id from [`SONAR_ID_BASE`] upwards.
@@ -47,6 +49,15 @@
 //! crossing at 0.8 m/s is tracked within 0.1 m/s after 8 sweeps (`hil/tests/tracker.rs`).
 //! Slower sonar targets are planned as still; contacts from the host carry their own
 //! velocity. Speeds are capped at `max_speed_mps`.
+//!
+//! **Structure does not move.** A feature longer than `max_mover_half_m` (an elongated fit of
+//! a wall or a pier) is never given a velocity: running along a channel, each sweep fits the
+//! wall abeam of the vehicle, and a track that follows those fits "moves" with the vehicle. In
+//! the bench's channels such phantom movers, met by the guard at their closest approach, drove
+//! the VideoRay into the opposite wall (`hil bench`, own sonar: two collisions).
+//!
+//! **Extent.** Each track keeps the largest radius of its compact sightings
+//! ([`Tracks::extent`]), which the guard uses for a mover (`crate::guidance::guard`).
 //!
 //! **Capacity.** One track per sensed obstacle: [`MAX_TRACKS`] = the obstacle table's size.
 //! Tracks whose obstacle has left the table (aged out by `World::expire`, evicted, removed)
@@ -82,6 +93,13 @@ const MANOEUVRE_MPS: f32 = 0.1;
 /// Longest time a track is extrapolated over, s (beyond it the gate stops growing).
 const MAX_GAP_S: f32 = 10.0;
 
+/// Longest gap over which a track seen once still gates a sighting, s: two sweeps, so a
+/// target missed on one sweep (speckle, too few beams at range, a turn of the vehicle) is
+/// still the same target when it is seen again, and gets its velocity then. With one sweep
+/// a crossing target missed once started a new, still track 7 s before it reached the
+/// vehicle (a generated crossing world, own sonar).
+const UNRATED_GAP_S: f32 = 2.0 * MAX_GAP_S;
+
 /// Association and tracking settings.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -111,6 +129,9 @@ pub struct TrackConfig {
     pub min_speed_mps: f32,
     /// Speeds are capped here, m/s (≤ `MAX_OBJECT_SPEED`).
     pub max_speed_mps: f32,
+    /// A feature longer than this (the half-length of an elongated fit, m) is structure — a
+    /// wall, a pier — and is never given a velocity, nor counts towards a mover's extent.
+    pub max_mover_half_m: f32,
 }
 
 impl Default for TrackConfig {
@@ -127,6 +148,7 @@ impl Default for TrackConfig {
             min_steady: 0,
             min_speed_mps: 0.5,
             max_speed_mps: 3.0,
+            max_mover_half_m: 3.0,
         }
     }
 }
@@ -165,6 +187,9 @@ pub struct Track {
     pub steady: u16,
     /// Its velocity has been estimated (two sightings far enough apart in time).
     pub rated: bool,
+    /// The largest radius a sighting of it has had, decimetres rounded up (saturating at
+    /// 25.5 m; one byte, so the table does not grow): see [`Tracks::extent`].
+    pub largest_dm: u8,
 }
 
 impl Track {
@@ -179,6 +204,16 @@ impl Track {
     /// The alpha–beta update with measurement `z` at `time_ms` (see the module notes).
     fn update(&mut self, cfg: &TrackConfig, z: Vec2, time_ms: u64) {
         let (predicted, dt) = self.predict(time_ms);
+        // A track seen once has no motion to extrapolate: its first velocity is the two
+        // centres over the whole gap it was gated over.
+        let dt = if self.rated {
+            dt
+        } else {
+            min(
+                time_ms.saturating_sub(self.time_ms) as f32 * 1e-3,
+                UNRATED_GAP_S,
+            )
+        };
         let r = z - predicted;
         self.center = predicted + r * cfg.alpha;
         if time_ms >= self.time_ms.saturating_add(cfg.min_update_ms) && dt > 0.0 {
@@ -216,6 +251,18 @@ impl Track {
     }
 }
 
+/// `r` in decimetres, rounded up, within one byte (NaN and negatives give 0).
+fn decimetres(r: f32) -> u8 {
+    let dm = libm::ceilf(r * 10.0);
+    if dm >= 255.0 {
+        255
+    } else if dm > 0.0 {
+        dm as u8
+    } else {
+        0
+    }
+}
+
 /// Track table and id allocation for sonar obstacles.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Tracks {
@@ -238,6 +285,20 @@ impl Tracks {
         &self.tracks
     }
 
+    /// The largest radius obstacle `id`'s sightings have had, m, if it is tracked.
+    ///
+    /// A scanning sonar sees a mover's near face at a different place each sweep, and a
+    /// target crossing against the sweep shows it fewer beams each time: the circle fitted to
+    /// one sweep's echoes shrank from 1.6 m to 0.3 m round a 1.9 m target in a generated
+    /// crossing world, and a guard that took the last fit let it run into the vehicle. Its
+    /// largest sighting is the better bound on its extent ([`crate::guidance::guard`]).
+    pub fn extent(&self, id: u16) -> Option<f32> {
+        self.tracks
+            .iter()
+            .find(|t| t.id == id)
+            .map(|t| f32::from(t.largest_dm) * 0.1)
+    }
+
     /// Puts `f` into `world` with repulsiveness `a_plus` (the planner's A_s⁺), seen from the
     /// vehicle at `vehicle`.
     pub fn admit(
@@ -256,6 +317,13 @@ impl Tracks {
         let Ok(shape) = f.to_shape() else {
             return Admission::Invalid;
         };
+        // A long echo is a wall seen from a new place, not a wall on the move.
+        let structure = match f.kind {
+            crate::sonar::FeatureKind::Rectangle { half, .. } => {
+                crate::math::max(half.x, half.y) > cfg.max_mover_half_m
+            }
+            crate::sonar::FeatureKind::Circle { .. } => false,
+        };
         self.tracks
             .retain(|t| world.obstacles().iter().any(|o| o.id == t.id));
 
@@ -271,13 +339,14 @@ impl Tracks {
             // "move" differently each sweep, start new tracks instead of making one a phantom
             // mover. An unrated track may have moved at up to `gate_speed_mps` in any
             // direction, once a sweep has passed (`revisit_ms`).
-            let dt = min(f.time_ms.saturating_sub(t.time_ms) as f32 * 1e-3, MAX_GAP_S);
+            let gap = f.time_ms.saturating_sub(t.time_ms) as f32 * 1e-3;
+            let dt = min(gap, MAX_GAP_S);
             let revisit = f.time_ms >= t.time_ms.saturating_add(cfg.revisit_ms);
             let (velocity, allowance) = if t.rated {
                 let v = t.velocity;
                 (v, (STEADY_FRACTION * v.norm() + MANOEUVRE_MPS) * dt)
             } else if revisit {
-                (Vec2::ZERO, cfg.gate_speed_mps * dt)
+                (Vec2::ZERO, cfg.gate_speed_mps * min(gap, UNRATED_GAP_S))
             } else {
                 (Vec2::ZERO, 0.0)
             };
@@ -291,12 +360,18 @@ impl Tracks {
         let (id, track) = match best.and_then(|(i, _)| self.tracks.get_mut(i)) {
             Some(t) => {
                 t.update(cfg, f.center, f.time_ms);
+                if !structure {
+                    t.largest_dm = t.largest_dm.max(decimetres(f.radius));
+                }
                 (t.id, Some(*t))
             }
             None => (self.next_id, None),
         };
         let fresh = track.is_none();
-        let velocity = track.map_or(Vec2::ZERO, |t| t.reported_velocity(cfg, f.radius));
+        let velocity = match track {
+            Some(t) if !structure => t.reported_velocity(cfg, f.radius),
+            _ => Vec2::ZERO,
+        };
         // The track's centre: with the default α = 1, where the sonar saw it last.
         let center = track.map_or(f.center, |t| t.center);
         let o = Obstacle::new(
@@ -326,6 +401,7 @@ impl Tracks {
                     first: f.center,
                     steady: 0,
                     rated: false,
+                    largest_dm: if structure { 0 } else { decimetres(f.radius) },
                 });
                 Admission::Added(id)
             }
@@ -581,5 +657,95 @@ mod tests {
             Admission::Invalid
         );
         assert!(w.obstacles().is_empty());
+    }
+
+    fn wall(x: f32, y: f32, half_len: f32, t_ms: u64) -> Feature {
+        Feature {
+            center: Vec2::new(x, y),
+            radius: half_len,
+            kind: FeatureKind::Rectangle {
+                half: Vec2::new(half_len, 0.5),
+                angle: 0.0,
+            },
+            confidence: 0.9,
+            time_ms: t_ms,
+            beams: 20,
+        }
+    }
+
+    #[test]
+    fn a_wall_seen_from_new_places_never_moves_and_a_short_box_may() {
+        let cfg = TrackConfig::default();
+        let mut w = World::new();
+        let mut t = Tracks::default();
+        // A vehicle running along a quay at 1 m/s: each sweep's fit is centred abeam of it.
+        for k in 0..6u64 {
+            let x = 9.0 * k as f32;
+            t.admit(
+                &cfg,
+                2.5,
+                &mut w,
+                &wall(x, 5.0, 6.0, 9000 * k),
+                Vec2::new(x, 0.0),
+            );
+        }
+        assert_eq!(w.obstacles().len(), 1, "one track along the quay");
+        assert_eq!(w.obstacles()[0].velocity, Vec2::ZERO);
+        assert_eq!(t.extent(w.obstacles()[0].id), Some(0.0), "no mover extent");
+        // A 2 m box doing the same is a mover.
+        let mut w = World::new();
+        let mut t = Tracks::default();
+        for k in 0..6u64 {
+            let x = 9.0 * k as f32;
+            t.admit(
+                &cfg,
+                2.5,
+                &mut w,
+                &wall(x, 5.0, 1.0, 9000 * k),
+                Vec2::new(x, 0.0),
+            );
+        }
+        let v = w.obstacles()[0].velocity;
+        assert!((v - Vec2::new(1.0, 0.0)).norm() < 0.05, "{v:?}");
+    }
+
+    #[test]
+    fn a_mover_keeps_the_extent_of_its_largest_sighting() {
+        let cfg = TrackConfig::default();
+        let mut w = World::new();
+        let mut t = Tracks::default();
+        // Fits shrinking as the target crosses against the sweep (as measured: 1.6 → 0.3 m).
+        for (k, r) in [1.6f32, 1.2, 0.7, 0.3].into_iter().enumerate() {
+            let s = 9.0 * k as f32;
+            let f = feature(20.0 + 0.6 * s, 10.0 - 0.5 * s, r, 0.9);
+            t.admit(&cfg, 2.5, &mut w, &at(f, 9000 * k as u64), Vec2::ZERO);
+        }
+        let o = w.obstacles()[0];
+        assert!(o.velocity.norm() > 0.5, "a mover: {:?}", o.velocity);
+        assert!(
+            (o.shape.bounding_radius() - 0.3).abs() < 1e-6,
+            "the last fit"
+        );
+        assert_eq!(t.extent(o.id), Some(1.6));
+    }
+
+    #[test]
+    fn a_target_missed_on_one_sweep_is_still_the_same_target() {
+        let cfg = TrackConfig::default();
+        let mut w = World::new();
+        let mut t = Tracks::default();
+        // Seen at 0 s, missed at 9 s, seen again at 18 s 14 m on: 0.78 m/s.
+        let v = Vec2::new(0.6, -0.5);
+        for k in [0u64, 2] {
+            let s = 9.0 * k as f32;
+            let f = feature(20.0 + v.x * s, 30.0 + v.y * s, 1.1, 0.9);
+            t.admit(&cfg, 2.5, &mut w, &at(f, 9000 * k), Vec2::ZERO);
+        }
+        assert_eq!(w.obstacles().len(), 1, "one target");
+        let got = w.obstacles()[0].velocity;
+        assert!(
+            (got - v).norm() < 1e-3,
+            "its velocity over the gap: {got:?}"
+        );
     }
 }
