@@ -210,7 +210,7 @@ pub fn start(
     let runtime = memory.runtime.write(runtime);
     // Contacts get the planner's A_s⁺ when the periodic task admits them.
     let background = Background::new(ExtractorConfig::default(), params.a_plus).ok()?;
-    router.set_cell(params.route_cell_m);
+    router.set_params(&params);
     let ping360 = Ping360::new(Ping360Config::BOARD).ok()?;
     let sonar = memory.sonar.split();
     let mav = memory.mavlink.split();

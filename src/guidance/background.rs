@@ -397,10 +397,10 @@ fn dispatch(
         }
         Message::Params(p) => {
             // The periodic task answers for the parameters; the route layer takes its cell size
-            // only from a set it will accept.
+            // and the hull only from a set it will accept.
             let queued = request(sink, Control::Params(header, p), counters);
             if let (true, Some(r), Ok(())) = (queued, router, p.validate()) {
-                r.set_cell(p.route_cell_m);
+                r.set_params(&p);
             }
         }
         Message::ChartObstacle(c) => match c.to_obstacle(now_ms) {

@@ -157,7 +157,7 @@ impl OneThreadRuntime {
             map: EvidenceMap::empty(),
             router: {
                 let mut r = Router::new(config.route);
-                r.set_cell(params.route_cell_m);
+                r.set_params(&params);
                 r
             },
             now_ms: 0,

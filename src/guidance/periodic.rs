@@ -365,7 +365,8 @@ impl Periodic {
     #[inline(never)]
     fn snapshot(&mut self, m: &EvidenceMap, p: Vec2) {
         let mut near: heapless::Vec<Near, MAX_MAP_CELLS> = heapless::Vec::new();
-        m.nearest(p, self.map_reach(m.cell_m()), &mut near);
+        let hull = self.planner.params().agent_radius_m;
+        m.nearest(p, self.map_reach(m.cell_m()), hull, &mut near);
         // Cells as discs of half their side: neighbours touch, so a wall has no seams.
         self.world
             .set_map(near.iter().map(|c| c.center), 0.5 * m.cell_m());

@@ -10,8 +10,9 @@
 //! 1. moves its [`grid::Grid`] with the vehicle and takes in the evidence map (charted
 //!    obstacles and still contacts are marked as they arrive);
 //! 2. spreads a [`wavefront::Wavefront`] from the goal (or the window cell nearest a goal
-//!    beyond the window) through free cells — first with the obstacles grown by one cell, so
-//!    the route keeps its distance; if that finds no way, without;
+//!    beyond the window) through free cells — first with the obstacles grown by two cells, so
+//!    the route keeps its distance; if that finds no way, grown only as much as keeps every
+//!    way as wide as the hull (none for a small craft);
 //! 3. walks down the wavefront from the vehicle and takes the farthest cell of the walk it can
 //!    see in a straight line (`aim`);
 //! 4. publishes a [`Route`] through a lock-free [`RouteSlot`].
@@ -34,6 +35,7 @@ pub use wavefront::Wavefront;
 
 use crate::field::Shape;
 use crate::math::Vec2;
+use crate::params::Params;
 use crate::sonar::EvidenceMap;
 use wavefront::Cell;
 
@@ -143,6 +145,8 @@ const STILL_SPEED: f32 = 0.1;
 #[derive(Clone, Debug)]
 pub struct Router {
     cfg: RouteConfig,
+    /// Cells the last pass grows obstacles by ([`last_pass_growth`]).
+    narrowest: u8,
     grid: Grid,
     wave: Wavefront,
     /// What blocks the wavefront in the current pass (a field, not a local: 512 bytes off the
@@ -162,6 +166,7 @@ impl Router {
     pub const fn new(cfg: RouteConfig) -> Self {
         Router {
             cfg,
+            narrowest: 0,
             grid: Grid::new(cfg.cell_m),
             wave: Wavefront::new(),
             blocked: [0; ROUTE_SIDE],
@@ -185,13 +190,17 @@ impl Router {
         self.cfg.cell_m > 0.0
     }
 
-    /// A new cell size (`Params::route_cell_m`; 0: off). A change starts an empty grid.
-    pub fn set_cell(&mut self, cell_m: f32) {
+    /// The planner's parameters: the cell size (`Params::route_cell_m`; 0: off; a change
+    /// starts an empty grid) and the hull (`Params::agent_radius_m`), which sets how narrow a
+    /// way the last pass may take ([`last_pass_growth`]).
+    pub fn set_params(&mut self, prm: &Params) {
+        let cell_m = prm.route_cell_m;
         if cell_m.is_finite() && cell_m >= 0.0 && cell_m != self.cfg.cell_m {
             self.cfg.cell_m = cell_m;
             self.grid = Grid::new(cell_m);
             self.last_ms = None;
         }
+        self.narrowest = last_pass_growth(prm.agent_radius_m, self.cfg.cell_m);
     }
 
     /// A new mission goal (replanned at the next navigation), or none.
@@ -264,8 +273,8 @@ impl Router {
         };
         let inside = self.grid.cell_of(goal);
         let source = inside.unwrap_or_else(|| self.grid.clamp(goal));
-        for grown in [true, false] {
-            self.fill_blocked(grown, start, source);
+        for growth in [KEEP_OFF_CELLS, self.narrowest] {
+            self.fill_blocked(growth, start, source);
             if self.wave.spread(&self.blocked, source, start, MAX_LAYERS) {
                 let end = if inside.is_some() {
                     goal
@@ -330,21 +339,22 @@ impl Router {
 }
 
 impl Router {
-    /// Fills `blocked` for a pass: the occupied cells grown by two cells (the route keeps its
-    /// distance), but never round the vehicle and the goal themselves; or, `grown` false, the
-    /// occupied cells as they are, the vehicle's own cell excepted.
-    fn fill_blocked(&mut self, grown: bool, start: Cell, source: Cell) {
+    /// Fills `blocked` for a pass: the occupied cells grown by `growth` cells, but never round
+    /// the vehicle and the goal themselves; with no growth, the occupied cells as they are,
+    /// the vehicle's own cell excepted.
+    fn fill_blocked(&mut self, growth: u8, start: Cell, source: Cell) {
         for (r, row) in self.blocked.iter_mut().enumerate() {
             *row = self.grid.occupied_row(r);
         }
-        if !grown {
+        if growth == 0 {
             if let Some(row) = self.blocked.get_mut(start.1) {
                 *row &= !1u64.checked_shl(start.0 as u32).unwrap_or(0);
             }
             return;
         }
-        grow(&mut self.blocked);
-        grow(&mut self.blocked);
+        for _ in 0..growth {
+            grow(&mut self.blocked);
+        }
         for (c, r) in [start, source] {
             // The 3 × 3 cells round it, set back to what is occupied there.
             let cols = (0b111u64 << c) >> 1;
@@ -355,6 +365,29 @@ impl Router {
                 }
             }
         }
+    }
+}
+
+/// Cells the first pass grows obstacles by, so the route keeps its distance.
+const KEEP_OFF_CELLS: u8 = 2;
+
+/// Cells the last pass grows obstacles by: the fewest that leave open only ways as wide as a
+/// hull of radius `hull_m`. A way k free cells across is at least k cells wide, and growing
+/// both sides by g leaves a free cell only where k ≥ 2g + 1; so g = ⌈(2·hull/cell − 1)/2⌉,
+/// at least 0, at most [`KEEP_OFF_CELLS`]. 0 for a VideoRay (0.5 m) on 2 m cells, as before;
+/// 1 for the flat-fish (2.25 m), which would otherwise be routed through 2 m gaps it cannot
+/// pass and stop before them, held by the guard.
+fn last_pass_growth(hull_m: f32, cell_m: f32) -> u8 {
+    if !(hull_m > 0.0 && cell_m > 0.0) {
+        return 0;
+    }
+    let g = libm::ceilf((2.0 * hull_m / cell_m - 1.0) * 0.5);
+    if g >= f32::from(KEEP_OFF_CELLS) {
+        KEEP_OFF_CELLS
+    } else if g > 0.0 {
+        g as u8
+    } else {
+        0
     }
 }
 
@@ -457,7 +490,10 @@ mod tests {
         assert!(!r.grid.is_occupied(cell));
 
         let mut off = Router::new(RouteConfig::default());
-        off.set_cell(0.0);
+        off.set_params(&Params {
+            route_cell_m: 0.0,
+            ..Params::default()
+        });
         off.set_goal(Some(Vec2::new(50.0, 0.0)));
         assert_eq!(off.on_nav(Vec2::ZERO, 0, None), None);
     }

@@ -445,7 +445,11 @@ impl EvidenceMap {
 
     /// A polar scan of the map round `p`: in each of [`SECTORS`] equal sectors of bearing, the
     /// believed-occupied cell nearest `p` within `radius_m` (at most [`MAX_REACH_CELLS`]
-    /// cells), nearest first, at most `out`'s capacity K of them.
+    /// cells), nearest first, at most `out`'s capacity K of them. A cell lying wholly within
+    /// `hull_m` of `p` is passed over: the vehicle's own hull is water, so an echo there is
+    /// false (speckle near the head), and a cell within the sonar's blanking range is never
+    /// looked through again to be cleared — believed, it held a flat-fish (2.25 m hull)
+    /// "inside an obstacle" 27 m from anything, for the rest of a bench run.
     ///
     /// Why per sector and not simply the K nearest: between two piers, in a channel or in a
     /// corner, the nearest wall alone has more than K cells within reach, and the K nearest
@@ -458,6 +462,7 @@ impl EvidenceMap {
         &self,
         p: Vec2,
         radius_m: f32,
+        hull_m: f32,
         out: &mut heapless::Vec<Near, K>,
     ) -> bool {
         out.clear();
@@ -477,6 +482,14 @@ impl EvidenceMap {
             cj.saturating_sub(r).max(w.y0),
             cj.saturating_add(r).min(w.y0 + MASK),
         );
+        // Cells that may lie wholly within the hull: at most this many cells off (squared).
+        let half_diagonal = core::f32::consts::FRAC_1_SQRT_2 * cell;
+        let inside = if hull_m > half_diagonal {
+            min(hull_m / cell, MAX_REACH_CELLS as f32) as i32 + 1
+        } else {
+            -1
+        };
+        let inside2 = if inside < 0 { -1 } else { inside * inside };
         // Per sector: squared cell distance and the cell (d2 = i32::MAX: none yet).
         let mut best = [(i32::MAX, 0i32, 0i32); SECTORS];
         for j in j0..=j1 {
@@ -484,6 +497,9 @@ impl EvidenceMap {
                 let (di, dj) = (i - ci, j - cj);
                 let d2 = di * di + dj * dj;
                 if d2 > r2 || self.value(i, j) < self.cfg.occupied {
+                    continue;
+                }
+                if d2 <= inside2 && (self.center_of(i, j) - p).norm() + half_diagonal <= hull_m {
                     continue;
                 }
                 if let Some(b) = best.get_mut(sector(di, dj)) {
@@ -594,7 +610,7 @@ mod tests {
         look(&m, Vec2::ZERO, 0.0, Some(6.2));
         assert!(m.is_occupied(w, 12, 0));
         let mut near: heapless::Vec<Near, 8> = heapless::Vec::new();
-        assert!(m.nearest(Vec2::ZERO, 10.0, &mut near));
+        assert!(m.nearest(Vec2::ZERO, 10.0, 0.0, &mut near));
         assert_eq!(near.len(), 1);
         assert!((near[0].center - Vec2::new(6.25, 0.25)).norm() < 1e-6);
         // Beams that see past it (echo at 14 m) clear it.
@@ -670,13 +686,30 @@ mod tests {
             ping(&m, Vec2::ZERO, k as f32 * 1.2, Some(*r));
         }
         let mut near: heapless::Vec<Near, 3> = heapless::Vec::new();
-        m.nearest(Vec2::ZERO, 12.0, &mut near);
+        m.nearest(Vec2::ZERO, 12.0, 0.0, &mut near);
         let d: std::vec::Vec<f32> = near.iter().map(|n| n.d2.sqrt()).collect();
         assert_eq!(d.len(), 3);
         assert!(d[0] < d[1] && d[1] < d[2] && d[2] < 5.6, "{d:?}");
         // Radius bounds the search.
-        m.nearest(Vec2::ZERO, 2.5, &mut near);
+        m.nearest(Vec2::ZERO, 2.5, 0.0, &mut near);
         assert_eq!(near.len(), 1);
+    }
+
+    #[test]
+    fn a_cell_inside_the_hull_is_passed_over_and_one_it_touches_is_not() {
+        let m = map();
+        m.believe(Vec2::new(0.3, 0.2));
+        m.believe(Vec2::new(0.2, 2.6));
+        let mut near: heapless::Vec<Near, 4> = heapless::Vec::new();
+        m.nearest(Vec2::ZERO, 6.0, 0.0, &mut near);
+        assert_eq!(near.len(), 2, "without a hull both");
+        // A 2.25 m hull holds the cell at 0.36 m wholly; the one at 2.6 m reaches out of it.
+        m.nearest(Vec2::ZERO, 6.0, 2.25, &mut near);
+        assert_eq!(near.len(), 1);
+        assert!(
+            (near[0].center - Vec2::new(0.25, 2.75)).norm() < 1e-6,
+            "{near:?}"
+        );
     }
 
     #[test]
@@ -706,7 +739,7 @@ mod tests {
             }
         }
         let mut near: heapless::Vec<Near, 32> = heapless::Vec::new();
-        m.nearest(Vec2::ZERO, 6.0, &mut near);
+        m.nearest(Vec2::ZERO, 6.0, 0.0, &mut near);
         assert!(near.iter().any(|n| n.center.y > 0.9), "the north wall");
         assert!(near.iter().any(|n| n.center.y < -2.5), "the south wall too");
         assert!(
@@ -761,9 +794,9 @@ mod tests {
             seconded: 0,
         });
         let mut near: heapless::Vec<Near, 4> = heapless::Vec::new();
-        m.nearest(Vec2::ZERO, 30.0, &mut near);
+        m.nearest(Vec2::ZERO, 30.0, 0.0, &mut near);
         assert!(near.is_empty());
-        assert!(!m.nearest(Vec2::new(f32::NAN, 0.0), 5.0, &mut near));
+        assert!(!m.nearest(Vec2::new(f32::NAN, 0.0), 5.0, 0.0, &mut near));
         assert!(EvidenceMap::new(EvidenceConfig {
             cell_m: 0.0,
             ..EvidenceConfig::default()
