@@ -11,11 +11,11 @@ use std::fmt::Write as _;
 
 use toml::de::{DeTable, DeValue};
 
-use crate::scenario::{
-    self, type_name, value_integer, value_number, ModelKind, ScenarioError, Sensing, SourceText,
-    Table, Val,
-};
+mod reader;
+
+use crate::scenario::{self, ModelKind, ScenarioError, Sensing, SourceText};
 use crate::sim::Rng;
+use reader::{type_name, value_integer, value_number, Table, Val};
 
 /// The planner period the parameter sets are checked at, s (every generated scenario uses it;
 /// a scenario file's own `dt_s` replaces it at run time).

@@ -1,0 +1,163 @@
+//! The sweep spec's reader: the spanned TOML document walked table by table, in file order,
+//! unknown keys refused with the scenario reader's "did you mean" hint, each refusal naming
+//! file, line and key path as a scenario's do.
+
+use std::ops::Range;
+
+use toml::de::{DeTable, DeValue};
+use toml::Spanned;
+
+use crate::scenario::{unknown_key, ScenarioError, SourceText};
+
+// ---------------------------------------------------------------------------------------------
+// Typed access to the spanned document.
+
+pub(crate) type Val<'a> = Spanned<DeValue<'a>>;
+
+pub(crate) fn type_name(v: &DeValue<'_>) -> &'static str {
+    match v {
+        DeValue::String(_) => "a string",
+        DeValue::Integer(_) => "an integer",
+        DeValue::Float(_) => "a float",
+        DeValue::Boolean(_) => "a boolean",
+        DeValue::Datetime(_) => "a date-time",
+        DeValue::Array(_) => "an array",
+        DeValue::Table(_) => "a table",
+    }
+}
+
+pub(crate) fn join(path: &str, key: &str) -> String {
+    if path.is_empty() {
+        key.to_string()
+    } else {
+        format!("{path}.{key}")
+    }
+}
+
+/// A table of the document with its key path and the span of its header.
+pub(crate) struct Table<'a> {
+    pub(crate) src: SourceText<'a>,
+    pub(crate) path: String,
+    pub(crate) span: Range<usize>,
+    /// (key, key span, value), in file order.
+    pub(crate) entries: Vec<(&'a str, Range<usize>, &'a Val<'a>)>,
+}
+
+impl<'a> Table<'a> {
+    pub(crate) fn new(
+        src: SourceText<'a>,
+        path: String,
+        span: Range<usize>,
+        t: &'a DeTable<'a>,
+    ) -> Self {
+        let mut entries: Vec<_> = t
+            .iter()
+            .map(|(k, v)| (k.get_ref().as_ref(), k.span(), v))
+            .collect();
+        // The map is sorted by name; file order makes "the first error" the first in the file.
+        entries.sort_by_key(|e| e.1.start);
+        Table {
+            src,
+            path,
+            span,
+            entries,
+        }
+    }
+
+    pub(crate) fn key(&self, key: &str) -> String {
+        join(&self.path, key)
+    }
+
+    pub(crate) fn get(&self, key: &str) -> Option<&'a Val<'a>> {
+        self.entries.iter().find(|e| e.0 == key).map(|e| e.2)
+    }
+
+    pub(crate) fn span_of(&self, key: &str) -> Range<usize> {
+        self.entries
+            .iter()
+            .find(|e| e.0 == key)
+            .map_or(self.span.clone(), |e| e.1.clone())
+    }
+
+    /// Refuses any key not in `allowed`; `what` names the table in the message.
+    pub(crate) fn allow(&self, allowed: &[&str], what: &str) -> Result<(), ScenarioError> {
+        for (k, span, _) in &self.entries {
+            if allowed.contains(k) {
+                continue;
+            }
+            return Err(self
+                .src
+                .err(span, &self.key(k), unknown_key(k, allowed, what)));
+        }
+        Ok(())
+    }
+
+    pub(crate) fn missing(&self, key: &str) -> ScenarioError {
+        self.src
+            .err(&self.span, &self.key(key), "missing required key")
+    }
+
+    pub(crate) fn table(&self, key: &str) -> Result<Option<Table<'a>>, ScenarioError> {
+        self.get(key)
+            .map(|v| as_table(self.src, self.key(key), v))
+            .transpose()
+    }
+}
+
+pub(crate) fn as_table<'a>(
+    src: SourceText<'a>,
+    path: String,
+    v: &'a Val<'a>,
+) -> Result<Table<'a>, ScenarioError> {
+    match v.get_ref() {
+        DeValue::Table(t) => Ok(Table::new(src, path, v.span(), t)),
+        other => Err(src.err(
+            &v.span(),
+            &path,
+            format!("expected a table, got {}", type_name(other)),
+        )),
+    }
+}
+
+pub(crate) fn value_integer(
+    src: SourceText<'_>,
+    key: &str,
+    v: &Val<'_>,
+) -> Result<i64, ScenarioError> {
+    match v.get_ref() {
+        DeValue::Integer(i) => i64::from_str_radix(i.as_str(), i.radix())
+            .map_err(|_| src.err(&v.span(), key, format!("integer {i} is too large"))),
+        other => Err(src.err(
+            &v.span(),
+            key,
+            format!("expected an integer, got {}", type_name(other)),
+        )),
+    }
+}
+
+/// A finite number; integers are accepted where numbers are expected.
+pub(crate) fn value_number(
+    src: SourceText<'_>,
+    key: &str,
+    v: &Val<'_>,
+) -> Result<f64, ScenarioError> {
+    let x = match v.get_ref() {
+        DeValue::Integer(_) => value_integer(src, key, v)? as f64,
+        DeValue::Float(f) => f
+            .as_str()
+            .parse::<f64>()
+            .map_err(|_| src.err(&v.span(), key, format!("cannot read number `{f}`")))?,
+        other => {
+            return Err(src.err(
+                &v.span(),
+                key,
+                format!("expected a number, got {}", type_name(other)),
+            ))
+        }
+    };
+    if x.is_finite() {
+        Ok(x)
+    } else {
+        Err(src.err(&v.span(), key, format!("must be a finite number, got {x}")))
+    }
+}
