@@ -79,17 +79,33 @@ pub struct RunConfig {
 pub enum RunError {
     /// Building, starting or talking to a firmware failed.
     #[error("firmware: {0}")]
-    Firmware(String),
+    Firmware(#[from] std::io::Error),
+    /// The simulated Ping360 cannot be what the scenario's `[sonar]` asks, or what the board
+    /// is built for.
+    #[error("firmware: [sonar] {key}: {message}")]
+    Ping360 {
+        /// The `[sonar]` key at fault.
+        key: &'static str,
+        /// Why.
+        message: String,
+    },
+    /// A simulated Ping360 asked of a real board (`--port`), whose sonar UART is wired to a
+    /// real one.
+    #[error(
+        "firmware: a simulated Ping360 needs --firmware host or qemu (a board's sonar UART is \
+         wired to a real one)"
+    )]
+    Ping360OnBoard,
     /// The firmware refused the scenario's parameters or mission.
-    #[error("the firmware refused {0}")]
-    Refused(String),
+    #[error(transparent)]
+    Refused(#[from] crate::upload::Rejected),
     /// Writing the outputs failed.
     #[error("writing outputs: {0}")]
     Output(std::io::Error),
 }
 
-fn fw_err(e: std::io::Error) -> RunError {
-    RunError::Firmware(e.to_string())
+fn ping360_err((key, message): (&'static str, String)) -> RunError {
+    RunError::Ping360 { key, message }
 }
 
 /// One simulated vehicle and its firmware.
@@ -174,7 +190,7 @@ impl QuietRun {
 /// the firmware is built or a vehicle flies).
 pub fn run(sc: &Scenario, cfg: &RunConfig) -> Result<RunResult, RunError> {
     output::prepare_dir(&cfg.out_dir).map_err(RunError::Output)?;
-    let binary = firmware::build(&cfg.target).map_err(fw_err)?;
+    let binary = firmware::build(&cfg.target)?;
     let how = RunOptions {
         log_dir: Some(&cfg.out_dir),
         progress: cfg.progress,
@@ -249,21 +265,17 @@ fn simulate(
         let ping360 = sc.sonar.interface == SonarInterface::Ping360 && v.sensing == Sensing::Sonar;
         let mut ping360_cfg = None;
         if ping360 {
-            let cfg = ping360_sim::firmware_config(&sc.sonar)
-                .map_err(|(k, m)| RunError::Firmware(format!("[sonar] {k}: {m}")))?;
+            let cfg = ping360_sim::firmware_config(&sc.sonar).map_err(ping360_err)?;
             match target {
                 Target::Host => {
-                    let (master, slave) = firmware::open_pty().map_err(fw_err)?;
+                    let (master, slave) = firmware::open_pty()?;
                     extra = ping360_sim::firmware_args(&slave, &cfg);
                     ping360_port = Some(master);
                 }
-                Target::Qemu | Target::QemuUart => ping360_sim::board_config_matches(&cfg)
-                    .map_err(|(k, m)| RunError::Firmware(format!("[sonar] {k}: {m}")))?,
-                Target::Port(..) => {
-                    return Err(RunError::Firmware(
-                        "a simulated Ping360 needs --firmware host or qemu (a board's sonar UART is wired to a real one)".into(),
-                    ))
+                Target::Qemu | Target::QemuUart => {
+                    ping360_sim::board_config_matches(&cfg).map_err(ping360_err)?
                 }
+                Target::Port(..) => return Err(RunError::Ping360OnBoard),
             }
             ping360_cfg = Some(cfg);
         }
@@ -278,15 +290,14 @@ fn simulate(
             Firmware::start_qemu(binary, lockstep, ping360)
         } else {
             Firmware::start(target, binary, lockstep, &extra)
-        }
-        .map_err(fw_err)?;
+        }?;
         if matches!(target, Target::Qemu | Target::QemuUart) && ping360 {
             ping360_port = fw.take_sonar_port();
         }
         let ping360_port = ping360_port.zip(ping360_cfg);
         if how.stop_early && lockstep {
             // The sweep's runs: one write per period (see `Firmware::set_batching`).
-            fw.set_batching(true).map_err(fw_err)?;
+            fw.set_batching(true)?;
         }
         let log = match how.log_dir {
             Some(dir) => Some(FrameLog::create(dir, &v.name).map_err(RunError::Output)?),
@@ -375,8 +386,7 @@ fn simulate(
     if sc.mode == RunMode::Lockstep {
         for s in sims.iter_mut() {
             let mut clean = crate::firmware::NoTap;
-            s.fw.send(&Message::Tick(TickRepr { time_ms: 0 }), &mut clean)
-                .map_err(fw_err)?;
+            s.fw.send(&Message::Tick(TickRepr { time_ms: 0 }), &mut clean)?;
             // With a Ping360, its telemetry too (it counts the commands sent).
             let ping360 = s.ping360.is_some();
             let got =
@@ -386,8 +396,7 @@ fn simulate(
                         Reply::Telemetry(t) => ping360 && t.time_ms == 0,
                         _ => false,
                     })
-                })
-                .map_err(fw_err)?;
+                })?;
             // The Ping360's first command went out in that period: how many to read.
             if let Some((p, _, expected)) = s.ping360.as_mut() {
                 p.tick(0);
@@ -402,7 +411,7 @@ fn simulate(
     // Parameters and missions go out next; the firmware answers them at its next period. A
     // waypoint mission's items follow as the replies come (`upload`).
     for s in sims.iter_mut() {
-        s.upload.send(&mut s.fw, 0).map_err(fw_err)?;
+        s.upload.send(&mut s.fw, 0)?;
     }
 
     let steps = (sc.duration_s / sc.dt_s).round().max(1.0) as u64;
@@ -440,8 +449,7 @@ fn simulate(
                 .collect();
             send_sensors(s, sc, t, &truth, &others)?;
             if sc.mode == RunMode::Lockstep {
-                s.fw.send(&Message::Tick(TickRepr { time_ms: t_ms }), &mut s.tap)
-                    .map_err(fw_err)?;
+                s.fw.send(&Message::Tick(TickRepr { time_ms: t_ms }), &mut s.tap)?;
             }
             if let Some((p, _, _)) = s.ping360.as_mut() {
                 p.tick(t_ms);
@@ -457,7 +465,7 @@ fn simulate(
         for (i, s) in sims.iter_mut().enumerate() {
             collect(s, sc.mode, t_ms)?;
             if !s.upload.done() {
-                s.upload.send(&mut s.fw, k).map_err(fw_err)?;
+                s.upload.send(&mut s.fw, k)?;
             }
             let state = s.model.state();
             let near = nearest(sc, t, &state, hull_radius(s.kind), &hulls, i);
@@ -560,8 +568,7 @@ fn send_sensors(
         let lockstep = sc.mode == RunMode::Lockstep;
         let hulls: Vec<(P2, f64)> = others.iter().map(|o| (o.position, o.hull_radius)).collect();
         tap.t = t;
-        p.sync(*expected, (t - sc.dt_s).max(0.0), lockstep)
-            .map_err(fw_err)?;
+        p.sync(*expected, (t - sc.dt_s).max(0.0), lockstep)?;
         p.answer(
             t,
             truth,
@@ -571,8 +578,7 @@ fn send_sensors(
             tap,
             lockstep,
             in_window(&sc.faults.sonar_dropout),
-        )
-        .map_err(fw_err)?;
+        )?;
     }
     let fresh = s.nav.sample(t, truth);
     let nav = if in_window(&sc.faults.nav_freeze) {
@@ -593,7 +599,7 @@ fn send_sensors(
             nav,
             body: None,
         });
-        s.fw.send(&m, &mut s.tap).map_err(fw_err)?;
+        s.fw.send(&m, &mut s.tap)?;
     }
     if in_window(&sc.faults.sonar_dropout) {
         return Ok(());
@@ -608,8 +614,7 @@ fn send_sensors(
             let hulls: Vec<(P2, f64)> =
                 others.iter().map(|o| (o.position, o.hull_radius)).collect();
             for ping in s.sonar.poll(t, truth, &sc.obstacles, &hulls) {
-                s.fw.send(&Message::Scanline(ping.as_scanline()), &mut s.tap)
-                    .map_err(fw_err)?;
+                s.fw.send(&Message::Scanline(ping.as_scanline()), &mut s.tap)?;
             }
             if sc.sonar.vehicle_contacts {
                 send_contacts(s, t, t_ms, truth, &[], others, sc.sonar.range_m)?;
@@ -638,7 +643,7 @@ fn send_contacts(
             time_ms: t_ms,
             contacts: ContactList::new(chunk),
         });
-        s.fw.send(&m, &mut s.tap).map_err(fw_err)?;
+        s.fw.send(&m, &mut s.tap)?;
     }
     Ok(())
 }
@@ -667,17 +672,13 @@ fn collect(s: &mut SimVehicle, mode: RunMode, t_ms: u64) -> Result<(), RunError>
                         attempt += 1;
                         s.tick_retries += 1;
                         s.resent = Some(t_ms);
-                        s.fw.send(&Message::Tick(TickRepr { time_ms: t_ms }), &mut s.tap)
-                            .map_err(fw_err)?;
+                        s.fw.send(&Message::Tick(TickRepr { time_ms: t_ms }), &mut s.tap)?;
                     }
-                    Err(e) => return Err(fw_err(e)),
+                    Err(e) => return Err(e.into()),
                 }
             }
         }
-        RunMode::Realtime => {
-            s.fw.receive_until(Duration::ZERO, &mut s.tap, |_| true)
-                .map_err(fw_err)?
-        }
+        RunMode::Realtime => s.fw.receive_until(Duration::ZERO, &mut s.tap, |_| true)?,
     };
     if let Some(resent) = s.resent {
         // A period whose Tick went out twice and came back answered twice (now, or with the
@@ -696,7 +697,7 @@ fn collect(s: &mut SimVehicle, mode: RunMode, t_ms: u64) -> Result<(), RunError>
     for r in &got {
         match r {
             // A rejected set-up request ends the run; a busy one goes again.
-            Reply::Reply(rep) => s.upload.on_reply(rep).map_err(RunError::Refused)?,
+            Reply::Reply(rep) => s.upload.on_reply(rep)?,
             Reply::Belief(c) => {
                 let position = s.model.state().position;
                 s.record.belief.apply(c, t_ms as f64 * 1e-3, position);
