@@ -257,7 +257,13 @@ Checksum: 1760 check: 1760 pass: True>\"";
         let broken = ONE.replace("  - angle: 150\n", "");
         let e = parse(&broken).unwrap_err();
         assert_eq!(e.to_string(), "message 0: no `- angle:`");
-        assert!(matches!(e, DumpError::Missing { message: 0, field: "- angle:" }));
+        assert!(matches!(
+            e,
+            DumpError::Missing {
+                message: 0,
+                field: "- angle:"
+            }
+        ));
         let broken = ONE.replace("'0x98'", "'0xzz'");
         assert!(parse(&broken).unwrap_err().to_string().contains("0xzz"));
     }

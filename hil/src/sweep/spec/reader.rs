@@ -7,6 +7,7 @@ use std::ops::Range;
 use toml::de::{DeTable, DeValue};
 use toml::Spanned;
 
+use super::Value;
 use crate::scenario::{unknown_key, ScenarioError, SourceText};
 
 // ---------------------------------------------------------------------------------------------
@@ -159,5 +160,101 @@ pub(crate) fn value_number(
         Ok(x)
     } else {
         Err(src.err(&v.span(), key, format!("must be a finite number, got {x}")))
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// The spec's range-checked reads.
+
+/// The sweep spec's range-checked reads, on a [`Table`].
+pub(super) trait SpecReads<'a> {
+    fn fail(&self, v: &Val<'_>, k: &str, message: impl Into<String>) -> ScenarioError;
+    fn text(&self, k: &str) -> Result<Option<&'a str>, ScenarioError>;
+    fn int_in(&self, k: &str, lo: i64, hi: i64) -> Result<Option<i64>, ScenarioError>;
+    fn num_in(&self, k: &str, lo: f64, hi: f64) -> Result<Option<f64>, ScenarioError>;
+    fn range_in(&self, k: &str, lo: f64, hi: f64) -> Result<Option<(f64, f64)>, ScenarioError>;
+}
+
+impl<'a> SpecReads<'a> for Table<'a> {
+    fn fail(&self, v: &Val<'_>, k: &str, message: impl Into<String>) -> ScenarioError {
+        self.src.err(&v.span(), &self.key(k), message)
+    }
+
+    fn text(&self, k: &str) -> Result<Option<&'a str>, ScenarioError> {
+        let Some(v) = self.get(k) else {
+            return Ok(None);
+        };
+        match v.get_ref() {
+            DeValue::String(s) => Ok(Some(s.as_ref())),
+            other => Err(self.fail(v, k, format!("expected a string, got {}", type_name(other)))),
+        }
+    }
+
+    fn int_in(&self, k: &str, lo: i64, hi: i64) -> Result<Option<i64>, ScenarioError> {
+        let Some(v) = self.get(k) else {
+            return Ok(None);
+        };
+        let i = value_integer(self.src, &self.key(k), v)?;
+        if !(lo..=hi).contains(&i) {
+            return Err(self.fail(v, k, format!("must be in {lo} ..= {hi}, got {i}")));
+        }
+        Ok(Some(i))
+    }
+
+    fn num_in(&self, k: &str, lo: f64, hi: f64) -> Result<Option<f64>, ScenarioError> {
+        let Some(v) = self.get(k) else {
+            return Ok(None);
+        };
+        let x = value_number(self.src, &self.key(k), v)?;
+        if !(lo..=hi).contains(&x) {
+            return Err(self.fail(v, k, format!("must be in {lo} ..= {hi}, got {x}")));
+        }
+        Ok(Some(x))
+    }
+
+    /// `[min, max]` with `lo <= min <= max <= hi`.
+    fn range_in(&self, k: &str, lo: f64, hi: f64) -> Result<Option<(f64, f64)>, ScenarioError> {
+        let Some(v) = self.get(k) else {
+            return Ok(None);
+        };
+        let key = self.key(k);
+        let DeValue::Array(a) = v.get_ref() else {
+            return Err(self.fail(
+                v,
+                k,
+                format!("expected [min, max], got {}", type_name(v.get_ref())),
+            ));
+        };
+        if a.len() != 2 {
+            return Err(self.fail(v, k, format!("expected [min, max], got {} items", a.len())));
+        }
+        let x = value_number(self.src, &format!("{key}[0]"), &a[0])?;
+        let y = value_number(self.src, &format!("{key}[1]"), &a[1])?;
+        if !(lo <= x && x <= y && y <= hi) {
+            return Err(self.fail(
+                v,
+                k,
+                format!("must be [min, max] with {lo} <= min <= max <= {hi}, got [{x}, {y}]"),
+            ));
+        }
+        Ok(Some((x, y)))
+    }
+}
+
+/// A `[planner]` value: integer, finite float or string.
+pub(super) fn value_any(
+    src: SourceText<'_>,
+    key: &str,
+    v: &Val<'_>,
+) -> Result<Value, ScenarioError> {
+    match v.get_ref() {
+        DeValue::Integer(_) => value_integer(src, key, v).map(Value::Int),
+        DeValue::Float(_) => value_number(src, key, v).map(Value::Float),
+        DeValue::String(s) => Ok(Value::Str(s.to_string())),
+        other => Err(src.err(
+            &v.span(),
+            key,
+            format!("expected a number or a string, got {}", type_name(other)),
+        )),
     }
 }
