@@ -65,8 +65,8 @@ mod vehicle;
 use error::At;
 pub use error::ScenarioError;
 pub(crate) use error::SourceText;
-pub(crate) use refusal::unknown_key;
 use refusal::{refusal, unknown_choice};
+pub(crate) use refusal::{type_name, unknown_key};
 pub use schema::*;
 
 // ---------------------------------------------------------------------------------------------

@@ -74,19 +74,9 @@ pub(super) fn obstacle(
     };
     let velocity = at.velocity("velocity", &f.velocity, MAX_OBSTACLE_SPEED)?;
     // The firmware's own constructors are the last word on what geometry it accepts.
-    let vpf_shape = match &shape {
-        SimShape::Circle { center, radius } => Shape::circle(center.to_vpf(), *radius as f32),
-        SimShape::Rectangle {
-            center,
-            half_size,
-            angle,
-        } => Shape::rectangle(center.to_vpf(), half_size.to_vpf(), *angle as f32),
-        SimShape::Polygon { points } => {
-            let pts: Vec<vpf::Vec2> = points.iter().map(|p| p.to_vpf()).collect();
-            Shape::polygon(&pts)
-        }
-    }
-    .map_err(|e| at.refuse(format!("refused by the firmware's geometry: {e}")))?;
+    let vpf_shape = shape
+        .to_vpf()
+        .map_err(|e| at.refuse(format!("refused by the firmware's geometry: {e}")))?;
     Ok((SimObstacle { shape, velocity }, vpf_shape))
 }
 

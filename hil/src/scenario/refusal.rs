@@ -128,7 +128,8 @@ fn value_at<'a>(doc: &'a DeTable<'a>, path: &[Seg<'_>]) -> Option<&'a DeValue<'a
     Some(v)
 }
 
-fn type_name(v: &DeValue<'_>) -> &'static str {
+/// A TOML value's type, as refusals name it ("a string", "an array").
+pub(crate) fn type_name(v: &DeValue<'_>) -> &'static str {
     match v {
         DeValue::String(_) => "a string",
         DeValue::Integer(_) => "an integer",

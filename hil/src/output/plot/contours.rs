@@ -12,7 +12,7 @@
 use super::ramp;
 use crate::output::svg::{finite, Frame, PathData, Svg};
 use crate::output::RunOutput;
-use crate::types::{SimObstacle, SimShape, P2};
+use crate::types::{SimObstacle, P2};
 
 /// Contour levels spaced evenly in log E over the open water.
 const LEVELS: usize = 18;
@@ -28,28 +28,11 @@ pub fn field_obstacles(obstacles: &[SimObstacle], a_plus: f32) -> Vec<vpf::Obsta
         .iter()
         .enumerate()
         .filter_map(|(i, o)| {
-            let shape = vpf_shape(&o.shape)?;
+            let shape = o.shape.to_vpf().ok()?;
             let id = u16::try_from(i).ok()?;
             vpf::Obstacle::new(id, shape, a_plus, vpf::Origin::Charted, 0).ok()
         })
         .collect()
-}
-
-fn vpf_shape(s: &SimShape) -> Option<vpf::field::Shape> {
-    use vpf::field::Shape;
-    match s {
-        SimShape::Circle { center, radius } => Shape::circle(center.to_vpf(), *radius as f32),
-        SimShape::Rectangle {
-            center,
-            half_size,
-            angle,
-        } => Shape::rectangle(center.to_vpf(), half_size.to_vpf(), *angle as f32),
-        SimShape::Polygon { points } => {
-            let pts: Vec<vpf::Vec2> = points.iter().map(|p| p.to_vpf()).collect();
-            Shape::polygon(&pts)
-        }
-    }
-    .ok()
 }
 
 /// E(p) without the rotor: goal-point attractor plus every obstacle's stator (as the

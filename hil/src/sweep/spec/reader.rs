@@ -8,24 +8,13 @@ use toml::de::{DeTable, DeValue};
 use toml::Spanned;
 
 use super::Value;
+pub(crate) use crate::scenario::type_name;
 use crate::scenario::{unknown_key, ScenarioError, SourceText};
 
 // ---------------------------------------------------------------------------------------------
 // Typed access to the spanned document.
 
 pub(crate) type Val<'a> = Spanned<DeValue<'a>>;
-
-pub(crate) fn type_name(v: &DeValue<'_>) -> &'static str {
-    match v {
-        DeValue::String(_) => "a string",
-        DeValue::Integer(_) => "an integer",
-        DeValue::Float(_) => "a float",
-        DeValue::Boolean(_) => "a boolean",
-        DeValue::Datetime(_) => "a date-time",
-        DeValue::Array(_) => "an array",
-        DeValue::Table(_) => "a table",
-    }
-}
 
 pub(crate) fn join(path: &str, key: &str) -> String {
     if path.is_empty() {
