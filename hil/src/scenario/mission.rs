@@ -149,13 +149,7 @@ fn radius(
     params: &Params,
 ) -> Result<f64, ScenarioError> {
     match r {
-        Some(r) => at.positive(
-            key,
-            &r.span(),
-            r.get_ref().0,
-            limit(MAX_WAYPOINT_RADIUS_M),
-            "m",
-        ),
+        Some(r) => at.positive(key, r, (0.0, limit(MAX_WAYPOINT_RADIUS_M)), "m"),
         None => Ok(f64::from(params.arrival_radius_m)),
     }
 }
@@ -225,10 +219,7 @@ fn list(
 /// `[vehicle.survey]`: corner, length_m, width_m, heading_deg, spacing_m, radius_m, speed.
 fn survey_of(at: &At<'_>, f: &SurveyFile, params: &Params) -> Result<Survey, ScenarioError> {
     let side = limit(vpf::planner::mission::MAX_SURVEY_SIDE_M);
-    let positive = |key: &str, v: &Option<Spanned<Num>>| {
-        let v = at.req(key, v)?;
-        at.positive(key, &v.span(), v.get_ref().0, side, "m")
-    };
+    let positive = |key: &str, v| at.positive(key, at.req(key, v)?, (0.0, side), "m");
     let corner = at.position("corner", at.req("corner", &f.corner)?)?;
     let length_m = positive("length_m", &f.length_m)?;
     let width_m = positive("width_m", &f.width_m)?;

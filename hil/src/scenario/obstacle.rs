@@ -9,7 +9,7 @@ use vpf::field::shape::MIN_EXTENT_M;
 use vpf::field::{Shape, MAX_POLYGON_VERTICES};
 
 use super::file::{shape_keys, ObstacleFile};
-use super::values::{Items, Pair};
+use super::values::{Items, Num, Pair};
 use super::{unknown_key, At, ScenarioError};
 use crate::types::{SimObstacle, SimShape, P2};
 
@@ -52,7 +52,7 @@ pub(super) fn obstacle(
             center: at.position("center", at.req("center", &f.center)?)?,
             radius: {
                 let r = at.req("radius", &f.radius)?;
-                at.size("radius", &r.span(), r.get_ref().0)?
+                at.size("radius", r)?
             },
         },
         "rectangle" => {
@@ -60,7 +60,10 @@ pub(super) fn obstacle(
             let half = at.req("half_size", &f.half_size)?;
             let half_size = half.get_ref().0;
             for (i, v) in [half_size.x, half_size.y].into_iter().enumerate() {
-                at.size(&format!("half_size[{i}]"), &half.span(), v)?;
+                at.size(
+                    &format!("half_size[{i}]"),
+                    &Spanned::new(half.span(), Num(v)),
+                )?;
             }
             SimShape::Rectangle {
                 center,

@@ -1,10 +1,9 @@
 //! The leaf values of a scenario file as serde reads them — a finite number, an integer, a pair
-//! `[x, y]`, a list of tables — each refusing a wrong type in the schema's words, and the range
+//! `[x, y]`, a table, an array — each refusing a wrong type in the schema's words, and the range
 //! checks the builders apply to them at their keys.
 
 use std::fmt;
 use std::marker::PhantomData;
-use std::ops::Range;
 
 use serde::de::value::MapAccessDeserializer;
 use serde::de::{self, Deserialize, Deserializer, MapAccess, SeqAccess, Visitor};
@@ -203,58 +202,33 @@ impl At<'_> {
         hi: f64,
         unit: &str,
     ) -> Result<f64, ScenarioError> {
-        self.within_at(key, &v.span(), v.get_ref().0, lo, hi, unit)
-    }
-
-    /// Number `x`, written at `span` as (part of) `key`, within `lo ..= hi`.
-    pub(super) fn within_at(
-        &self,
-        key: &str,
-        span: &Range<usize>,
-        x: f64,
-        lo: f64,
-        hi: f64,
-        unit: &str,
-    ) -> Result<f64, ScenarioError> {
+        let x = v.get_ref().0;
         if (lo..=hi).contains(&x) {
-            Ok(x)
-        } else {
-            Err(self.fail(
-                key,
-                span,
-                format!("must be in {lo} ..= {hi}{}, got {x}", unit_suffix(unit)),
-            ))
+            return Ok(x);
         }
+        let m = format!("must be in {lo} ..= {hi}{}, got {x}", unit_suffix(unit));
+        Err(self.fail(key, &v.span(), m))
     }
 
-    /// `key`'s number > 0 and at most `hi`.
-    /// `key`'s number (`x`, written at `span`) > 0 and at most `hi`.
+    /// `key`'s number > 0 and within `lo ..= hi` (unit `unit`).
     pub(super) fn positive(
         &self,
         key: &str,
-        span: &Range<usize>,
-        x: f64,
-        hi: f64,
+        v: &Spanned<Num>,
+        (lo, hi): (f64, f64),
         unit: &str,
     ) -> Result<f64, ScenarioError> {
+        let x = v.get_ref().0;
         if x <= 0.0 {
-            return Err(self.fail(key, span, format!("must be > 0, got {x}")));
+            return Err(self.fail(key, &v.span(), format!("must be > 0, got {x}")));
         }
-        self.within_at(key, span, x, 0.0, hi, unit)
+        self.within(key, v, lo, hi, unit)
     }
 
     /// A size of a shape: > 0, and within the firmware's shape limits.
-    pub(super) fn size(
-        &self,
-        key: &str,
-        span: &Range<usize>,
-        x: f64,
-    ) -> Result<f64, ScenarioError> {
-        if x <= 0.0 {
-            return Err(self.fail(key, span, format!("must be > 0, got {x}")));
-        }
-        let lo = f64::from(MIN_EXTENT_M);
-        self.within_at(key, span, x, lo, f64::from(MAX_EXTENT_M), "m")
+    pub(super) fn size(&self, key: &str, v: &Spanned<Num>) -> Result<f64, ScenarioError> {
+        let limits = (f64::from(MIN_EXTENT_M), f64::from(MAX_EXTENT_M));
+        self.positive(key, v, limits, "m")
     }
 
     /// An angle in degrees within ±360, in radians; 0 when absent.
