@@ -139,10 +139,10 @@ pub struct QuietRun {
     /// every vehicle is within `arrival_radius_m` of its goal, instead of at `duration_s`.
     pub stop_early: bool,
     /// The host-process firmware on a Unix socket pair instead of a pty
-    /// ([`Firmware::start_host_socket`]); other targets ignore it.
+    /// ([`Firmware::start_host_socket`](crate::firmware::Firmware::start_host_socket)); other targets ignore it.
     pub socket: bool,
     /// In lockstep, the host firmware's runtime in this process instead of a process
-    /// ([`Firmware::in_process`]: the same code, no wake-up or system call per period); other
+    /// ([`Firmware::in_process`](crate::firmware::Firmware::in_process): the same code, no wake-up or system call per period); other
     /// targets ignore it.
     pub in_process: bool,
 }

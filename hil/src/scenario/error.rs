@@ -15,7 +15,7 @@ use toml::Spanned;
 /// errors, unreadable files) display as `FILE:LINE:COLUMN: MESSAGE` and `FILE: MESSAGE`.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct ScenarioError {
-    /// The file name as given to [`load`] or [`parse`].
+    /// The file name as given to [`load`](super::load) or [`parse`](super::parse).
     pub file: String,
     /// 1-based line of the offending key or value (of the table header for a missing key);
     /// 0 when there is no line (the file could not be read).

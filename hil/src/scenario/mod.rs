@@ -3,7 +3,7 @@
 //! [`Scenario`].
 //!
 //! Every refusal is a [`ScenarioError`] naming the file, the line and the key path of the
-//! offending key or value, e.g. `u_trap.toml:12: key `obstacle[2].radius`: must be > 0, got -1`.
+//! offending key or value, e.g. ``u_trap.toml:12: key `obstacle[2].radius`: must be > 0, got -1``.
 //! The schema is documented in `hil/scenarios/README.md`.
 //!
 //! The document is read by serde into the file's tables (`file.rs`: every key spanned, unknown

@@ -24,7 +24,7 @@ pub enum Sector {
 /// The sonar's configuration. [`Default`] is a Micron at 30 m: 300 bins, 1.8° steps,
 /// continuous rotation.
 ///
-/// [`SonarConfig::validate`] says which field is out of range; [`Sonar::new`] instead clamps
+/// [`SonarConfig::validate`] says which field is out of range; [`Sonar::new`](super::Sonar::new) instead clamps
 /// every field into its range ([`SonarConfig::clamped`]; a non-finite number takes its
 /// default), so a sonar can always be built.
 #[derive(Clone, Copy, Debug, PartialEq)]

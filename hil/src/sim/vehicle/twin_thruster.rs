@@ -108,8 +108,8 @@ impl Pid {
 
 /// A vehicle in the horizontal plane driven by two horizontal thrusters in differential: a
 /// Fossen-style 3-DOF model with diagonal inertia (rigid body + added mass), linear and
-/// quadratic damping, and PI-D surge-speed and heading autopilots. [`VideoRay`] and
-/// [`FlatFish`](super::flatfish::FlatFish) are this model with their own [`HullParams`] and
+/// quadratic damping, and PI-D surge-speed and heading autopilots. [`VideoRay`](super::VideoRay) and
+/// [`FlatFish`](crate::sim::flatfish::FlatFish) are this model with their own [`HullParams`] and
 /// [`AutopilotGains`].
 ///
 /// With ν = (u, v, r) the velocity relative to the water, m₁₁ = m + X_u̇, m₂₂ = m + Y_v̇,

@@ -4,7 +4,7 @@
 //! exactly as the scenario parser does (`videoray.toml:14: key `sweep.params.a_plus`: ...`).
 //!
 //! The fixed `[planner]` table and every parameter set are checked by the scenario parser's own
-//! `[planner]` rules ([`scenario::parse_planner`]), so a sweep accepts exactly the keys and
+//! `[planner]` rules ([`scenario::parse_planner`](crate::scenario::parse_planner)), so a sweep accepts exactly the keys and
 //! values a scenario does. The format is documented in `hil/sweeps/README.md`.
 //!
 //! - `schema.rs`: the validated spec's types;
