@@ -112,15 +112,15 @@ impl SourceText<'_> {
 /// Where a table of the file is — its key path (`vehicle[1].formation`) and span — for the
 /// checks that follow reading, which report at one of its keys.
 #[derive(Clone)]
-pub(super) struct At<'a> {
-    pub(super) src: SourceText<'a>,
-    pub(super) path: String,
-    pub(super) span: Range<usize>,
+pub(crate) struct At<'a> {
+    pub(crate) src: SourceText<'a>,
+    pub(crate) path: String,
+    pub(crate) span: Range<usize>,
 }
 
 impl<'a> At<'a> {
     /// The root table (its span empty: a missing top-level key is reported at line 1).
-    pub(super) fn root(src: SourceText<'a>) -> Self {
+    pub(crate) fn root(src: SourceText<'a>) -> Self {
         At {
             src,
             path: String::new(),
@@ -129,7 +129,7 @@ impl<'a> At<'a> {
     }
 
     /// Table `key` of this one, spanning `span`.
-    pub(super) fn child(&self, key: &str, span: Range<usize>) -> Self {
+    pub(crate) fn child(&self, key: &str, span: Range<usize>) -> Self {
         At {
             src: self.src,
             path: self.key(key),
@@ -138,7 +138,7 @@ impl<'a> At<'a> {
     }
 
     /// The key path of `key` in this table.
-    pub(super) fn key(&self, key: &str) -> String {
+    pub(crate) fn key(&self, key: &str) -> String {
         if self.path.is_empty() {
             key.to_string()
         } else {
@@ -147,7 +147,7 @@ impl<'a> At<'a> {
     }
 
     /// A refusal of `key`'s value, written at `span`.
-    pub(super) fn fail(
+    pub(crate) fn fail(
         &self,
         key: &str,
         span: &Range<usize>,
@@ -157,17 +157,17 @@ impl<'a> At<'a> {
     }
 
     /// A refusal of the whole table (at its header).
-    pub(super) fn refuse(&self, message: impl Into<String>) -> ScenarioError {
+    pub(crate) fn refuse(&self, message: impl Into<String>) -> ScenarioError {
         self.src.err(&self.span, &self.path, message)
     }
 
     /// `key` is required and absent: reported at the table's header.
-    pub(super) fn missing(&self, key: &str) -> ScenarioError {
+    pub(crate) fn missing(&self, key: &str) -> ScenarioError {
         self.fail(key, &self.span, "missing required key")
     }
 
     /// The value of required `key`, or its refusal.
-    pub(super) fn req<'v, T>(
+    pub(crate) fn req<'v, T>(
         &self,
         key: &str,
         v: &'v Option<Spanned<T>>,

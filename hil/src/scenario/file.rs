@@ -9,11 +9,14 @@ use serde::de::{Deserializer, MapAccess, SeqAccess, Visitor};
 use serde::Deserialize;
 use toml::Spanned;
 
+use toml::de::{DeTable, DeValue};
+
 use super::planner::Planner;
+use super::refusal::{keys_of, value_at, Seg};
 use super::values::{Int, Item, Items, Num, Pair, Table};
 
 /// `Option<Spanned<T>>`: a key that may be absent, with where it was written.
-pub(super) type Opt<T> = Option<Spanned<T>>;
+pub(crate) type Opt<T> = Option<Spanned<T>>;
 
 /// The document.
 #[derive(Deserialize)]
@@ -195,9 +198,28 @@ pub(super) struct SurveyFile {
     pub speed: Opt<Num>,
 }
 
-/// What a table is called in "unknown key in …", by its key path's segments (indices
-/// dropped): the shape-dependent obstacle's name is the caller's.
-pub(super) fn table_name(parent: &[&str], root: &str) -> String {
+/// What a table of a scenario (`root`: of a parameter file) is called in "unknown key in …",
+/// and an obstacle's keys, which are its shape's.
+pub(super) fn naming(
+    root: &'static str,
+) -> impl Fn(&DeTable<'_>, &[Seg<'_>]) -> (String, Option<&'static [&'static str]>) {
+    move |doc, parent| {
+        if let [Seg::Key("obstacle"), Seg::Index(i)] = parent {
+            let shape = value_at(
+                doc,
+                &[Seg::Key("obstacle"), Seg::Index(*i), Seg::Key("shape")],
+            );
+            if let Some(DeValue::String(shape)) = shape {
+                if let Some(keys) = shape_keys(shape) {
+                    return (format!("a {shape} obstacle"), Some(keys));
+                }
+            }
+        }
+        (table_name(&keys_of(parent), root), None)
+    }
+}
+
+fn table_name(parent: &[&str], root: &str) -> String {
     match parent {
         [] => root.to_string(),
         ["vehicle"] => "a [[vehicle]]".into(),

@@ -62,12 +62,15 @@ mod schema;
 mod values;
 mod vehicle;
 
-use error::At;
+pub(crate) use error::At;
 pub use error::ScenarioError;
 pub(crate) use error::SourceText;
+pub(crate) use file::Opt;
+pub(crate) use refusal::{closest, unknown_key};
+pub(crate) use refusal::{keys_of, Naming, Seg};
 use refusal::{refusal, unknown_choice};
-pub(crate) use refusal::{type_name, unknown_key};
 pub use schema::*;
+pub(crate) use values::{int_within, Int, Item, Items, Num, Table};
 
 // ---------------------------------------------------------------------------------------------
 // Entry points.
@@ -99,17 +102,18 @@ pub fn parse(text: &str, file: &str) -> Result<Scenario, ScenarioError> {
         return Err(too_big(file, text.len() as u64));
     }
     let src = SourceText { file, text };
-    let f: file::ScenarioFile = read(src, "the scenario")?;
+    let f: file::ScenarioFile = read(src, &file::naming("the scenario"))?;
     build::build(&At::root(src), &f)
 }
 
-/// Reads `src` as a `T` (its syntax, types and keys), each refusal at its key.
-fn read<T: serde::de::DeserializeOwned>(
+/// Reads `src` as a `T` (its syntax, types and keys), each refusal at its key, its tables
+/// named by `naming`. (The sweep spec's reader too.)
+pub(crate) fn read<T: serde::de::DeserializeOwned>(
     src: SourceText<'_>,
-    root: &str,
+    naming: &Naming,
 ) -> Result<T, ScenarioError> {
     let doc = toml::de::DeTable::parse(src.text).map_err(|e| src.syntax(&e))?;
-    T::deserialize(toml::de::Deserializer::from(doc)).map_err(|e| refusal(src, &e, root))
+    T::deserialize(toml::de::Deserializer::from(doc)).map_err(|e| refusal(src, &e, naming))
 }
 
 fn too_big(file: &str, bytes: u64) -> ScenarioError {
@@ -131,6 +135,9 @@ fn too_big(file: &str, bytes: u64) -> ScenarioError {
 /// `file`, the line and the key, as for a scenario.
 pub fn parse_planner(text: &str, file: &str, dt_s: f64) -> Result<Params, ScenarioError> {
     let src = SourceText { file, text };
-    let f: file::ParamFile = read(src, "a parameter file (only a [planner] table)")?;
+    let f: file::ParamFile = read(
+        src,
+        &file::naming("a parameter file (only a [planner] table)"),
+    )?;
     planner::planner(&At::root(src), &f.planner, dt_s, &(0..0))
 }

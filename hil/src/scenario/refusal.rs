@@ -4,11 +4,16 @@
 
 use toml::de::{DeTable, DeValue};
 
-use super::file::{shape_keys, table_name};
 use super::{ScenarioError, SourceText};
 
-/// `e`, met reading `src` as a document whose root is called `root` in messages.
-pub(super) fn refusal(src: SourceText<'_>, e: &toml::de::Error, root: &str) -> ScenarioError {
+/// How a document's tables are called in "unknown key in …": given the document and the key
+/// path of the table, its name, and its keys where they are not its struct's fields (an
+/// obstacle's are its shape's).
+pub(crate) type Naming =
+    dyn Fn(&DeTable<'_>, &[Seg<'_>]) -> (String, Option<&'static [&'static str]>);
+
+/// `e`, met reading `src`, its tables named by `naming`.
+pub(crate) fn refusal(src: SourceText<'_>, e: &toml::de::Error, naming: &Naming) -> ScenarioError {
     let span = e.span().unwrap_or(0..0);
     // The text parsed before it was read, so it parses again.
     let doc = DeTable::parse(src.text)
@@ -20,7 +25,7 @@ pub(super) fn refusal(src: SourceText<'_>, e: &toml::de::Error, root: &str) -> S
     let message = e.message();
     let message = if let Some(rest) = message.strip_prefix("unknown field `") {
         let (field, expected) = rest.split_once('`').unwrap_or((rest, ""));
-        unknown_field(&doc, &path, field, expected, root)
+        unknown_field(&doc, &path, field, expected, naming)
     } else if let Some((got, expected)) = message
         .strip_prefix("invalid type: ")
         .and_then(|m| m.rsplit_once(", expected "))
@@ -47,43 +52,28 @@ fn unknown_field(
     path: &[Seg<'_>],
     field: &str,
     expected: &str,
-    root: &str,
+    naming: &Naming,
 ) -> String {
     // A date-time is read as a table with one private key.
     if field.starts_with("$__toml_private") {
         return "expected a table, got a date-time".into();
     }
-    let parent = &path[..path.len().saturating_sub(1)];
-    let names: Vec<&str> = parent
-        .iter()
+    let (what, keys) = naming(doc, &path[..path.len().saturating_sub(1)]);
+    let allowed: Vec<&str> = match keys {
+        Some(keys) => keys.to_vec(),
+        None => expected.split('`').skip(1).step_by(2).collect(),
+    };
+    unknown_key(field, &allowed, &what)
+}
+
+/// The keys of `path`, its array indices left out: `vehicle[0].survey` is `vehicle.survey`.
+pub(crate) fn keys_of<'a>(path: &[Seg<'a>]) -> Vec<&'a str> {
+    path.iter()
         .filter_map(|s| match s {
             Seg::Key(k) => Some(*k),
             Seg::Index(_) => None,
         })
-        .collect();
-    // An obstacle's keys are its shape's.
-    if let [Seg::Key("obstacle"), Seg::Index(i)] = parent {
-        if let Some((shape, keys)) = obstacle_shape(doc, *i) {
-            return unknown_key(field, keys, &format!("a {shape} obstacle"));
-        }
-    }
-    let allowed: Vec<&str> = expected.split('`').skip(1).step_by(2).collect();
-    unknown_key(field, &allowed, &table_name(&names, root))
-}
-
-/// The shape of obstacle `i` and its keys, if it names a known one.
-fn obstacle_shape<'a>(doc: &'a DeTable<'a>, i: usize) -> Option<(String, &'static [&'static str])> {
-    let get = |t: &'a DeTable<'a>, key: &str| t.iter().find(|(k, _)| k.get_ref() == key);
-    let DeValue::Array(items) = get(doc, "obstacle")?.1.get_ref() else {
-        return None;
-    };
-    let DeValue::Table(t) = items.get(i)?.get_ref() else {
-        return None;
-    };
-    let DeValue::String(shape) = get(t, "shape")?.1.get_ref() else {
-        return None;
-    };
-    Some((shape.to_string(), shape_keys(shape)?))
+        .collect()
 }
 
 /// "unknown key in `what`", with the nearest allowed key if it is close enough to be a typo.
@@ -102,7 +92,7 @@ pub(super) fn unknown_choice(what: &str, got: &str, names: &[&str]) -> String {
 }
 
 /// The allowed key nearest to `key` by edit distance, if it is close enough to be a typo.
-fn closest<'k>(key: &str, allowed: &[&'k str]) -> Option<&'k str> {
+pub(crate) fn closest<'k>(key: &str, allowed: &[&'k str]) -> Option<&'k str> {
     allowed
         .iter()
         .map(|a| (strsim::levenshtein(key, a), *a))
@@ -112,7 +102,7 @@ fn closest<'k>(key: &str, allowed: &[&'k str]) -> Option<&'k str> {
 }
 
 /// The value at `path` in `doc`.
-fn value_at<'a>(doc: &'a DeTable<'a>, path: &[Seg<'_>]) -> Option<&'a DeValue<'a>> {
+pub(crate) fn value_at<'a>(doc: &'a DeTable<'a>, path: &[Seg<'_>]) -> Option<&'a DeValue<'a>> {
     let (Seg::Key(first), rest) = path.split_first()? else {
         return None;
     };
@@ -129,7 +119,7 @@ fn value_at<'a>(doc: &'a DeTable<'a>, path: &[Seg<'_>]) -> Option<&'a DeValue<'a
 }
 
 /// A TOML value's type, as refusals name it ("a string", "an array").
-pub(crate) fn type_name(v: &DeValue<'_>) -> &'static str {
+fn type_name(v: &DeValue<'_>) -> &'static str {
     match v {
         DeValue::String(_) => "a string",
         DeValue::Integer(_) => "an integer",
@@ -145,7 +135,7 @@ pub(crate) fn type_name(v: &DeValue<'_>) -> &'static str {
 // The key path at a place in the document.
 
 /// A step of a key path.
-enum Seg<'a> {
+pub(crate) enum Seg<'a> {
     Key(&'a str),
     Index(usize),
 }

@@ -15,19 +15,19 @@ use crate::types::P2;
 
 /// A finite number; an integer is accepted where a number is expected.
 #[derive(Clone, Copy, Debug)]
-pub(super) struct Num(pub(super) f64);
+pub(crate) struct Num(pub(crate) f64);
 
 /// An integer.
 #[derive(Clone, Copy, Debug)]
-pub(super) struct Int(pub(super) i64);
+pub(crate) struct Int(pub(crate) i64);
 
 /// A pair `[x, y]` of finite numbers.
 #[derive(Clone, Copy, Debug)]
-pub(super) struct Pair(pub(super) P2);
+pub(crate) struct Pair(pub(crate) P2);
 
 /// A table, and only a table (serde would read an array as a struct's fields in order).
 #[derive(Debug)]
-pub(super) struct Table<T>(pub(super) T);
+pub(crate) struct Table<T>(pub(crate) T);
 
 impl<T> std::ops::Deref for Table<T> {
     type Target = T;
@@ -39,7 +39,7 @@ impl<T> std::ops::Deref for Table<T> {
 /// An array whose items are `T`, refused as a whole with `T`'s [`Item::LIST`] when it is not
 /// an array.
 #[derive(Debug)]
-pub(super) struct Items<T>(pub(super) Vec<Spanned<T>>);
+pub(crate) struct Items<T>(pub(crate) Vec<Spanned<T>>);
 
 impl<T> Default for Items<T> {
     fn default() -> Self {
@@ -48,7 +48,7 @@ impl<T> Default for Items<T> {
 }
 
 /// What an array of these is called in a refusal.
-pub(super) trait Item {
+pub(crate) trait Item {
     const LIST: &'static str;
 }
 
@@ -184,7 +184,7 @@ impl Item for Pair {
 // Range checks, each refusal at its key.
 
 /// ` unit`, or nothing for a plain number.
-pub(super) fn unit_suffix(unit: &str) -> String {
+pub(crate) fn unit_suffix(unit: &str) -> String {
     if unit.is_empty() {
         String::new()
     } else {
@@ -194,7 +194,7 @@ pub(super) fn unit_suffix(unit: &str) -> String {
 
 impl At<'_> {
     /// `key`'s number within `lo ..= hi`.
-    pub(super) fn within(
+    pub(crate) fn within(
         &self,
         key: &str,
         v: &Spanned<Num>,
@@ -211,7 +211,7 @@ impl At<'_> {
     }
 
     /// `key`'s number > 0 and within `lo ..= hi` (unit `unit`).
-    pub(super) fn positive(
+    pub(crate) fn positive(
         &self,
         key: &str,
         v: &Spanned<Num>,
@@ -226,13 +226,13 @@ impl At<'_> {
     }
 
     /// A size of a shape: > 0, and within the firmware's shape limits.
-    pub(super) fn size(&self, key: &str, v: &Spanned<Num>) -> Result<f64, ScenarioError> {
+    pub(crate) fn size(&self, key: &str, v: &Spanned<Num>) -> Result<f64, ScenarioError> {
         let limits = (f64::from(MIN_EXTENT_M), f64::from(MAX_EXTENT_M));
         self.positive(key, v, limits, "m")
     }
 
     /// An angle in degrees within ±360, in radians; 0 when absent.
-    pub(super) fn degrees(
+    pub(crate) fn degrees(
         &self,
         key: &str,
         v: &Option<Spanned<Num>>,
@@ -244,7 +244,7 @@ impl At<'_> {
     }
 
     /// A position: a pair within ±[`MAX_POSITION_M`].
-    pub(super) fn position(&self, key: &str, v: &Spanned<Pair>) -> Result<P2, ScenarioError> {
+    pub(crate) fn position(&self, key: &str, v: &Spanned<Pair>) -> Result<P2, ScenarioError> {
         let p = v.get_ref().0;
         if p.x.abs() > MAX_POSITION_M || p.y.abs() > MAX_POSITION_M {
             return Err(self.fail(
@@ -260,7 +260,7 @@ impl At<'_> {
     }
 
     /// A velocity: a pair of at most `max` m/s; zero when absent.
-    pub(super) fn velocity(
+    pub(crate) fn velocity(
         &self,
         key: &str,
         v: &Option<Spanned<Pair>>,
@@ -281,7 +281,7 @@ impl At<'_> {
     }
 
     /// A time window `[from_s, to_s]` with 0 ≤ from < to.
-    pub(super) fn window(
+    pub(crate) fn window(
         &self,
         key: &str,
         v: &Option<Spanned<Pair>>,
@@ -301,7 +301,7 @@ impl At<'_> {
     }
 
     /// Matches `key`'s string against `(name, value)` choices.
-    pub(super) fn choose<T: Copy>(
+    pub(crate) fn choose<T: Copy>(
         &self,
         key: &str,
         s: &Spanned<String>,
@@ -320,7 +320,7 @@ impl At<'_> {
 }
 
 /// An integer value checked within `lo ..= hi` (its refusal at `key`).
-pub(super) fn int_within(
+pub(crate) fn int_within(
     at: &At<'_>,
     key: &str,
     v: &Spanned<Int>,

@@ -8,24 +8,21 @@
 //! values a scenario does. The format is documented in `hil/sweeps/README.md`.
 //!
 //! - `schema.rs`: the validated spec's types;
-//! - `reader.rs`: the spanned document walked table by table, with the spec's range-checked
-//!   reads;
+//! - `file.rs`: the file's tables as serde reads them (the scenario reader's values and
+//!   refusals: file, line, key path, "did you mean");
 //! - `tables.rs`: each table of the file read and checked (`[craft]`, `[planner]`, `[sweep]`,
 //!   `[scenarios]`, `[criterion]`);
 //! - `sets.rs`: the parameter sets — the grid's combinations or the random draws — and their
 //!   checks.
 
-use toml::de::DeTable;
-
-mod reader;
+mod file;
 mod schema;
 mod sets;
 mod tables;
 
 pub use schema::*;
 
-use crate::scenario::{ScenarioError, SourceText};
-use reader::{SpecReads, Table};
+use crate::scenario::{self, int_within, At, ScenarioError, SourceText};
 
 /// The planner period the parameter sets are checked at, s (every generated scenario uses it;
 /// a scenario file's own `dt_s` replaces it at run time).
@@ -59,42 +56,26 @@ pub fn load(path: &std::path::Path) -> Result<Spec, ScenarioError> {
 /// Parses and validates sweep `text`; `file` names it in errors.
 pub fn parse(text: &str, file: &str) -> Result<Spec, ScenarioError> {
     let src = SourceText { file, text };
-    let doc = DeTable::parse(text).map_err(|e| src.syntax(&e))?;
-    let root = Table::new(src, String::new(), 0..0, doc.get_ref());
-    root.allow(
-        &[
-            "name",
-            "description",
-            "seed",
-            "craft",
-            "planner",
-            "sweep",
-            "scenarios",
-            "criterion",
-        ],
-        "the sweep file",
-    )?;
-    let name = root.text("name")?.ok_or_else(|| root.missing("name"))?;
-    if name.trim().is_empty() {
-        let v = root.get("name").map_or(0..0, |v| v.span());
-        return Err(src.err(&v, "name", "must not be empty"));
+    let f: file::SpecFile = scenario::read(src, &file::naming)?;
+    let root = At::root(src);
+    let name = root.req("name", &f.name)?;
+    if name.get_ref().trim().is_empty() {
+        return Err(root.fail("name", &name.span(), "must not be empty"));
     }
-    let description = root.text("description")?.unwrap_or_default().to_string();
-    let seed = root
-        .int_in("seed", 0, i64::MAX)?
-        .ok_or_else(|| root.missing("seed"))? as u64;
+    let description = f.description.as_ref().map_or("", |d| d.get_ref());
+    let seed = int_within(&root, "seed", root.req("seed", &f.seed)?, 0, i64::MAX)? as u64;
 
-    let craft = tables::craft(&root)?;
-    let base = tables::base_planner(&root, src)?;
-    let (mode, params, heatmap) = tables::sweep(&root, &base)?;
-    let scenarios = tables::scenarios(&root)?;
-    let weights = tables::criterion(&root)?;
+    let craft = tables::craft(&root, &f.craft)?;
+    let base = tables::base_planner(src, &f.planner)?;
+    let (mode, params, heatmap) = tables::sweep(&root, &f.sweep, &base)?;
+    let scenarios = tables::scenarios(&root, &f.scenarios)?;
+    let weights = tables::criterion(&root, &f.criterion)?;
 
     let mut spec = Spec {
         file: file.to_string(),
         text: text.to_string(),
-        name: name.to_string(),
-        description,
+        name: name.get_ref().clone(),
+        description: description.to_string(),
         seed,
         craft,
         base,
@@ -105,8 +86,12 @@ pub fn parse(text: &str, file: &str) -> Result<Spec, ScenarioError> {
         weights,
         sets: Vec::new(),
     };
-    spec.sets = sets::expand(&spec, &root)?;
-    sets::check_runs(&spec, &root)?;
+    // The sizes are refused at their tables' headers (both are required, so present).
+    let span_of = |t: Option<std::ops::Range<usize>>| t.unwrap_or(0..0);
+    let sweep_at = root.child("sweep", span_of(f.sweep.as_ref().map(|t| t.span())));
+    spec.sets = sets::expand(&spec, &sweep_at)?;
+    let scenarios_span = span_of(f.scenarios.as_ref().map(|t| t.span()));
+    sets::check_runs(&spec, &root.child("scenarios", scenarios_span))?;
     sets::check_sets(&spec)?;
     Ok(spec)
 }

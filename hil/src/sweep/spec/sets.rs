@@ -2,9 +2,8 @@
 //! random draws (seeded, rounded to 3 significant digits), each checked by the scenario
 //! parser's `[planner]` rules, and the sweep's size held to [`MAX_RUNS`].
 
-use super::reader::Table;
 use super::{Axis, Mode, Spec, Value, CHECK_DT_S, MAX_RUNS, MAX_SETS};
-use crate::scenario::ScenarioError;
+use crate::scenario::{At, ScenarioError};
 use crate::sim::Rng;
 
 /// 3 significant digits (random draws stay readable, and the CSV, the recipe and the firmware
@@ -20,25 +19,23 @@ fn round3(x: f64) -> f64 {
 }
 
 /// Refuses a sweep of more than [`MAX_RUNS`] runs, naming the product.
-pub(super) fn check_runs(spec: &Spec, root: &Table<'_>) -> Result<(), ScenarioError> {
+/// `scenarios_at` is the `[scenarios]` table, where the refusal is reported.
+pub(super) fn check_runs(spec: &Spec, scenarios_at: &At<'_>) -> Result<(), ScenarioError> {
     let sets = spec.sets.len();
     let scenarios = spec.scenarios.count();
     match sets.checked_mul(scenarios) {
         Some(runs) if runs <= MAX_RUNS => Ok(()),
-        runs => Err(root.src.err(
-            &root.span_of("scenarios"),
-            "scenarios",
-            format!(
-                "{sets} parameter sets × {scenarios} scenarios = {} runs; at most {MAX_RUNS} \
+        runs => Err(scenarios_at.refuse(format!(
+            "{sets} parameter sets × {scenarios} scenarios = {} runs; at most {MAX_RUNS} \
                  (fewer sets, or fewer scenarios)",
-                runs.map_or_else(|| "too many".to_string(), |r| r.to_string())
-            ),
-        )),
+            runs.map_or_else(|| "too many".to_string(), |r| r.to_string())
+        ))),
     }
 }
 
-/// The parameter sets: the grid's combinations, or the random draws.
-pub(super) fn expand(spec: &Spec, root: &Table<'_>) -> Result<Vec<Vec<Value>>, ScenarioError> {
+/// The parameter sets: the grid's combinations, or the random draws. `sweep` is the `[sweep]`
+/// table, where a grid too large is reported.
+pub(super) fn expand(spec: &Spec, sweep: &At<'_>) -> Result<Vec<Vec<Value>>, ScenarioError> {
     match spec.mode {
         Mode::Grid => {
             let lists: Vec<&Vec<Value>> = spec
@@ -54,9 +51,9 @@ pub(super) fn expand(spec: &Spec, root: &Table<'_>) -> Result<Vec<Vec<Value>>, S
                 .try_fold(1usize, |acc, l| acc.checked_mul(l.len()))
                 .filter(|n| *n <= MAX_SETS);
             let Some(total) = total else {
-                return Err(root.src.err(
-                    &root.span_of("sweep"),
-                    "sweep.params",
+                return Err(sweep.fail(
+                    "params",
+                    &sweep.span,
                     format!("the grid has more than {MAX_SETS} parameter sets"),
                 ));
             };

@@ -1,48 +1,51 @@
-//! The sweep file's tables, each read and checked: `[craft]`, the fixed `[planner]` (by the
-//! scenario parser's own `[planner]` rules), `[sweep]` and its parameters' axes, `[scenarios]`,
+//! The sweep file's tables, each checked: `[craft]`, the fixed `[planner]` (by the scenario
+//! parser's own `[planner]` rules), `[sweep]` and its parameters' axes, `[scenarios]`,
 //! `[criterion]`.
 
-use toml::de::DeValue;
+use toml::Spanned;
 
-use super::reader::{type_name, value_any, value_number, SpecReads, Table, Val};
+use super::file::{AxisFile, CraftFile, CriterionFile, Entries, MinMax, ScenariosFile, SweepFile};
 use super::{Axis, Craft, Mode, Param, Scenarios, Value, Weights, CHECK_DT_S, MAX_SETS};
-use crate::scenario::{self, ModelKind, ScenarioError, Sensing, SourceText};
+use crate::scenario::{
+    self, int_within, At, Int, ModelKind, Num, Opt, ScenarioError, Sensing, SourceText, Table,
+};
 
-pub(super) fn craft(root: &Table<'_>) -> Result<Craft, ScenarioError> {
-    let t = root.table("craft")?.ok_or_else(|| root.missing("craft"))?;
-    t.allow(&["model", "margin_m", "label"], "[craft]")?;
-    let m = t.text("model")?.ok_or_else(|| t.missing("model"))?;
-    let model = m.parse::<ModelKind>().map_err(|e| {
-        let v = t.get("model").map_or(0..0, |v| v.span());
-        t.src.err(&v, &t.key("model"), e.to_string())
-    })?;
-    let margin_m = t
-        .num_in("margin_m", 0.0, 100.0)?
-        .ok_or_else(|| t.missing("margin_m"))?;
-    let label = t.text("label")?.unwrap_or(model.name()).to_string();
+pub(super) fn craft(root: &At<'_>, t: &Opt<Table<CraftFile>>) -> Result<Craft, ScenarioError> {
+    let t = root.req("craft", t)?;
+    let (at, f) = (root.child("craft", t.span()), t.get_ref());
+    let m = at.req("model", &f.model)?;
+    let model = m
+        .get_ref()
+        .parse::<ModelKind>()
+        .map_err(|e| at.fail("model", &m.span(), e.to_string()))?;
+    let margin_m = at.within("margin_m", at.req("margin_m", &f.margin_m)?, 0.0, 100.0, "")?;
+    let label = f.label.as_ref().map_or(model.name(), |l| l.get_ref());
     Ok(Craft {
         model,
         margin_m,
-        label,
+        label: label.to_string(),
     })
 }
 
 /// The fixed `[planner]` keys, checked by the scenario parser on the spec's own text with every
 /// line outside the table blanked (so its errors carry the spec's line numbers).
 pub(super) fn base_planner(
-    root: &Table<'_>,
     src: SourceText<'_>,
+    t: &Opt<Entries<String, Value>>,
 ) -> Result<Vec<(String, Value)>, ScenarioError> {
-    let Some(t) = root.table("planner")? else {
+    let Some(t) = t else {
         return Ok(Vec::new());
     };
-    let mut out = Vec::new();
-    let mut last = t.span.end;
-    for (k, _, v) in &t.entries {
-        out.push((k.to_string(), value_any(src, &t.key(k), v)?));
-        last = last.max(v.span().end);
-    }
-    let (first_line, last_line) = (src.line_of(t.span.start), src.line_of(last));
+    let entries = &t.get_ref().0;
+    let out = entries
+        .iter()
+        .map(|(k, v)| (k.get_ref().clone(), v.get_ref().clone()))
+        .collect();
+    let last = entries
+        .iter()
+        .map(|(_, v)| v.span().end)
+        .fold(t.span().end, usize::max);
+    let (first_line, last_line) = (src.line_of(t.span().start), src.line_of(last));
     let kept: String = src
         .text
         .lines()
@@ -62,94 +65,68 @@ pub(super) fn base_planner(
 type SweepPart = (Mode, Vec<Param>, Option<(String, String)>);
 
 pub(super) fn sweep(
-    root: &Table<'_>,
+    root: &At<'_>,
+    t: &Opt<Table<SweepFile>>,
     base: &[(String, Value)],
 ) -> Result<SweepPart, ScenarioError> {
-    let t = root.table("sweep")?.ok_or_else(|| root.missing("sweep"))?;
-    t.allow(&["mode", "samples", "heatmap", "params"], "[sweep]")?;
-    let mode = match t.text("mode")?.unwrap_or("grid") {
+    let t = root.req("sweep", t)?;
+    let (at, f) = (root.child("sweep", t.span()), t.get_ref());
+    let mode = match f.mode.as_ref().map_or("grid", |m| m.get_ref().as_str()) {
         "grid" => {
-            if let Some(v) = t.get("samples") {
-                return Err(t.fail(v, "samples", "only for mode = \"random\""));
+            if let Some(v) = &f.samples {
+                return Err(at.fail("samples", &v.span(), "only for mode = \"random\""));
             }
             Mode::Grid
         }
         "random" => Mode::Random {
-            samples: t
-                .int_in("samples", 1, MAX_SETS as i64)?
-                .ok_or_else(|| t.missing("samples"))? as usize,
+            samples: int_within(
+                &at,
+                "samples",
+                at.req("samples", &f.samples)?,
+                1,
+                MAX_SETS as i64,
+            )? as usize,
         },
         other => {
-            let v = t.get("mode").map_or(0..0, |v| v.span());
-            return Err(t.src.err(
-                &v,
-                &t.key("mode"),
+            let span = f.mode.as_ref().map_or(0..0, Spanned::span);
+            return Err(at.fail(
+                "mode",
+                &span,
                 format!("unknown mode \"{other}\" (expected \"grid\" or \"random\")"),
             ));
         }
     };
-    let p = t.table("params")?.ok_or_else(|| t.missing("params"))?;
-    if p.entries.is_empty() {
-        return Err(t.src.err(&p.span, &p.path, "no parameter to sweep"));
+    let p = at.req("params", &f.params)?;
+    let pt = at.child("params", p.span());
+    if p.get_ref().0.is_empty() {
+        return Err(pt.refuse("no parameter to sweep"));
     }
-    let names: Vec<&str> = vpf::link::PARAM_NAMES
-        .iter()
-        .copied()
-        .filter(|n| *n != "period_s")
-        .collect();
     let mut params = Vec::new();
-    for (k, kspan, v) in &p.entries {
-        if !names.contains(k) {
-            return Err(p.src.err(
-                kspan,
-                &p.key(k),
-                format!(
-                    "not a [planner] parameter (expected one of: {})",
-                    names.join(", ")
-                ),
-            ));
-        }
-        if base.iter().any(|(b, _)| b == k) {
-            return Err(p.src.err(
-                kspan,
-                &p.key(k),
+    for (k, v) in &p.get_ref().0 {
+        let (name, kspan) = (k.get_ref().0.as_str(), k.span());
+        if base.iter().any(|(b, _)| b == name) {
+            return Err(pt.fail(
+                name,
+                &kspan,
                 "is also fixed in [planner]: a parameter is either fixed or swept",
             ));
         }
-        let axis = axis(&p, k, v, mode)?;
         params.push(Param {
-            name: k.to_string(),
-            axis,
-            line: p.src.line_of(kspan.start),
+            name: name.to_string(),
+            axis: axis(&pt, name, v, mode)?,
+            line: pt.src.line_of(kspan.start),
         });
     }
-    let heatmap = match t.get("heatmap") {
+    let heatmap = match &f.heatmap {
         None => None,
         Some(v) => {
-            let bad = || {
-                t.fail(
-                    v,
-                    "heatmap",
-                    "expected two swept parameters, [\"x\", \"y\"]",
-                )
-            };
-            let DeValue::Array(a) = v.get_ref() else {
-                return Err(bad());
-            };
-            let names: Vec<&str> = a
-                .iter()
-                .filter_map(|x| match x.get_ref() {
-                    DeValue::String(s) => Some(s.as_ref()),
-                    _ => None,
-                })
-                .collect();
-            if names.len() != 2 || a.len() != 2 || names[0] == names[1] {
-                return Err(bad());
+            let names: Vec<&str> = v.get_ref().0.iter().map(|n| n.get_ref().as_str()).collect();
+            let fail = |m: String| at.fail("heatmap", &v.span(), m);
+            if names.len() != 2 || names[0] == names[1] {
+                return Err(fail("expected two swept parameters, [\"x\", \"y\"]".into()));
             }
-            for n in &names {
-                if !params.iter().any(|q| q.name == *n) {
-                    return Err(t.fail(v, "heatmap", format!("`{n}` is not a swept parameter")));
-                }
+            if let Some(n) = names.iter().find(|n| !params.iter().any(|q| q.name == **n)) {
+                return Err(fail(format!("`{n}` is not a swept parameter")));
             }
             Some((names[0].to_string(), names[1].to_string()))
         }
@@ -157,65 +134,53 @@ pub(super) fn sweep(
     Ok((mode, params, heatmap))
 }
 
-pub(super) fn axis(p: &Table<'_>, k: &str, v: &Val<'_>, mode: Mode) -> Result<Axis, ScenarioError> {
-    let key = p.key(k);
+fn axis(p: &At<'_>, k: &str, v: &Spanned<AxisFile>, mode: Mode) -> Result<Axis, ScenarioError> {
     match v.get_ref() {
-        DeValue::Array(a) => {
-            if a.is_empty() {
-                return Err(p.fail(v, k, "needs at least one value"));
+        AxisFile::List(items) => {
+            if items.0.is_empty() {
+                return Err(p.fail(k, &v.span(), "needs at least one value"));
             }
-            let mut values = Vec::new();
-            for (i, item) in a.iter().enumerate() {
-                let x = value_any(p.src, &format!("{key}[{i}]"), item)?;
-                if values.contains(&x) {
-                    return Err(p.src.err(
+            let mut values: Vec<Value> = Vec::new();
+            for (i, item) in items.0.iter().enumerate() {
+                let x = item.get_ref();
+                if values.contains(x) {
+                    return Err(p.fail(
+                        &format!("{k}[{i}]"),
                         &item.span(),
-                        &format!("{key}[{i}]"),
                         format!("value {} is listed twice", x.toml()),
                     ));
                 }
-                values.push(x);
+                values.push(x.clone());
             }
             Ok(Axis::List(values))
         }
-        DeValue::Table(t) => {
-            let t = Table::new(p.src, key.clone(), v.span(), t);
+        AxisFile::Range(r) => {
             if mode == Mode::Grid {
                 return Err(p.fail(
-                    v,
                     k,
+                    &v.span(),
                     "a range { min, max } needs mode = \"random\"; a grid lists its values",
                 ));
             }
-            t.allow(&["min", "max", "log"], "a parameter range")?;
-            let min_v = t.get("min").ok_or_else(|| t.missing("min"))?;
-            let max_v = t.get("max").ok_or_else(|| t.missing("max"))?;
-            let min = value_number(t.src, &t.key("min"), min_v)?;
-            let max = value_number(t.src, &t.key("max"), max_v)?;
-            let integer = matches!(min_v.get_ref(), DeValue::Integer(_))
-                && matches!(max_v.get_ref(), DeValue::Integer(_));
-            let log = match t.get("log") {
-                None => false,
-                Some(l) => match l.get_ref() {
-                    DeValue::Boolean(b) => *b,
-                    other => {
-                        return Err(t.fail(
-                            l,
-                            "log",
-                            format!("expected a boolean, got {}", type_name(other)),
-                        ))
-                    }
-                },
+            let t = p.child(k, v.span());
+            let (min_v, max_v) = (t.req("min", &r.min)?, t.req("max", &r.max)?);
+            let number = |key: &str, v: &Spanned<Value>| match v.get_ref() {
+                Value::Str(_) => Err(t.fail(key, &v.span(), "expected a number, got a string")),
+                x => Ok(x.number().unwrap_or(0.0)),
             };
+            let (min, max) = (number("min", min_v)?, number("max", max_v)?);
+            let integer = matches!(
+                (min_v.get_ref(), max_v.get_ref()),
+                (Value::Int(_), Value::Int(_))
+            );
+            let log = r.log.as_ref().is_some_and(|l| *l.get_ref());
             if min > max {
-                return Err(t.fail(max_v, "max", format!("must be >= min ({min}), got {max}")));
+                let m = format!("must be >= min ({min}), got {max}");
+                return Err(t.fail("max", &max_v.span(), m));
             }
             if log && min <= 0.0 {
-                return Err(t.fail(
-                    min_v,
-                    "min",
-                    format!("a log range needs min > 0, got {min}"),
-                ));
+                let m = format!("a log range needs min > 0, got {min}");
+                return Err(t.fail("min", &min_v.span(), m));
             }
             Ok(Axis::Range {
                 min,
@@ -224,173 +189,146 @@ pub(super) fn axis(p: &Table<'_>, k: &str, v: &Val<'_>, mode: Mode) -> Result<Ax
                 integer,
             })
         }
-        other => Err(p.fail(
-            v,
-            k,
-            format!(
-                "expected a list of values or a range {{ min, max }}, got {}",
-                type_name(other)
-            ),
-        )),
     }
 }
 
-pub(super) fn scenarios(root: &Table<'_>) -> Result<Scenarios, ScenarioError> {
+/// `key`'s number within `lo ..= hi`, if given.
+fn num(
+    at: &At<'_>,
+    key: &str,
+    v: &Opt<Num>,
+    lo: f64,
+    hi: f64,
+) -> Result<Option<f64>, ScenarioError> {
+    v.as_ref()
+        .map(|v| at.within(key, v, lo, hi, ""))
+        .transpose()
+}
+
+/// `key`'s `[min, max]` with `lo <= min <= max <= hi`, if given.
+fn range(
+    at: &At<'_>,
+    key: &str,
+    v: &Opt<MinMax>,
+    lo: f64,
+    hi: f64,
+) -> Result<Option<(f64, f64)>, ScenarioError> {
+    let Some(v) = v else {
+        return Ok(None);
+    };
+    let MinMax(x, y) = *v.get_ref();
+    if !(lo <= x && x <= y && y <= hi) {
+        return Err(at.fail(
+            key,
+            &v.span(),
+            format!("must be [min, max] with {lo} <= min <= max <= {hi}, got [{x}, {y}]"),
+        ));
+    }
+    Ok(Some((x, y)))
+}
+
+/// `key`'s integer within `lo ..= hi`, if given.
+fn int(
+    at: &At<'_>,
+    key: &str,
+    v: &Opt<Int>,
+    lo: i64,
+    hi: i64,
+) -> Result<Option<i64>, ScenarioError> {
+    v.as_ref()
+        .map(|v| int_within(at, key, v, lo, hi))
+        .transpose()
+}
+
+pub(super) fn scenarios(
+    root: &At<'_>,
+    t: &Opt<Table<ScenariosFile>>,
+) -> Result<Scenarios, ScenarioError> {
+    let t = root.req("scenarios", t)?;
+    let (at, f) = (root.child("scenarios", t.span()), t.get_ref());
     let mut s = Scenarios::default();
-    let t = root
-        .table("scenarios")?
-        .ok_or_else(|| root.missing("scenarios"))?;
-    t.allow(
-        &[
-            "files",
-            "clutter",
-            "passage",
-            "utrap",
-            "bench_families",
-            "bench_count",
-            "bench_first_seed",
-            "length_m",
-            "sensing",
-            "speed_mps",
-            "time_factor",
-            "duration_cap_s",
-            "min_gap_m",
-            "density",
-            "passage_gap_m",
-            "utrap_width_m",
-            "utrap_depth_m",
-            "current_mps",
-            "nav_sigma_m",
-            "scale",
-        ],
-        "[scenarios]",
-    )?;
-    if let Some(v) = t.get("files") {
-        let DeValue::Array(a) = v.get_ref() else {
-            return Err(t.fail(v, "files", "expected a list of scenario file paths"));
-        };
-        for (i, item) in a.iter().enumerate() {
-            match item.get_ref() {
-                DeValue::String(f) => s.files.push(f.to_string()),
-                other => {
-                    return Err(t.src.err(
-                        &item.span(),
-                        &format!("{}[{i}]", t.key("files")),
-                        format!("expected a path (string), got {}", type_name(other)),
-                    ))
-                }
-            }
-        }
+    if let Some(files) = &f.files {
+        s.files = files
+            .get_ref()
+            .0
+            .iter()
+            .map(|f| f.get_ref().clone())
+            .collect();
     }
-    let count = |k: &str| t.int_in(k, 0, 100_000).map(|x| x.unwrap_or(0) as usize);
-    s.clutter = count("clutter")?;
-    s.passage = count("passage")?;
-    s.utrap = count("utrap")?;
-    if let Some(v) = t.get("bench_families") {
-        let DeValue::Array(a) = v.get_ref() else {
-            return Err(t.fail(v, "bench_families", "expected a list of bench family names"));
+    let count = |k: &str, v: &Opt<Int>| int(&at, k, v, 0, 100_000).map(|x| x.unwrap_or(0) as usize);
+    s.clutter = count("clutter", &f.clutter)?;
+    s.passage = count("passage", &f.passage)?;
+    s.utrap = count("utrap", &f.utrap)?;
+    for (i, name) in f
+        .bench_families
+        .iter()
+        .flat_map(|v| &v.get_ref().0)
+        .enumerate()
+    {
+        let Some(family) = crate::bench::worlds::Family::parse(name.get_ref()) else {
+            return Err(at.fail(
+                &format!("bench_families[{i}]"),
+                &name.span(),
+                format!(
+                    "expected a bench family: one of {}",
+                    crate::bench::worlds::FAMILIES.map(|f| f.name()).join(", ")
+                ),
+            ));
         };
-        for (i, item) in a.iter().enumerate() {
-            let family = match item.get_ref() {
-                DeValue::String(f) => crate::bench::worlds::Family::parse(f),
-                _ => None,
-            };
-            let Some(family) = family else {
-                return Err(t.src.err(
-                    &item.span(),
-                    &format!("{}[{i}]", t.key("bench_families")),
-                    format!(
-                        "expected a bench family: one of {}",
-                        crate::bench::worlds::FAMILIES.map(|f| f.name()).join(", ")
-                    ),
-                ));
-            };
-            s.bench_families.push(family);
-        }
+        s.bench_families.push(family);
     }
-    s.bench_count = count("bench_count")?;
-    s.bench_first_seed = t.int_in("bench_first_seed", 0, 1_000_000)?.unwrap_or(0) as u64;
+    s.bench_count = count("bench_count", &f.bench_count)?;
+    s.bench_first_seed =
+        int(&at, "bench_first_seed", &f.bench_first_seed, 0, 1_000_000)?.unwrap_or(0) as u64;
     if s.bench_families.is_empty() {
         s.bench_count = 0;
     }
     if s.files.is_empty() && s.clutter + s.passage + s.utrap + s.bench_count == 0 {
-        return Err(t.src.err(
-            &t.span,
-            &t.path,
+        return Err(at.refuse(
             "no scenario: list `files` or ask for generated `clutter`, `passage`, `utrap` or \
              `bench_families` with `bench_count`",
         ));
     }
-    if let Some(r) = t.range_in("length_m", 15.0, 1000.0)? {
-        s.length_m = r;
+    let d = Scenarios::default();
+    s.length_m = range(&at, "length_m", &f.length_m, 15.0, 1000.0)?.unwrap_or(d.length_m);
+    if let Some(x) = &f.sensing {
+        s.sensing = at.choose(
+            "sensing",
+            x,
+            &[("contacts", Sensing::Contacts), ("sonar", Sensing::Sonar)],
+            "sensing",
+        )?;
     }
-    if let Some(x) = t.text("sensing")? {
-        s.sensing = match x {
-            "contacts" => Sensing::Contacts,
-            "sonar" => Sensing::Sonar,
-            other => {
-                let v = t.get("sensing").map_or(0..0, |v| v.span());
-                return Err(t.src.err(
-                    &v,
-                    &t.key("sensing"),
-                    format!("unknown sensing \"{other}\" (expected \"contacts\" or \"sonar\")"),
-                ));
-            }
-        };
-    }
-    if let Some(x) = t.num_in("speed_mps", 0.05, 20.0)? {
-        s.speed_mps = x;
-    }
-    if let Some(x) = t.num_in("time_factor", 1.0, 100.0)? {
-        s.time_factor = x;
-    }
-    s.duration_cap_s = t.num_in("duration_cap_s", 1.0, 86_400.0)?;
-    if let Some(x) = t.num_in("min_gap_m", 0.5, 100.0)? {
-        s.min_gap_m = x;
-    }
-    if let Some(r) = t.range_in("density", 0.0, 10.0)? {
-        s.density = r;
-    }
-    if let Some(r) = t.range_in("passage_gap_m", 0.5, 50.0)? {
-        s.passage_gap_m = r;
-    }
-    if let Some(r) = t.range_in("utrap_width_m", 2.0, 100.0)? {
-        s.utrap_width_m = r;
-    }
-    if let Some(r) = t.range_in("utrap_depth_m", 1.0, 100.0)? {
-        s.utrap_depth_m = r;
-    }
-    if let Some(x) = t.num_in("current_mps", 0.0, 5.0)? {
-        s.current_mps = x;
-    }
-    if let Some(x) = t.num_in("nav_sigma_m", 0.0, 100.0)? {
-        s.nav_sigma_m = x;
-    }
-    if let Some(x) = t.num_in("scale", 0.1, 100.0)? {
-        s.scale = x;
-    }
+    s.speed_mps = num(&at, "speed_mps", &f.speed_mps, 0.05, 20.0)?.unwrap_or(d.speed_mps);
+    s.time_factor = num(&at, "time_factor", &f.time_factor, 1.0, 100.0)?.unwrap_or(d.time_factor);
+    s.duration_cap_s = num(&at, "duration_cap_s", &f.duration_cap_s, 1.0, 86_400.0)?;
+    s.min_gap_m = num(&at, "min_gap_m", &f.min_gap_m, 0.5, 100.0)?.unwrap_or(d.min_gap_m);
+    s.density = range(&at, "density", &f.density, 0.0, 10.0)?.unwrap_or(d.density);
+    s.passage_gap_m =
+        range(&at, "passage_gap_m", &f.passage_gap_m, 0.5, 50.0)?.unwrap_or(d.passage_gap_m);
+    s.utrap_width_m =
+        range(&at, "utrap_width_m", &f.utrap_width_m, 2.0, 100.0)?.unwrap_or(d.utrap_width_m);
+    s.utrap_depth_m =
+        range(&at, "utrap_depth_m", &f.utrap_depth_m, 1.0, 100.0)?.unwrap_or(d.utrap_depth_m);
+    s.current_mps = num(&at, "current_mps", &f.current_mps, 0.0, 5.0)?.unwrap_or(d.current_mps);
+    s.nav_sigma_m = num(&at, "nav_sigma_m", &f.nav_sigma_m, 0.0, 100.0)?.unwrap_or(d.nav_sigma_m);
+    s.scale = num(&at, "scale", &f.scale, 0.1, 100.0)?.unwrap_or(d.scale);
     Ok(s)
 }
 
-pub(super) fn criterion(root: &Table<'_>) -> Result<Weights, ScenarioError> {
+pub(super) fn criterion(
+    root: &At<'_>,
+    t: &Opt<Table<CriterionFile>>,
+) -> Result<Weights, ScenarioError> {
     let mut w = Weights::default();
-    let Some(t) = root.table("criterion")? else {
+    let Some(t) = t else {
         return Ok(w);
     };
-    t.allow(
-        &["time", "energy", "oscillation", "deadband_deg_s"],
-        "[criterion]",
-    )?;
-    if let Some(x) = t.num_in("time", 0.0, 1000.0)? {
-        w.time = x;
-    }
-    if let Some(x) = t.num_in("energy", 0.0, 1000.0)? {
-        w.energy = x;
-    }
-    if let Some(x) = t.num_in("oscillation", 0.0, 1000.0)? {
-        w.oscillation = x;
-    }
-    if let Some(x) = t.num_in("deadband_deg_s", 0.0, 360.0)? {
+    let (at, f) = (root.child("criterion", t.span()), t.get_ref());
+    w.time = num(&at, "time", &f.time, 0.0, 1000.0)?.unwrap_or(w.time);
+    w.energy = num(&at, "energy", &f.energy, 0.0, 1000.0)?.unwrap_or(w.energy);
+    w.oscillation = num(&at, "oscillation", &f.oscillation, 0.0, 1000.0)?.unwrap_or(w.oscillation);
+    if let Some(x) = num(&at, "deadband_deg_s", &f.deadband_deg_s, 0.0, 360.0)? {
         w.deadband = x.to_radians();
     }
     Ok(w)
