@@ -14,7 +14,8 @@
 //! - `error.rs`: refusals naming file, line and key path, and the places they are reported at;
 //! - `file.rs`: the file's tables as serde reads them; `values.rs`: its leaf values (numbers,
 //!   pairs, lists) and their range checks; `refusal.rs`: serde's refusals in the schema's words
-//!   (key path from the span, "did you mean" hints);
+//!   (key path from the span, "did you mean" hints). The sweep spec (`crate::sweep::spec`) is
+//!   read with the same three and `read`;
 //! - `build.rs`: the document built into a [`Scenario`]; `planner.rs`: the `[planner]` table,
 //!   its keys from the library's parameter declaration; `obstacle.rs`, `vehicle.rs`,
 //!   `mission.rs`: an obstacle, a vehicle, a vehicle's waypoint mission.
