@@ -17,21 +17,21 @@ use crate::error::Error;
 use crate::firmware::Target;
 use crate::output::file_stem;
 use crate::output::metrics::VehicleMetrics;
-use crate::runner::{run, RunConfig};
+use crate::runner::{run, RunConfig, RunError};
 use crate::scenario::Scenario;
 
 /// Every strategy, in the order of the table.
 pub const STRATEGIES: [Strategy; 3] = [Strategy::Vpf, Strategy::Multipoint, Strategy::Navfn];
 
 /// One row: a vehicle of a scenario flown with one strategy.
-#[derive(Clone, Debug)]
+#[derive(Debug)]
 pub struct Row {
     /// Scenario name.
     pub scenario: String,
     /// The strategy.
     pub strategy: Strategy,
     /// The vehicle's metrics, or why the run failed.
-    pub result: Result<VehicleMetrics, String>,
+    pub result: Result<VehicleMetrics, RunError>,
 }
 
 /// Runs every scenario with every strategy in `strategies` on `jobs` threads; outputs under
@@ -46,7 +46,7 @@ pub fn compare(
     let pairs: Vec<(usize, Strategy)> = (0..scenarios.len())
         .flat_map(|i| strategies.iter().map(move |&s| (i, s)))
         .collect();
-    let results: Mutex<Vec<Option<Vec<Row>>>> = Mutex::new(vec![None; pairs.len()]);
+    let results: Mutex<Vec<Option<Vec<Row>>>> = Mutex::new(pairs.iter().map(|_| None).collect());
     let next = AtomicUsize::new(0);
     std::thread::scope(|scope| {
         for _ in 0..jobs.max(1) {
@@ -87,7 +87,7 @@ fn fly(sc: &Scenario, strategy: Strategy, target: &Target, out: &Path) -> Vec<Ro
     };
     match run(&sc, &cfg) {
         Ok(r) => r.summary.vehicles.into_iter().map(|v| row(Ok(v))).collect(),
-        Err(e) => vec![row(Err(e.to_string()))],
+        Err(e) => vec![row(Err(e))],
     }
 }
 

@@ -9,7 +9,10 @@
 
 use std::collections::VecDeque;
 
-use vpf::link::{Message, MissionCountRepr, MissionItemRepr, ReplyRepr, ReplyStatus, SurveyRepr};
+use vpf::link::{
+    Message, MessageType, MissionCountRepr, MissionItemRepr, Problem, ReplyRepr, ReplyStatus,
+    SurveyRepr,
+};
 use vpf::planner::Formation;
 use vpf::{Mission, Params};
 
@@ -21,6 +24,19 @@ use crate::types::P2;
 pub const IN_FLIGHT: usize = vpf::guidance::CONTROL_QUEUE;
 /// Periods after which an unanswered request is taken as lost.
 pub const STALE_PERIODS: u64 = 20;
+
+/// A set-up request the firmware refused: the message, the field (its row in the message's
+/// layout) and the problem, as its reply gave them.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("the firmware refused the scenario's {to:?} message (field {field}: {problem:?})")]
+pub struct Rejected {
+    /// The refused message's type.
+    pub to: MessageType,
+    /// The refused field's row, or `vpf::link::FIELD_WHOLE_MESSAGE`.
+    pub field: u8,
+    /// Why.
+    pub problem: Problem,
+}
 
 /// A vehicle's set-up requests on their way.
 pub struct Uploader {
@@ -109,7 +125,7 @@ impl Uploader {
 
     /// A reply: accepted (done with it), busy (send it again) or rejected (the message that
     /// names the request and the field).
-    pub fn on_reply(&mut self, r: &ReplyRepr) -> Result<(), String> {
+    pub fn on_reply(&mut self, r: &ReplyRepr) -> Result<(), Rejected> {
         let Some(i) = self
             .in_flight
             .iter()
@@ -124,10 +140,11 @@ impl Uploader {
                 self.pending.push_front(m);
                 Ok(())
             }
-            ReplyStatus::Rejected { field, problem } => Err(format!(
-                "the scenario's {:?} message (field {field}: {problem:?})",
-                r.to_type
-            )),
+            ReplyStatus::Rejected { field, problem } => Err(Rejected {
+                to: r.to_type,
+                field,
+                problem,
+            }),
         }
     }
 

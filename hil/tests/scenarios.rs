@@ -1049,3 +1049,34 @@ fn the_readme_example_is_valid() {
     assert_eq!(s.vehicles[1].sensing, Sensing::Contacts);
     assert_eq!(s.faults.nav_loss.map(|w| w.to_s), Some(110.0));
 }
+
+#[test]
+fn a_table_must_be_a_table_and_values_keep_their_toml_type() {
+    // serde reads an array as a struct's fields in order: a table key refuses it.
+    let text = with("formation = [4, 2.0]\n");
+    assert_refused(
+        &text,
+        "vehicle[0].formation",
+        "formation",
+        "expected a table, got an array",
+    );
+    let text = with("\n[sonar]\nrange_m = 1979-05-27\n");
+    assert_refused(
+        &text,
+        "sonar.range_m",
+        "range_m",
+        "expected a number, got a date-time",
+    );
+    let text = with("\n[[obstacle]]\nshape = \"circle\"\ncenter = [5.0, 5.0]\nradius = 1e400\n");
+    assert_refused(&text, "obstacle[0].radius", "radius", "overflows");
+    let text = BASE.replace("seed = 7", "seed = 99999999999999999999");
+    assert_refused(&text, "seed", "seed", "too large");
+    // A key unknown to every shape is hinted from the obstacle's own shape.
+    let text = with("\n[[obstacle]]\nshape = \"rectangle\"\ncenter = [5.0, 5.0]\nradius = 1.0\n");
+    assert_refused(
+        &text,
+        "obstacle[0].radius",
+        "radius",
+        "unknown key in a rectangle obstacle",
+    );
+}

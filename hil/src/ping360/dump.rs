@@ -23,10 +23,72 @@
 //! type, is an error naming the message and the field. The checksum logged by the decoder that
 //! wrote the dump is kept: rebuilding the frame must reproduce it.
 
+use std::path::PathBuf;
+
 use vpf::link::ping::{emit_frame, DeviceDataRepr, Message, PingSettings};
 
 /// Largest dump read, bytes (the recording of 101 messages is 1 MB).
 pub const MAX_DUMP_BYTES: u64 = 256 << 20;
+
+/// Why a dump does not read, or a message of it does not rebuild.
+#[derive(Debug, thiserror::Error)]
+pub enum DumpError {
+    /// Message `message` (0-based, in file order) lacks `field`.
+    #[error("message {message}: no `{field}`")]
+    Missing {
+        /// Which message.
+        message: usize,
+        /// The field, as the dump names it.
+        field: &'static str,
+    },
+    /// A field's value is not a number of its type.
+    #[error("message {message}: `{field}` is not a number that fits")]
+    NotANumber {
+        /// Which message.
+        message: usize,
+        /// The field, as the dump names it.
+        field: &'static str,
+    },
+    /// The `data` list has no closing `]`.
+    #[error("message {message}: `data` is not closed")]
+    Unclosed {
+        /// Which message.
+        message: usize,
+    },
+    /// An item of the `data` list is not a byte.
+    #[error("message {message}: data item `{item}` is not a byte")]
+    NotAByte {
+        /// Which message.
+        message: usize,
+        /// The item as written.
+        item: String,
+    },
+    /// The firmware's encoder refused the message.
+    #[error("the frame does not rebuild: {0}")]
+    Encode(#[from] vpf::link::ping::Error),
+    /// The file could not be read.
+    #[error("{}: {source}", path.display())]
+    Io {
+        /// The dump.
+        path: PathBuf,
+        /// Why.
+        source: std::io::Error,
+    },
+    /// The file is larger than [`MAX_DUMP_BYTES`].
+    #[error("{}: larger than {MAX_DUMP_BYTES} bytes", path.display())]
+    TooLarge {
+        /// The dump.
+        path: PathBuf,
+    },
+    /// A message of the file does not read.
+    #[error("{}: {source}", path.display())]
+    In {
+        /// The dump.
+        path: PathBuf,
+        /// Why.
+        source: Box<DumpError>,
+    },
+}
 
 /// One `device_data` message of a dump.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -53,52 +115,63 @@ pub struct DumpMessage {
 
 impl DumpMessage {
     /// The binary frame the sonar sent, rebuilt with the firmware's own encoder.
-    pub fn frame(&self) -> Result<Vec<u8>, String> {
+    pub fn frame(&self) -> Result<Vec<u8>, DumpError> {
         let m = Message::DeviceData(DeviceDataRepr {
             settings: self.settings,
             data: &self.data,
         });
         let mut buf = vec![0u8; 8 + m.payload_len() + 2];
-        let n = emit_frame(&m, self.src, self.dst, &mut buf).map_err(|e| e.to_string())?;
+        let n = emit_frame(&m, self.src, self.dst, &mut buf)?;
         buf.truncate(n);
         Ok(buf)
     }
 }
 
 /// The value after `key` (e.g. `"angle:"`) in `text`, as a number of type `T`.
-fn field<T: std::str::FromStr>(text: &str, key: &str, which: usize) -> Result<T, String> {
-    let at = text
-        .find(key)
-        .ok_or_else(|| format!("message {which}: no `{key}`"))?;
+fn field<T: std::str::FromStr>(
+    text: &str,
+    key: &'static str,
+    which: usize,
+) -> Result<T, DumpError> {
+    let at = text.find(key).ok_or(DumpError::Missing {
+        message: which,
+        field: key,
+    })?;
     let rest = text[at + key.len()..].trim_start();
     let end = rest
         .find(|c: char| !c.is_ascii_digit())
         .unwrap_or(rest.len());
-    rest[..end]
-        .parse()
-        .map_err(|_| format!("message {which}: `{key}` is not a number that fits"))
+    rest[..end].parse().map_err(|_| DumpError::NotANumber {
+        message: which,
+        field: key,
+    })
 }
 
 /// Parses every `device_data` message of a dump, in order.
-pub fn parse(text: &str) -> Result<Vec<DumpMessage>, String> {
+pub fn parse(text: &str) -> Result<Vec<DumpMessage>, DumpError> {
     let mut out = Vec::new();
     for (i, block) in text.split("ID: 2300 - device_data").skip(1).enumerate() {
-        let data_at = block
-            .find("- data:")
-            .ok_or_else(|| format!("message {i}: no `data`"))?;
+        let data_at = block.find("- data:").ok_or(DumpError::Missing {
+            message: i,
+            field: "data",
+        })?;
         let list_end = block[data_at..]
             .find(']')
-            .ok_or_else(|| format!("message {i}: `data` is not closed"))?;
+            .ok_or(DumpError::Unclosed { message: i })?;
         let list = &block[data_at + "- data:".len()..data_at + list_end];
         let data = list
             .split(',')
             .map(|s| s.trim().trim_start_matches('[').trim_matches('\''))
             .filter(|s| !s.is_empty())
             .map(|s| {
-                u8::from_str_radix(s.trim_start_matches("0x"), 16)
-                    .map_err(|_| format!("message {i}: data item `{s}` is not a byte"))
+                u8::from_str_radix(s.trim_start_matches("0x"), 16).map_err(|_| {
+                    DumpError::NotAByte {
+                        message: i,
+                        item: s.to_string(),
+                    }
+                })
             })
-            .collect::<Result<Vec<u8>, String>>()?;
+            .collect::<Result<Vec<u8>, DumpError>>()?;
         let head = &block[..data_at];
         let tail = &block[data_at + list_end..];
         let settings = PingSettings {
@@ -126,20 +199,26 @@ pub fn parse(text: &str) -> Result<Vec<DumpMessage>, String> {
 }
 
 /// Reads a dump file (at most [`MAX_DUMP_BYTES`]).
-pub fn read(path: &std::path::Path) -> Result<Vec<DumpMessage>, String> {
+pub fn read(path: &std::path::Path) -> Result<Vec<DumpMessage>, DumpError> {
     use std::io::Read;
-    let f = std::fs::File::open(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let io = |source| DumpError::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    let f = std::fs::File::open(path).map_err(io)?;
     let mut text = String::new();
     f.take(MAX_DUMP_BYTES + 1)
         .read_to_string(&mut text)
-        .map_err(|e| format!("{}: {e}", path.display()))?;
+        .map_err(io)?;
     if text.len() as u64 > MAX_DUMP_BYTES {
-        return Err(format!(
-            "{}: larger than {MAX_DUMP_BYTES} bytes",
-            path.display()
-        ));
+        return Err(DumpError::TooLarge {
+            path: path.to_path_buf(),
+        });
     }
-    parse(&text).map_err(|e| format!("{}: {e}", path.display()))
+    parse(&text).map_err(|e| DumpError::In {
+        path: path.to_path_buf(),
+        source: Box::new(e),
+    })
 }
 
 #[cfg(test)]
@@ -176,8 +255,16 @@ Checksum: 1760 check: 1760 pass: True>\"";
     #[test]
     fn a_missing_field_is_named() {
         let broken = ONE.replace("  - angle: 150\n", "");
-        assert_eq!(parse(&broken), Err("message 0: no `- angle:`".into()));
+        let e = parse(&broken).unwrap_err();
+        assert_eq!(e.to_string(), "message 0: no `- angle:`");
+        assert!(matches!(
+            e,
+            DumpError::Missing {
+                message: 0,
+                field: "- angle:"
+            }
+        ));
         let broken = ONE.replace("'0x98'", "'0xzz'");
-        assert!(parse(&broken).unwrap_err().contains("0xzz"));
+        assert!(parse(&broken).unwrap_err().to_string().contains("0xzz"));
     }
 }

@@ -89,6 +89,54 @@ pub struct RawArgs {
     out: PathBuf,
 }
 
+/// Why `hil sonar-replay` or `hil ping360-raw` stopped.
+#[derive(Debug, thiserror::Error)]
+pub enum ReplayError {
+    /// The driver's settings are refused by the firmware's driver.
+    #[error("the Ping360 settings: {0}")]
+    Driver(#[from] vpf::sonar::ping360::ConfigError),
+    /// The extractor's settings are refused by the firmware's extractor.
+    #[error("the extractor settings: {0}")]
+    Extractor(vpf::sonar::ConfigError),
+    /// A file could not be read or written.
+    #[error("{}: {source}", path.display())]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        source: std::io::Error,
+    },
+    /// The recording is larger than [`MAX_REPLAY_BYTES`].
+    #[error("{}: larger than {MAX_REPLAY_BYTES} bytes", path.display())]
+    TooLarge {
+        /// The recording.
+        path: PathBuf,
+    },
+    /// The text dump does not read, or a message does not rebuild.
+    #[error(transparent)]
+    Dump(#[from] super::dump::DumpError),
+    /// A rebuilt frame's checksum is not the one the dump logged.
+    #[error("message {message}: rebuilt checksum {rebuilt}, the dump logged {logged}")]
+    Checksum {
+        /// Which message.
+        message: usize,
+        /// The rebuilt frame's.
+        rebuilt: u16,
+        /// The dump's.
+        logged: u16,
+    },
+}
+
+impl ReplayError {
+    /// For `map_err`: reading or writing `path` failed.
+    fn io(path: &Path) -> impl Fn(std::io::Error) -> ReplayError + '_ {
+        move |source| ReplayError::Io {
+            path: path.to_path_buf(),
+            source,
+        }
+    }
+}
+
 /// One ping as replayed: head angle, bow-relative bearing (rad), range (m), the nearest echo's
 /// range if any, and the scanline's bins.
 #[derive(Clone, Debug, PartialEq)]
@@ -115,9 +163,13 @@ pub struct Replay {
 }
 
 /// Replays `bytes` with the driver set by `cfg` and the extractor by `ex`.
-pub fn replay(bytes: &[u8], cfg: Ping360Config, ex: ExtractorConfig) -> Result<Replay, String> {
-    let mut driver = Ping360::new(cfg).map_err(|e| e.to_string())?;
-    let mut extractor = Extractor::new(ex).map_err(|e| e.to_string())?;
+pub fn replay(
+    bytes: &[u8],
+    cfg: Ping360Config,
+    ex: ExtractorConfig,
+) -> Result<Replay, ReplayError> {
+    let mut driver = Ping360::new(cfg)?;
+    let mut extractor = Extractor::new(ex).map_err(ReplayError::Extractor)?;
     let pose = Pose {
         position: Vec2::ZERO,
         heading: 0.0,
@@ -231,17 +283,16 @@ pub fn plot(r: &Replay) -> String {
     svg.finish()
 }
 
-fn read_bounded(path: &Path) -> Result<Vec<u8>, String> {
-    let f = std::fs::File::open(path).map_err(|e| format!("{}: {e}", path.display()))?;
+fn read_bounded(path: &Path) -> Result<Vec<u8>, ReplayError> {
+    let f = std::fs::File::open(path).map_err(ReplayError::io(path))?;
     let mut bytes = Vec::new();
     f.take(MAX_REPLAY_BYTES + 1)
         .read_to_end(&mut bytes)
-        .map_err(|e| format!("{}: {e}", path.display()))?;
+        .map_err(ReplayError::io(path))?;
     if bytes.len() as u64 > MAX_REPLAY_BYTES {
-        return Err(format!(
-            "{}: larger than {MAX_REPLAY_BYTES} bytes",
-            path.display()
-        ));
+        return Err(ReplayError::TooLarge {
+            path: path.to_path_buf(),
+        });
     }
     Ok(bytes)
 }
@@ -267,7 +318,7 @@ pub fn cli(args: Args) -> ExitCode {
     set(&mut ex.gain_per_m, args.gain_per_m);
     set(&mut ex.cluster_gap_m, args.cluster_gap_m);
     let (file, plot_to) = (args.ping360, args.plot);
-    let run = || -> Result<(), String> {
+    let run = || -> Result<(), ReplayError> {
         let bytes = read_bounded(&file)?;
         let r = replay(&bytes, cfg, ex)?;
         let c = r.counters;
@@ -309,7 +360,7 @@ pub fn cli(args: Args) -> ExitCode {
             );
         }
         if let Some(p) = &plot_to {
-            std::fs::write(p, plot(&r)).map_err(|e| format!("{}: {e}", p.display()))?;
+            std::fs::write(p, plot(&r)).map_err(ReplayError::io(p))?;
             println!("plot: {}", p.display());
         }
         Ok(())
@@ -326,21 +377,22 @@ pub fn cli(args: Args) -> ExitCode {
 /// `hil ping360-raw DUMP.txt OUT.bin`.
 pub fn cli_raw(args: RawArgs) -> ExitCode {
     let (dump_path, out) = (args.dump, args.out);
-    let run = || -> Result<String, String> {
+    let run = || -> Result<String, ReplayError> {
         let msgs = super::dump::read(&dump_path)?;
         let mut bytes = Vec::new();
         for (i, m) in msgs.iter().enumerate() {
             let f = m.frame()?;
             let sum = u16::from_le_bytes([f[f.len() - 2], f[f.len() - 1]]);
             if sum != m.checksum {
-                return Err(format!(
-                    "message {i}: rebuilt checksum {sum}, the dump logged {}",
-                    m.checksum
-                ));
+                return Err(ReplayError::Checksum {
+                    message: i,
+                    rebuilt: sum,
+                    logged: m.checksum,
+                });
             }
             bytes.extend_from_slice(&f);
         }
-        std::fs::write(&out, &bytes).map_err(|e| format!("{}: {e}", out.display()))?;
+        std::fs::write(&out, &bytes).map_err(ReplayError::io(&out))?;
         Ok(format!(
             "{}: {} frames, {} bytes, every checksum as the dump logged",
             out.display(),

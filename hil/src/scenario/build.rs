@@ -1,52 +1,42 @@
-//! The schema's tables, key by key, built into a [`Scenario`] with every range checked.
+//! The file's tables built into a [`Scenario`]: required keys, every range and the cross-checks
+//! (vehicles against obstacles, the Ping360 against what it can do), each refusal at its key.
 
-use toml::de::DeValue;
-use vpf::field::shape::MIN_EXTENT_M;
-use vpf::field::{Shape, MAX_POLYGON_VERTICES};
-use vpf::params::{Kind, ParamId, Value, PARAM_NAMES};
-use vpf::planner::Formation;
-use vpf::Params;
+use toml::Spanned;
+use vpf::field::Shape;
 
-use super::reader::{
-    check_position, choose, type_name, unit_suffix, value_pair, Located, ScenarioError, Table,
-};
+use super::file::{CurrentFile, FaultsFile, NavigationFile, Opt, ScenarioFile, SonarFile};
+use super::values::{int_within, Num, Table};
 use super::{
-    check_name, mission, Autopilot, Current, Faults, ModelKind, Navigation, RunMode, Scenario,
-    Sensing, Sonar, SonarInterface, SonarMode, Vehicle, MAX_DURATION_S, MAX_OBSTACLES,
+    obstacle, planner, vehicle, At, Current, Faults, Navigation, RunMode, Scenario, ScenarioError,
+    Sonar, SonarInterface, SonarMode, Vehicle, MAX_DURATION_S, MAX_NAME_CHARS, MAX_OBSTACLES,
     MAX_VEHICLES, OBSTACLE_FACTOR,
 };
-use crate::types::{SimObstacle, SimShape, P2};
 
-pub(super) const ROOT_KEYS: &[&str] = &[
-    "name",
-    "duration_s",
-    "dt_s",
-    "seed",
-    "mode",
-    "planner",
-    "vehicle",
-    "obstacle",
-    "sonar",
-    "navigation",
-    "current",
-    "faults",
-];
-
-pub(super) fn build(root: &Table<'_>) -> Result<Scenario, ScenarioError> {
-    root.allow(ROOT_KEYS, "the scenario")?;
-
-    let name = root.req_string("name")?;
-    check_name(&name)?;
-    let dt = root.req_number("dt_s")?;
-    let dt_s = dt.within(0.02, 1.0, "s")?;
-    let duration = root.req_number("duration_s")?;
-    let duration_s = duration.within(dt_s, MAX_DURATION_S, "s (at least dt_s)")?;
-    let seed = root.integer("seed")?.ok_or_else(|| root.missing("seed"))?;
-    let seed_v =
-        u64::try_from(seed.v).map_err(|_| seed.fail(format!("must be >= 0, got {}", seed.v)))?;
-    let mode = match root.string("mode")? {
-        Some(m) => choose(
-            &m,
+pub(super) fn build(root: &At<'_>, f: &ScenarioFile) -> Result<Scenario, ScenarioError> {
+    let name = root.req("name", &f.name)?;
+    check_name(root, "name", name)?;
+    let dt = root.req("dt_s", &f.dt_s)?;
+    let dt_s = root.within("dt_s", dt, 0.02, 1.0, "s")?;
+    let duration = root.req("duration_s", &f.duration_s)?;
+    let duration_s = root.within(
+        "duration_s",
+        duration,
+        dt_s,
+        MAX_DURATION_S,
+        "s (at least dt_s)",
+    )?;
+    let seed = root.req("seed", &f.seed)?;
+    let seed_v = u64::try_from(seed.get_ref().0).map_err(|_| {
+        root.fail(
+            "seed",
+            &seed.span(),
+            format!("must be >= 0, got {}", seed.get_ref().0),
+        )
+    })?;
+    let mode = match &f.mode {
+        Some(m) => root.choose(
+            "mode",
+            m,
             &[
                 ("lockstep", RunMode::Lockstep),
                 ("realtime", RunMode::Realtime),
@@ -56,59 +46,65 @@ pub(super) fn build(root: &Table<'_>) -> Result<Scenario, ScenarioError> {
         None => RunMode::Lockstep,
     };
 
-    let params = planner(root, &dt)?;
-    let sonar = sonar(root)?;
-    let navigation = navigation(root, dt_s)?;
-    let current = current(root)?;
-    let faults = faults(root)?;
+    let params = planner::planner(root, &f.planner, dt_s, &dt.span())?;
+    let sonar = sonar(root, &f.sonar)?;
+    let navigation = navigation(root, &f.navigation, dt_s)?;
+    let current = current(root, &f.current)?;
+    let faults = faults(root, &f.faults)?;
 
-    let mut obstacles = Vec::new();
-    let mut shapes = Vec::new();
-    let tables = root.tables("obstacle")?;
+    let tables = &f.obstacle.0;
     if let Some(t) = tables.get(MAX_OBSTACLES) {
-        return Err(t.src.err(
-            &t.span,
-            &t.path,
-            format!(
-                "too many obstacles: {} of at most {MAX_OBSTACLES} ({OBSTACLE_FACTOR} × the \
-                 firmware's table of {})",
-                tables.len(),
-                vpf::world::MAX_OBSTACLES
-            ),
-        ));
+        return Err(root
+            .child(&format!("obstacle[{MAX_OBSTACLES}]"), t.span())
+            .refuse(format!(
+            "too many obstacles: {} of at most {MAX_OBSTACLES} ({OBSTACLE_FACTOR} × the firmware's \
+             table of {})",
+            tables.len(),
+            vpf::world::MAX_OBSTACLES
+        )));
     }
-    for t in tables {
-        let (o, s) = obstacle(&t)?;
+    let mut obstacles = Vec::new();
+    let mut shapes: Vec<Shape> = Vec::new();
+    for (i, t) in tables.iter().enumerate() {
+        let at = root.child(&format!("obstacle[{i}]"), t.span());
+        let (o, s) = obstacle::obstacle(&at, t.get_ref())?;
         obstacles.push(o);
         shapes.push(s);
     }
 
-    let tables = root.tables("vehicle")?;
+    let tables = f.vehicle.as_ref().map_or(&[][..], |v| &v.get_ref().0[..]);
     if tables.is_empty() {
-        return Err(root.src.err(
-            &root.span_of("vehicle"),
+        let span = f.vehicle.as_ref().map_or(root.span.clone(), |v| v.span());
+        return Err(root.fail(
             "vehicle",
+            &span,
             "no vehicle: a scenario needs at least one [[vehicle]]",
         ));
     }
     if let Some(t) = tables.get(MAX_VEHICLES) {
-        return Err(t.src.err(
-            &t.span,
-            &t.path,
-            format!(
+        return Err(root
+            .child(&format!("vehicle[{MAX_VEHICLES}]"), t.span())
+            .refuse(format!(
                 "too many vehicles: at most {MAX_VEHICLES} (the firmware tracks {} others)",
                 MAX_VEHICLES - 1
-            ),
-        ));
+            )));
     }
     let mut vehicles: Vec<Vehicle> = Vec::new();
-    for t in &tables {
-        let v = vehicle(t, &sonar, &params, &obstacles, &shapes, &vehicles)?;
+    for (i, t) in tables.iter().enumerate() {
+        let at = root.child(&format!("vehicle[{i}]"), t.span());
+        let world = vehicle::World {
+            sonar: &sonar,
+            params: &params,
+            obstacles: &obstacles,
+            shapes: &shapes,
+            earlier: &vehicles,
+        };
+        let v = vehicle::vehicle(&at, t.get_ref(), &world)?;
         vehicles.push(v);
     }
 
     Ok(Scenario {
-        name: name.v.to_string(),
+        name: name.get_ref().clone(),
         duration_s,
         dt_s,
         seed: seed_v,
@@ -123,594 +119,192 @@ pub(super) fn build(root: &Table<'_>) -> Result<Scenario, ScenarioError> {
     })
 }
 
-// --- [planner] -------------------------------------------------------------------------------
-
-/// A parameter's declared range and unit, for messages (the decision is `Params::validate`'s).
-pub(super) fn param_range(id: ParamId) -> String {
-    let range = match (id.range(), id.kind()) {
-        (vpf::params::Range::Any, Kind::U32) => format!("0 ..= {}", u32::MAX),
-        (r, _) => r.to_string(),
-    };
-    format!("{range}{}", unit_suffix(id.unit()))
-}
-
-/// A parameter's value as a scenario would write it.
-pub(super) fn param_value(p: &Params, id: ParamId) -> String {
-    p.get(id).to_string()
-}
-
-pub(super) fn planner(root: &Table<'_>, dt: &Located<'_, f64>) -> Result<Params, ScenarioError> {
-    let mut params = Params {
-        period_s: dt.v as f32,
-        ..Params::default()
-    };
-    // Every name validate reports is a declared parameter.
-    let id_of = |name: &str| ParamId::from_name(name).unwrap_or(ParamId::period_s);
-    let Some(t) = root.table("planner")? else {
-        params.validate().map_err(|e| {
-            root.src.err(
-                &root.span,
-                &format!("planner.{}", e.name),
-                format!(
-                    "the default value {} is refused by vpf ({e})",
-                    param_value(&params, id_of(e.name))
-                ),
-            )
-        })?;
-        return Ok(params);
-    };
-    t.allow(&PARAM_NAMES, "[planner] (the names of vpf::Params' fields)")?;
-
-    for &(name, _, _) in &t.entries {
-        let Some(id) = ParamId::from_name(name) else {
-            continue;
-        };
-        let value = match id.kind() {
-            _ if id == ParamId::period_s => {
-                return Err(t.src.err(
-                    &t.span_of(name),
-                    &t.key(name),
-                    "the planner period is the top-level `dt_s`; set it there",
-                ))
-            }
-            Kind::Code(names) => {
-                let s = t.req_string(name)?;
-                let choices: Vec<(&str, u8)> = names.iter().copied().zip(0u8..).collect();
-                Value::Code(choose(&s, &choices, name)?)
-            }
-            Kind::U8 | Kind::U32 => {
-                let i = t.integer(name)?.ok_or_else(|| t.missing(name))?;
-                let refuse = || i.fail(format!("must be in {}, got {}", param_range(id), i.v));
-                if id.kind() == Kind::U8 {
-                    Value::U8(u8::try_from(i.v).map_err(|_| refuse())?)
-                } else {
-                    Value::U32(u32::try_from(i.v).map_err(|_| refuse())?)
-                }
-            }
-            // Out-of-f32 values become infinite and are refused by validate below.
-            Kind::F32 => Value::F32(t.req_number(name)?.v as f32),
-        };
-        params.set(id, value);
+/// A name that will become a directory or file name: not blank, at most [`MAX_NAME_CHARS`].
+pub(super) fn check_name(
+    at: &At<'_>,
+    key: &str,
+    name: &Spanned<String>,
+) -> Result<(), ScenarioError> {
+    let fail = |m: String| at.fail(key, &name.span(), m);
+    if name.get_ref().trim().is_empty() {
+        return Err(fail("must not be empty".into()));
     }
+    let n = name.get_ref().chars().count();
+    if n > MAX_NAME_CHARS {
+        return Err(fail(format!(
+            "{n} characters; at most {MAX_NAME_CHARS} (names become directory and file names)"
+        )));
+    }
+    Ok(())
+}
 
-    params.validate().map_err(|e| {
-        let id = id_of(e.name);
-        let value = param_value(&params, id);
-        // Every number read is a finite f64, so a non-finite f32 here overflowed: out of range.
-        let problem = format!("must be in {}", param_range(id));
-        if e.name == "period_s" {
-            dt.fail(format!("{problem}, got {}", dt.v))
-        } else if t.has(e.name) {
-            t.src.err(
-                &t.span_of(e.name),
-                &t.key(e.name),
-                format!("{problem}, got {value}"),
-            )
-        } else {
-            t.src.err(
-                &t.span,
-                &t.key(e.name),
-                format!(
-                    "{problem}, got the default {value} (v_max = {}); set it in [planner]",
-                    params.v_max
-                ),
-            )
-        }
-    })?;
-    Ok(params)
+/// `key`'s number within `lo ..= hi` (unit `unit`), or `default` when absent.
+fn or(
+    at: &At<'_>,
+    key: &str,
+    v: &Option<Spanned<Num>>,
+    (lo, hi, unit): (f64, f64, &str),
+    default: f64,
+) -> Result<f64, ScenarioError> {
+    match v {
+        Some(v) => at.within(key, v, lo, hi, unit),
+        None => Ok(default),
+    }
 }
 
 // --- [sonar], [navigation], [current], [faults] ----------------------------------------------
 
-pub(super) fn sonar(root: &Table<'_>) -> Result<Sonar, ScenarioError> {
-    let mut s = Sonar::default();
-    let Some(t) = root.table("sonar")? else {
-        return Ok(s);
+fn sonar(root: &At<'_>, t: &Opt<Table<SonarFile>>) -> Result<Sonar, ScenarioError> {
+    let d = Sonar::default();
+    let Some(t) = t else {
+        return Ok(d);
     };
-    t.allow(
-        &[
-            "mode",
-            "range_m",
-            "bins",
-            "step_deg",
-            "noise",
-            "speckle",
-            "beam_rays",
-            "false_echoes",
-            "vehicle_contacts",
+    let (at, f) = (root.child("sonar", t.span()), t.get_ref());
+    let interface = match &f.interface {
+        Some(i) => at.choose(
             "interface",
-        ],
-        "[sonar]",
-    )?;
-    let interface = match t.string("interface")? {
-        Some(i) => Some(choose(
-            &i,
+            i,
             &[
                 ("link", SonarInterface::Link),
                 ("ping360", SonarInterface::Ping360),
             ],
             "sonar interface",
-        )?),
-        None => None,
+        )?,
+        None => SonarInterface::Link,
     };
-    if let Some(m) = t.string("mode")? {
-        s.mode = choose(
-            &m,
+    let mode = match &f.mode {
+        Some(m) => at.choose(
+            "mode",
+            m,
             &[
                 ("scanlines", SonarMode::Scanlines),
                 ("contacts", SonarMode::Contacts),
             ],
             "sonar mode",
-        )?;
-    }
-    if let Some(r) = t.number("range_m")? {
-        s.range_m = r.within(
-            f64::from(vpf::sonar::MIN_RANGE_M),
-            f64::from(vpf::sonar::MAX_RANGE_M),
-            "m",
-        )?;
-    }
-    if let Some(b) = t.integer("bins")? {
-        let max = vpf::sonar::MAX_BINS as i64;
-        if !(1..=max).contains(&b.v) {
-            return Err(b.fail(format!("must be in 1 ..= {max}, got {}", b.v)));
-        }
-        s.bins = b.v as u16;
-    }
-    if let Some(d) = t.number("step_deg")? {
-        let lo = f64::from(vpf::sonar::MIN_STEP_RAD).to_degrees();
-        let hi = f64::from(vpf::sonar::MAX_STEP_RAD).to_degrees();
-        // Rounded inward so the printed range is safe to use.
-        let (lo, hi) = ((lo * 100.0).ceil() / 100.0, (hi * 100.0).floor() / 100.0);
-        s.step = d.within(lo, hi, "degrees")?.to_radians();
-    }
-    if let Some(n) = t.number("noise")? {
-        s.noise = n.within(0.0, 1.0, "")?;
-    }
-    if let Some(n) = t.number("speckle")? {
-        s.speckle = n.within(0.0, 1.0, "")?;
-    }
-    if let Some(b) = t.integer("beam_rays")? {
-        if !(1..=32).contains(&b.v) {
-            return Err(b.fail(format!("must be in 1 ..= 32, got {}", b.v)));
-        }
-        s.beam_rays = b.v as usize;
-    }
-    if let Some(n) = t.number("false_echoes")? {
-        s.false_echoes = n.within(0.0, 1.0, "")?;
-    }
-    if let Some(b) = t.boolean("vehicle_contacts")? {
-        s.vehicle_contacts = b;
-    }
-    if interface == Some(SonarInterface::Ping360) {
-        s.interface = SonarInterface::Ping360;
-        let at = |key: &str| t.get(key).map(|v| v.span()).unwrap_or(t.span.clone());
-        crate::ping360::sim::firmware_config(&s)
-            .map_err(|(key, msg)| t.src.err(&at(key), &t.key(key), msg))?;
+        )?,
+        None => d.mode,
+    };
+    let range = (
+        f64::from(vpf::sonar::MIN_RANGE_M),
+        f64::from(vpf::sonar::MAX_RANGE_M),
+        "m",
+    );
+    let lo = f64::from(vpf::sonar::MIN_STEP_RAD).to_degrees();
+    let hi = f64::from(vpf::sonar::MAX_STEP_RAD).to_degrees();
+    // Rounded inward so the printed range is safe to use.
+    let step = (
+        (lo * 100.0).ceil() / 100.0,
+        (hi * 100.0).floor() / 100.0,
+        "degrees",
+    );
+    let unit = (0.0, 1.0, "");
+    let s = Sonar {
+        mode,
+        range_m: or(&at, "range_m", &f.range_m, range, d.range_m)?,
+        bins: match &f.bins {
+            Some(b) => int_within(&at, "bins", b, 1, vpf::sonar::MAX_BINS as i64)? as u16,
+            None => d.bins,
+        },
+        step: match &f.step_deg {
+            Some(_) => or(&at, "step_deg", &f.step_deg, step, 0.0)?.to_radians(),
+            None => d.step,
+        },
+        noise: or(&at, "noise", &f.noise, unit, d.noise)?,
+        speckle: or(&at, "speckle", &f.speckle, unit, d.speckle)?,
+        beam_rays: match &f.beam_rays {
+            Some(b) => int_within(&at, "beam_rays", b, 1, 32)? as usize,
+            None => d.beam_rays,
+        },
+        false_echoes: or(&at, "false_echoes", &f.false_echoes, unit, d.false_echoes)?,
+        vehicle_contacts: f
+            .vehicle_contacts
+            .as_ref()
+            .map_or(d.vehicle_contacts, |b| *b.get_ref()),
+        interface,
+    };
+    if interface == SonarInterface::Ping360 {
+        crate::ping360::sim::firmware_config(&s).map_err(|(key, msg)| {
+            let span = match key {
+                "step_deg" => f.step_deg.as_ref().map(|v| v.span()),
+                "bins" => f.bins.as_ref().map(|v| v.span()),
+                "range_m" => f.range_m.as_ref().map(|v| v.span()),
+                _ => None,
+            };
+            at.fail(key, &span.unwrap_or(at.span.clone()), msg)
+        })?;
     }
     Ok(s)
 }
 
-pub(super) fn navigation(root: &Table<'_>, dt_s: f64) -> Result<Navigation, ScenarioError> {
-    let mut n = Navigation {
-        rate_hz: 1.0 / dt_s,
-        ..Navigation::default()
+fn navigation(
+    root: &At<'_>,
+    t: &Opt<Table<NavigationFile>>,
+    dt_s: f64,
+) -> Result<Navigation, ScenarioError> {
+    let rate_hz = 1.0 / dt_s;
+    let Some(t) = t else {
+        return Ok(Navigation {
+            rate_hz,
+            ..Navigation::default()
+        });
     };
-    let Some(t) = root.table("navigation")? else {
-        return Ok(n);
-    };
-    t.allow(
-        &["position_sigma_m", "heading_sigma_deg", "rate_hz"],
-        "[navigation]",
-    )?;
-    if let Some(x) = t.number("position_sigma_m")? {
-        n.position_sigma_m = x.within(0.0, 100.0, "m")?;
-    }
-    if let Some(x) = t.number("heading_sigma_deg")? {
-        n.heading_sigma = x.within(0.0, 180.0, "degrees")?.to_radians();
-    }
-    if let Some(x) = t.number("rate_hz")? {
-        n.rate_hz = x.within(0.1, 1000.0, "Hz")?;
-    }
-    Ok(n)
+    let (at, f) = (root.child("navigation", t.span()), t.get_ref());
+    Ok(Navigation {
+        position_sigma_m: or(
+            &at,
+            "position_sigma_m",
+            &f.position_sigma_m,
+            (0.0, 100.0, "m"),
+            0.0,
+        )?,
+        heading_sigma: or(
+            &at,
+            "heading_sigma_deg",
+            &f.heading_sigma_deg,
+            (0.0, 180.0, "degrees"),
+            0.0,
+        )?
+        .to_radians(),
+        rate_hz: or(&at, "rate_hz", &f.rate_hz, (0.1, 1000.0, "Hz"), rate_hz)?,
+    })
 }
 
-pub(super) fn current(root: &Table<'_>) -> Result<Current, ScenarioError> {
-    let Some(t) = root.table("current")? else {
+fn current(root: &At<'_>, t: &Opt<Table<CurrentFile>>) -> Result<Current, ScenarioError> {
+    let Some(t) = t else {
         return Ok(Current::default());
     };
-    t.allow(&["velocity"], "[current]")?;
+    let at = root.child("current", t.span());
     Ok(Current {
-        velocity: t.velocity("velocity", 5.0)?.unwrap_or_default(),
+        velocity: at.velocity("velocity", &t.get_ref().velocity, 5.0)?,
     })
 }
 
-pub(super) fn faults(root: &Table<'_>) -> Result<Faults, ScenarioError> {
-    let mut f = Faults::default();
-    let Some(t) = root.table("faults")? else {
-        return Ok(f);
+fn faults(root: &At<'_>, t: &Opt<Table<FaultsFile>>) -> Result<Faults, ScenarioError> {
+    let Some(t) = t else {
+        return Ok(Faults::default());
     };
-    t.allow(
-        &[
-            "bit_error_rate",
-            "drop_rate",
+    let (at, f) = (root.child("faults", t.span()), t.get_ref());
+    let (ber, rate) = ((0.0, 0.01, ""), (0.0, 1.0, ""));
+    Ok(Faults {
+        bit_error_rate: or(&at, "bit_error_rate", &f.bit_error_rate, ber, 0.0)?,
+        drop_rate: or(&at, "drop_rate", &f.drop_rate, rate, 0.0)?,
+        nav_delay_ms: or(
+            &at,
             "nav_delay_ms",
-            "nav_freeze",
-            "nav_loss",
-            "sonar_dropout",
+            &f.nav_delay_ms,
+            (0.0, 10_000.0, "ms"),
+            0.0,
+        )?,
+        nav_freeze: at.window("nav_freeze", &f.nav_freeze)?,
+        nav_loss: at.window("nav_loss", &f.nav_loss)?,
+        sonar_dropout: at.window("sonar_dropout", &f.sonar_dropout)?,
+        ping360_bit_error_rate: or(
+            &at,
             "ping360_bit_error_rate",
-            "ping360_drop_rate",
-        ],
-        "[faults]",
-    )?;
-    if let Some(x) = t.number("ping360_bit_error_rate")? {
-        f.ping360_bit_error_rate = x.within(0.0, 0.01, "")?;
-    }
-    if let Some(x) = t.number("ping360_drop_rate")? {
-        f.ping360_drop_rate = x.within(0.0, 1.0, "")?;
-    }
-    if let Some(x) = t.number("bit_error_rate")? {
-        f.bit_error_rate = x.within(0.0, 0.01, "")?;
-    }
-    if let Some(x) = t.number("drop_rate")? {
-        f.drop_rate = x.within(0.0, 1.0, "")?;
-    }
-    if let Some(x) = t.number("nav_delay_ms")? {
-        f.nav_delay_ms = x.within(0.0, 10_000.0, "ms")?;
-    }
-    f.nav_freeze = t.window("nav_freeze")?;
-    f.nav_loss = t.window("nav_loss")?;
-    f.sonar_dropout = t.window("sonar_dropout")?;
-    Ok(f)
-}
-
-// --- [[obstacle]] ----------------------------------------------------------------------------
-
-/// Largest obstacle speed, m/s (the firmware's `MAX_OBJECT_SPEED`).
-pub(super) const MAX_OBSTACLE_SPEED: f64 = vpf::world::MAX_OBJECT_SPEED as f64;
-
-pub(super) fn obstacle(t: &Table<'_>) -> Result<(SimObstacle, Shape), ScenarioError> {
-    let kind = t.req_string("shape")?;
-    let shape = match kind.v {
-        "circle" => {
-            t.allow(
-                &["shape", "center", "radius", "velocity"],
-                "a circle obstacle",
-            )?;
-            let center = t.req_position("center")?.v;
-            let radius = t.req_number("radius")?.size()?;
-            SimShape::Circle { center, radius }
-        }
-        "rectangle" => {
-            t.allow(
-                &["shape", "center", "half_size", "angle_deg", "velocity"],
-                "a rectangle obstacle",
-            )?;
-            let center = t.req_position("center")?.v;
-            let half = t.pair("half_size")?.ok_or_else(|| t.missing("half_size"))?;
-            for (i, v) in [half.v.x, half.v.y].into_iter().enumerate() {
-                let side = Located {
-                    v,
-                    span: half.span.clone(),
-                    key: format!("{}[{i}]", half.key),
-                    src: half.src,
-                };
-                side.size()?;
-            }
-            let angle = match t.number("angle_deg")? {
-                Some(a) => a.within(-360.0, 360.0, "degrees")?.to_radians(),
-                None => 0.0,
-            };
-            SimShape::Rectangle {
-                center,
-                half_size: half.v,
-                angle,
-            }
-        }
-        "polygon" => {
-            t.allow(&["shape", "points", "velocity"], "a polygon obstacle")?;
-            SimShape::Polygon {
-                points: polygon(t)?,
-            }
-        }
-        other => {
-            return Err(kind.fail(format!(
-                "unknown shape \"{other}\" (expected \"circle\", \"rectangle\" or \"polygon\")"
-            )))
-        }
-    };
-    let velocity = t
-        .velocity("velocity", MAX_OBSTACLE_SPEED)?
-        .unwrap_or_default();
-    // The firmware's own constructors are the last word on what geometry it accepts.
-    let vpf_shape = match &shape {
-        SimShape::Circle { center, radius } => Shape::circle(center.to_vpf(), *radius as f32),
-        SimShape::Rectangle {
-            center,
-            half_size,
-            angle,
-        } => Shape::rectangle(center.to_vpf(), half_size.to_vpf(), *angle as f32),
-        SimShape::Polygon { points } => {
-            let pts: Vec<vpf::Vec2> = points.iter().map(|p| p.to_vpf()).collect();
-            Shape::polygon(&pts)
-        }
-    }
-    .map_err(|e| {
-        t.src.err(
-            &t.span,
-            &t.path,
-            format!("refused by the firmware's geometry: {e}"),
-        )
-    })?;
-    Ok((SimObstacle { shape, velocity }, vpf_shape))
-}
-
-/// A convex polygon's vertices, refusing degenerate and concave ones with the vertex at fault.
-pub(super) fn polygon(t: &Table<'_>) -> Result<Vec<P2>, ScenarioError> {
-    let v = t.get("points").ok_or_else(|| t.missing("points"))?;
-    let key = t.key("points");
-    let DeValue::Array(items) = v.get_ref() else {
-        return Err(t.src.err(
-            &v.span(),
-            &key,
-            format!(
-                "expected an array of [x, y] vertices, got {}",
-                type_name(v.get_ref())
-            ),
-        ));
-    };
-    let n = items.len();
-    if !(3..=MAX_POLYGON_VERTICES).contains(&n) {
-        return Err(t.src.err(
-            &v.span(),
-            &key,
-            format!("a polygon needs 3 ..= {MAX_POLYGON_VERTICES} vertices, got {n}"),
-        ));
-    }
-    let mut pts = Vec::with_capacity(n);
-    for (i, item) in items.iter().enumerate() {
-        let p = Located {
-            v: value_pair(t.src, &format!("{key}[{i}]"), item)?,
-            span: item.span(),
-            key: format!("{key}[{i}]"),
-            src: t.src,
-        };
-        check_position(&p)?;
-        pts.push(p);
-    }
-    let at = |i: usize| &pts[i % n];
-    for i in 0..n {
-        let (a, b) = (at(i), at(i + 1));
-        if b.v.sub(a.v).norm() < f64::from(MIN_EXTENT_M) {
-            return Err(b.fail(format!(
-                "degenerate polygon: vertex {} repeats vertex {i}",
-                (i + 1) % n
-            )));
-        }
-    }
-    // Turn at each vertex: the cross product of the edges into and out of it.
-    let turn = |i: usize| {
-        let (p, c, q) = (at(i + n - 1).v, at(i).v, at(i + 1).v);
-        let (e1, e2) = (c.sub(p), q.sub(c));
-        let cross = e1.x * e2.y - e1.y * e2.x;
-        let dot = e1.x * e2.x + e1.y * e2.y;
-        (cross, dot, e1.norm() * e2.norm())
-    };
-    let area2: f64 = (0..n)
-        .map(|i| {
-            let (a, b) = (at(i).v, at(i + 1).v);
-            a.x * b.y - a.y * b.x
-        })
-        .sum();
-    let mut total_turn = 0.0;
-    for i in 0..n {
-        let (cross, dot, scale) = turn(i);
-        if cross.abs() <= 1e-6 * scale {
-            return Err(at(i).fail(format!(
-                "degenerate polygon: vertex {i} is collinear with its neighbours; remove it"
-            )));
-        }
-        if cross * area2 < 0.0 {
-            return Err(at(i).fail(format!(
-                "concave polygon (reflex vertex {i}): obstacles must be convex, split it into \
-                 convex pieces"
-            )));
-        }
-        total_turn += cross.atan2(dot);
-    }
-    // All turns one way but winding more than once round: a star, which crosses itself.
-    if (total_turn.abs() - std::f64::consts::TAU).abs() > 1e-6 {
-        return Err(t.src.err(
-            &v.span(),
-            &key,
-            "self-intersecting polygon: obstacles must be convex, split it into convex pieces",
-        ));
-    }
-    Ok(pts.into_iter().map(|p| p.v).collect())
-}
-
-// --- [[vehicle]] -----------------------------------------------------------------------------
-
-pub(super) fn vehicle(
-    t: &Table<'_>,
-    sonar: &Sonar,
-    params: &Params,
-    obstacles: &[SimObstacle],
-    shapes: &[Shape],
-    earlier: &[Vehicle],
-) -> Result<Vehicle, ScenarioError> {
-    let mut keys = vec![
-        "name",
-        "model",
-        "start",
-        "heading_deg",
-        "goal",
-        "formation",
-        "sensing",
-        "autopilot",
-    ];
-    keys.extend(mission::KEYS);
-    t.allow(&keys, "a [[vehicle]]")?;
-    let name = t.req_string("name")?;
-    check_name(&name)?;
-    if let Some(i) = earlier.iter().position(|v| v.name == name.v) {
-        return Err(name.fail(format!(
-            "two vehicles are named \"{}\" (vehicle[{i}] too); names must be unique",
-            name.v
-        )));
-    }
-    let model = choose(
-        &t.req_string("model")?,
-        &[
-            ("kinematic", ModelKind::Kinematic),
-            ("videoray", ModelKind::VideoRay),
-            ("flatfish", ModelKind::FlatFish),
-            ("flat-fish", ModelKind::FlatFish),
-            ("flat_fish", ModelKind::FlatFish),
-        ],
-        "model",
-    )?;
-    let start = t.req_position("start")?;
-    let heading = match t.number("heading_deg")? {
-        Some(h) => h.within(-360.0, 360.0, "degrees")?.to_radians(),
-        None => 0.0,
-    };
-    let mission = mission::parse(t, params)?;
-    let goal = match (t.position("goal")?, &mission) {
-        (Some(g), None) => g,
-        (Some(g), Some(_)) => {
-            return Err(
-                g.fail("give a `goal` or a waypoint mission (`waypoints`, `survey`), not both")
-            )
-        }
-        (None, Some((_, placed))) => match placed.last() {
-            Some(p) => Located {
-                v: p.at.v,
-                span: p.at.span.clone(),
-                key: p.at.key.clone(),
-                src: p.at.src,
-            },
-            None => return Err(t.missing("goal")),
-        },
-        (None, None) => return Err(t.src.err(&t.span, &t.key("goal"), "missing required key")),
-    };
-    let formation = match t.table("formation")? {
-        Some(f) => Some(formation(&f)?),
-        None => None,
-    };
-    let sensing = match t.string("sensing")? {
-        Some(s) => choose(
-            &s,
-            &[("sonar", Sensing::Sonar), ("contacts", Sensing::Contacts)],
-            "sensing",
+            &f.ping360_bit_error_rate,
+            ber,
+            0.0,
         )?,
-        None => match sonar.mode {
-            SonarMode::Scanlines => Sensing::Sonar,
-            SonarMode::Contacts => Sensing::Contacts,
-        },
-    };
-
-    let autopilot = match t.string("autopilot")? {
-        Some(s) => choose(
-            &s,
-            &[("plain", Autopilot::Plain), ("pid", Autopilot::SetPoints)],
-            "autopilot",
-        )?,
-        None => Autopilot::Plain,
-    };
-
-    for (i, (o, s)) in obstacles.iter().zip(shapes).enumerate() {
-        if s.signed_distance(start.v.to_vpf()) <= 0.0 {
-            return Err(start.fail(format!(
-                "start [{}, {}] is inside obstacle[{i}]",
-                start.v.x, start.v.y
-            )));
-        }
-        // A moving obstacle may uncover the goal later; a static one never will.
-        if o.velocity == P2::default() && s.signed_distance(goal.v.to_vpf()) <= 0.0 {
-            return Err(goal.fail(format!(
-                "goal [{}, {}] is inside the static obstacle[{i}]",
-                goal.v.x, goal.v.y
-            )));
-        }
-        for (k, w) in mission.iter().flat_map(|(_, placed)| placed).enumerate() {
-            if o.velocity == P2::default() && s.signed_distance(w.at.v.to_vpf()) <= 0.0 {
-                return Err(w.at.fail(format!(
-                    "waypoint {k} [{:.2}, {:.2}] is inside the static obstacle[{i}]",
-                    w.at.v.x, w.at.v.y
-                )));
-            }
-        }
-    }
-    let hull = 2.0 * f64::from(params.agent_radius_m);
-    if let Some(other) = earlier.iter().find(|v| v.start.sub(start.v).norm() < hull) {
-        return Err(start.fail(format!(
-            "start is within {hull} m (two agent radii) of vehicle \"{}\"'s start",
-            other.name
-        )));
-    }
-
-    Ok(Vehicle {
-        name: name.v.to_string(),
-        model,
-        start: start.v,
-        heading,
-        goal: goal.v,
-        mission: mission.map(|(m, _)| m),
-        formation,
-        sensing,
-        autopilot,
+        ping360_drop_rate: or(&at, "ping360_drop_rate", &f.ping360_drop_rate, rate, 0.0)?,
     })
-}
-
-pub(super) fn formation(t: &Table<'_>) -> Result<Formation, ScenarioError> {
-    t.allow(
-        &["q", "lattice_m", "orientation_deg", "attraction"],
-        "a formation",
-    )?;
-    let q = t.integer("q")?.ok_or_else(|| t.missing("q"))?;
-    if !matches!(q.v, 3 | 4 | 6) {
-        return Err(q.fail(format!(
-            "the formation descriptor must be 3, 4 or 6, got {}",
-            q.v
-        )));
-    }
-    let lattice_m = t.req_number("lattice_m")?.within(0.5, 1000.0, "m")?;
-    let orientation = match t.number("orientation_deg")? {
-        Some(o) => o.within(-360.0, 360.0, "degrees")?.to_radians(),
-        None => 0.0,
-    };
-    let attraction = match t.number("attraction")? {
-        Some(a) => a.within(0.001, 1e4, "")?,
-        None => 5.0,
-    };
-    let f = Formation {
-        q: q.v as u8,
-        lattice_m: lattice_m as f32,
-        orientation: orientation as f32,
-        attraction: attraction as f32,
-    };
-    f.validate()
-        .map_err(|e| t.src.err(&t.span, &t.path, format!("refused by vpf: {e}")))?;
-    Ok(f)
 }

@@ -3,22 +3,25 @@
 //! [`Scenario`].
 //!
 //! Every refusal is a [`ScenarioError`] naming the file, the line and the key path of the
-//! offending key or value, e.g. `u_trap.toml:12: key `obstacle[2].radius`: must be > 0, got -1`.
+//! offending key or value, e.g. ``u_trap.toml:12: key `obstacle[2].radius`: must be > 0, got -1``.
 //! The schema is documented in `hil/scenarios/README.md`.
 //!
-//! The document is parsed with `toml`'s span-preserving [`DeTable`] and walked by hand rather
-//! than through serde, so that every message can carry the key path and the line, and so that
-//! unknown keys are refused everywhere.
+//! The document is read by serde into the file's tables (`file.rs`: every key spanned, unknown
+//! keys refused), then built into a [`Scenario`] with every range and cross-reference checked
+//! at its key.
 //!
 //! - `schema.rs`: the validated scenario's types;
-//! - `reader.rs`: errors naming file, line and key path; spans; typed access to tables and
-//!   values, unknown keys refused with a "did you mean" hint (shared with the sweep spec);
-//! - `build.rs`: the tables, key by key, built into a [`Scenario`] with every range checked;
-//! - `mission.rs`: a vehicle's waypoint mission.
+//! - `error.rs`: refusals naming file, line and key path, and the places they are reported at;
+//! - `file.rs`: the file's tables as serde reads them; `values.rs`: its leaf values (numbers,
+//!   pairs, lists) and their range checks; `refusal.rs`: serde's refusals in the schema's words
+//!   (key path from the span, "did you mean" hints). The sweep spec (`crate::sweep::spec`) is
+//!   read with the same three and `read`;
+//! - `build.rs`: the document built into a [`Scenario`]; `planner.rs`: the `[planner]` table,
+//!   its keys from the library's parameter declaration; `obstacle.rs`, `vehicle.rs`,
+//!   `mission.rs`: an obstacle, a vehicle, a vehicle's waypoint mission.
 
 use std::path::Path;
 
-use toml::de::{DeTable, DeValue};
 use vpf::Params;
 
 pub use vpf::params::Strategy;
@@ -51,13 +54,24 @@ pub const MAX_NAME_CHARS: usize = 200;
 pub const MAX_SCENARIO_BYTES: usize = 4 << 20;
 
 mod build;
-mod reader;
+mod error;
+mod file;
+mod obstacle;
+mod planner;
+mod refusal;
 mod schema;
+mod values;
+mod vehicle;
 
-use build::*;
-pub use reader::ScenarioError;
-pub(crate) use reader::*;
+pub(crate) use error::At;
+pub use error::ScenarioError;
+pub(crate) use error::SourceText;
+pub(crate) use file::Opt;
+pub(crate) use refusal::{closest, unknown_key};
+pub(crate) use refusal::{keys_of, Naming, Seg};
+use refusal::{refusal, unknown_choice};
 pub use schema::*;
+pub(crate) use values::{int_within, Int, Item, Items, Num, Table};
 
 // ---------------------------------------------------------------------------------------------
 // Entry points.
@@ -89,9 +103,18 @@ pub fn parse(text: &str, file: &str) -> Result<Scenario, ScenarioError> {
         return Err(too_big(file, text.len() as u64));
     }
     let src = SourceText { file, text };
-    let doc = DeTable::parse(text).map_err(|e| src.syntax(&e))?;
-    let root = Table::new(src, String::new(), 0..0, doc.get_ref());
-    build(&root)
+    let f: file::ScenarioFile = read(src, &file::naming("the scenario"))?;
+    build::build(&At::root(src), &f)
+}
+
+/// Reads `src` as a `T` (its syntax, types and keys), each refusal at its key, its tables
+/// named by `naming`. (The sweep spec's reader too.)
+pub(crate) fn read<T: serde::de::DeserializeOwned>(
+    src: SourceText<'_>,
+    naming: &Naming,
+) -> Result<T, ScenarioError> {
+    let doc = toml::de::DeTable::parse(src.text).map_err(|e| src.syntax(&e))?;
+    T::deserialize(toml::de::Deserializer::from(doc)).map_err(|e| refusal(src, &e, naming))
 }
 
 fn too_big(file: &str, bytes: u64) -> ScenarioError {
@@ -107,34 +130,15 @@ fn too_big(file: &str, bytes: u64) -> ScenarioError {
     }
 }
 
-/// A name that will become a directory or file name: not blank, at most [`MAX_NAME_CHARS`].
-fn check_name(name: &Located<'_, &str>) -> Result<(), ScenarioError> {
-    if name.v.trim().is_empty() {
-        return Err(name.fail("must not be empty"));
-    }
-    let n = name.v.chars().count();
-    if n > MAX_NAME_CHARS {
-        return Err(name.fail(format!(
-            "{n} characters; at most {MAX_NAME_CHARS} (names become directory and file names)"
-        )));
-    }
-    Ok(())
-}
-
 /// Parses a parameter file — a document holding only a `[planner]` table, with the keys and
 /// checks of a scenario's `[planner]` (the recipes `hil sweep` writes) — into the parameters
 /// it gives (`Params::default()` with its overrides) at planner period `dt_s`. Errors name
 /// `file`, the line and the key, as for a scenario.
 pub fn parse_planner(text: &str, file: &str, dt_s: f64) -> Result<Params, ScenarioError> {
     let src = SourceText { file, text };
-    let doc = DeTable::parse(text).map_err(|e| src.syntax(&e))?;
-    let root = Table::new(src, String::new(), 0..0, doc.get_ref());
-    root.allow(&["planner"], "a parameter file (only a [planner] table)")?;
-    let dt = Located {
-        v: dt_s,
-        span: 0..0,
-        key: "dt_s".into(),
+    let f: file::ParamFile = read(
         src,
-    };
-    planner(&root, &dt)
+        &file::naming("a parameter file (only a [planner] table)"),
+    )?;
+    planner::planner(&At::root(src), &f.planner, dt_s, &(0..0))
 }

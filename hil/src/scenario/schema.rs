@@ -22,7 +22,7 @@ pub struct Scenario {
     /// The planner's parameters: `Params::default()` with the `[planner]` overrides and
     /// `period_s = dt_s`, validated. The strategy the firmware runs is `params.strategy`.
     pub params: Params,
-    /// The vehicles, in file order (at least one, at most [`MAX_VEHICLES`]).
+    /// The vehicles, in file order (at least one, at most [`MAX_VEHICLES`](super::MAX_VEHICLES)).
     pub vehicles: Vec<Vehicle>,
     /// The obstacles (true geometry at t = 0), in file order.
     pub obstacles: Vec<SimObstacle>,

@@ -137,18 +137,31 @@ pub fn parse(spec: &Spec, c: &[String], total_runs: usize) -> Option<RunRow> {
     })
 }
 
+/// `runs.csv` was written by another sweep: its header names other parameters.
+#[derive(Debug, thiserror::Error)]
+#[error("its header is not this sweep's:\n  found:    {found}\n  expected: {expected}")]
+pub struct OtherHeader {
+    /// The file's header.
+    pub found: String,
+    /// This sweep's.
+    pub expected: String,
+}
+
 /// Reads `runs.csv`'s text: the complete rows, and how many lines were dropped as incomplete.
 /// Errors if the header is not this spec's.
-pub fn read(spec: &Spec, text: &str, total_runs: usize) -> Result<(Vec<RunRow>, usize), String> {
+pub fn read(
+    spec: &Spec,
+    text: &str,
+    total_runs: usize,
+) -> Result<(Vec<RunRow>, usize), OtherHeader> {
     let mut lines = records(text);
     match lines.next() {
         Some(h) if h == header(spec) => {}
         Some(h) => {
-            return Err(format!(
-                "its header is not this sweep's:\n  found:    {}\n  expected: {}",
-                h.join(","),
-                header(spec).join(",")
-            ))
+            return Err(OtherHeader {
+                found: h.join(","),
+                expected: header(spec).join(","),
+            })
         }
         None => return Ok((Vec::new(), 0)),
     }

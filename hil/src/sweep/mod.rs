@@ -218,11 +218,8 @@ pub fn sweep(spec_path: &Path, opts: &Options) -> Result<Outcome, Error> {
         );
         note_firmware(&meta_path, &fw_hash, opts.quiet)?;
         started = Instant::now();
-        let params: Vec<Result<vpf::Params, String>> = (0..spec.sets.len())
-            .map(|i| {
-                spec.params_of(i, spec::CHECK_DT_S)
-                    .map_err(|e| e.to_string())
-            })
+        let params: Vec<_> = (0..spec.sets.len())
+            .map(|i| spec.params_of(i, spec::CHECK_DT_S))
             .collect();
         let work = pool::Work {
             spec: &spec,

@@ -18,7 +18,7 @@ pub struct Work<'a> {
     /// Its scenarios.
     pub batch: &'a [BatchScenario],
     /// Each set's parameters (or why the scenario parser refused them).
-    pub params: &'a [Result<vpf::Params, String>],
+    pub params: &'a [Result<vpf::Params, crate::scenario::ScenarioError>],
     /// How to run.
     pub run: QuietRun,
 }
@@ -36,7 +36,7 @@ pub fn run_one(w: &Work<'_>, run: usize) -> RunRow {
                 ..*p
             };
         }
-        Err(e) => return measure::failed(run, set, &b.id, e.clone()),
+        Err(e) => return measure::failed(run, set, &b.id, e.to_string()),
     }
     match run_quiet(&sc, &w.run) {
         Ok(out) => measure::measure(

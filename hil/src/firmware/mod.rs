@@ -5,17 +5,24 @@
 //! Frames go out whole (`send`); what comes back is decoded with the firmware's own stream
 //! decoder and kept as owned [`Reply`]s. A [`Tap`] sees every chunk both ways (the frame log)
 //! and may corrupt or drop outgoing frames (fault injection).
+//!
+//! - `build.rs`: building the firmware for a target; `tty.rs`: ptys, serial ports, raw mode
+//!   and bounded waits.
 
 use std::fs::File;
 use std::io::{BufRead, BufReader, Read, Write};
-use std::os::fd::{AsFd, FromRawFd};
 
 use nix::errno::Errno;
-use nix::poll::{poll, PollFd, PollFlags, PollTimeout};
-use nix::sys::termios;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
+
+mod build;
+mod tty;
+
+pub use build::{build, qemu_available};
+pub use tty::{open_pty, open_serial, readable};
+use tty::{open_raw, qemu_pty};
 
 use vpf::link::{
     CommandRepr, Decoder, Direction, Message, Outcome, ReplyRepr, TelemetryRepr, MAX_FRAME,
@@ -180,132 +187,6 @@ impl Port {
         };
         readable(f, ms)
     }
-}
-
-fn workspace_root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .parent()
-        .map_or_else(|| PathBuf::from("."), Path::to_path_buf)
-}
-
-/// Whether `qemu-system-arm` can be run here.
-pub fn qemu_available() -> bool {
-    Command::new("qemu-system-arm")
-        .arg("--version")
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
-        .status()
-        .is_ok_and(|s| s.success())
-}
-
-/// Builds the firmware for `target` (release) and returns the binary's path.
-pub fn build(target: &Target) -> std::io::Result<PathBuf> {
-    let root = workspace_root();
-    let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
-    let mut cmd = Command::new(cargo);
-    cmd.current_dir(&root).args([
-        "build",
-        "--quiet",
-        "--release",
-        "-p",
-        "vpf",
-        "--bin",
-        "vpf-firmware",
-    ]);
-    // Where cargo puts it: `CARGO_TARGET_DIR` if set (relative to the workspace), else target/.
-    let target_dir = std::env::var_os("CARGO_TARGET_DIR")
-        .filter(|d| !d.is_empty())
-        .map_or_else(|| root.join("target"), |d| root.join(d));
-    let path = match target {
-        Target::Qemu | Target::QemuUart => {
-            cmd.args(["--target", "thumbv7em-none-eabihf"]);
-            target_dir.join("thumbv7em-none-eabihf/release/vpf-firmware")
-        }
-        Target::Host | Target::Port(..) => target_dir.join("release/vpf-firmware"),
-    };
-    if matches!(target, Target::Port(..)) {
-        // A real board is flashed by the user; nothing to build here.
-        return Ok(path);
-    }
-    let status = cmd.status()?;
-    if !status.success() {
-        return Err(std::io::Error::other("firmware build failed"));
-    }
-    Ok(path)
-}
-
-/// Whether `f` has something to read within `ms` (negative: no limit); an interrupted wait
-/// counts as nothing yet.
-pub fn readable(f: &impl AsFd, ms: i32) -> std::io::Result<bool> {
-    let mut fds = [PollFd::new(f.as_fd(), PollFlags::POLLIN)];
-    let timeout = PollTimeout::try_from(ms).unwrap_or(PollTimeout::NONE);
-    match poll(&mut fds, timeout) {
-        Ok(n) => Ok(n > 0),
-        Err(Errno::EINTR) => Ok(false),
-        Err(e) => Err(e.into()),
-    }
-}
-
-/// Puts a terminal in raw mode (no echo, no line discipline). Reads block until a byte comes
-/// (VMIN = 1): the firmware reading the slave side must not mistake a quiet line for the end of
-/// input; this side bounds its own waits with `poll`.
-fn make_raw(f: &impl AsFd) -> std::io::Result<()> {
-    let mut t = termios::tcgetattr(f)?;
-    termios::cfmakeraw(&mut t);
-    termios::cfsetspeed(&mut t, termios::BaudRate::B115200)?;
-    t.control_chars[termios::SpecialCharacterIndices::VMIN as usize] = 1;
-    t.control_chars[termios::SpecialCharacterIndices::VTIME as usize] = 0;
-    termios::tcsetattr(f, termios::SetArg::TCSANOW, &t)?;
-    Ok(())
-}
-
-/// A real serial port at `baud`, 8N1, raw, through `serialport` (exclusive, as a real port
-/// should be), as a plain file: reads are bounded by `poll` like a pty's.
-pub fn open_serial(path: &Path, baud: u32) -> std::io::Result<File> {
-    use std::os::fd::IntoRawFd;
-    let port = serialport::new(path.to_string_lossy(), baud)
-        .timeout(Duration::from_millis(10))
-        .open_native()
-        .map_err(|e| std::io::Error::other(format!("{}: {e}", path.display())))?;
-    // SAFETY: the descriptor was just released by its owner, the serial port, and is ours.
-    Ok(unsafe { File::from_raw_fd(port.into_raw_fd()) })
-}
-
-/// The next pty QEMU names on its monitor ("char device redirected to /dev/pts/N (label
-/// serialK)", in the order of the `-serial`s that are ptys); lines before it are skipped.
-fn qemu_pty(lines: &mut impl Iterator<Item = std::io::Result<String>>) -> std::io::Result<String> {
-    loop {
-        let Some(line) = lines.next() else {
-            return Err(std::io::Error::other("qemu exited before naming its ptys"));
-        };
-        let line = line?;
-        if let Some(i) = line.find("/dev/pts/") {
-            let path = line[i..].split_whitespace().next().unwrap_or_default();
-            return Ok(path.to_string());
-        }
-    }
-}
-
-/// A pty (or device) opened for reading and writing, raw.
-fn open_raw(path: &str) -> std::io::Result<File> {
-    let port = std::fs::OpenOptions::new()
-        .read(true)
-        .write(true)
-        .open(path)?;
-    make_raw(&port)?;
-    Ok(port)
-}
-
-/// A new pseudo-terminal pair: (master, slave path). The slave stays open (leaked) so that no
-/// byte written before its user opens it is lost.
-pub fn open_pty() -> std::io::Result<(File, PathBuf)> {
-    let pty = nix::pty::openpty(None, None)?;
-    make_raw(&pty.slave)?;
-    make_raw(&pty.master)?;
-    let path = nix::unistd::ttyname(&pty.slave)?;
-    // The slave stays open here until the firmware has it, so no byte is lost meanwhile.
-    std::mem::forget(pty.slave);
-    Ok((File::from(pty.master), path))
 }
 
 impl Firmware {
