@@ -457,8 +457,11 @@ fn firmware_answers_over_its_uart() {
         }
         send(&mut pty, &mut seq, Message::Tick(TickRepr { time_ms: t }));
         let want = first_lockstep + k as usize + 1;
+        // The period's command and its telemetry (a frame after it).
         read_until(&mut pty, &mut rx, Duration::from_secs(10), |r| {
-            r.commands.iter().any(|c| c.time_ms == t) && r.commands.len() >= want
+            r.commands.iter().any(|c| c.time_ms == t)
+                && r.commands.len() >= want
+                && r.telemetry.iter().any(|tl| tl.time_ms == t)
         });
         let cmd = rx
             .commands
