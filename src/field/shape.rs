@@ -445,39 +445,21 @@ impl Polygon {
         }
     }
 
-    /// [`Polygon::signed_distance`] with the edge vectors of [`Polygon::edges`] given, for
-    /// many points (the same numbers, bit for bit).
-    #[inline(always)]
-    pub(crate) fn signed_distance_with(&self, edges: &Edges, p: Vec2) -> f32 {
-        let mut best2 = f32::INFINITY;
-        let mut inside = true;
-        self.each_edge_with(edges, p, |e, w, inv| {
-            if e.cross(w) < 0.0 {
-                inside = false;
-                best2 = min(segment_distance2(e, w, inv), best2);
-            }
-        });
-        if inside {
-            self.each_edge_with(edges, p, |e, w, inv| {
-                best2 = min(segment_distance2(e, w, inv), best2)
-            });
-            -sqrt(best2)
-        } else {
-            sqrt(best2)
+    /// The edges `(a, e = b − a, 1/|e|²)` in [`Polygon::each_edge`]'s order, each from its
+    /// start vertex a (for [`super::edges::EdgeTable`]).
+    pub(crate) fn each_edge_from(&self, mut f: impl FnMut(Vec2, Vec2, f32)) {
+        let n = usize::from(self.len).min(MAX_POLYGON_VERTICES);
+        let v = self.vertices.get(..n).unwrap_or(&[]);
+        let inv = self.inv_len2.get(..n).unwrap_or(&[]);
+        let (Some(&last), Some(&inv_last)) = (v.last(), inv.last()) else {
+            return;
+        };
+        let (mut a, mut inv_a) = (last, inv_last);
+        for (&b, &inv_b) in v.iter().zip(inv) {
+            f(a, b - a, inv_a);
+            a = b;
+            inv_a = inv_b;
         }
-    }
-
-    /// The edge vectors b − a in [`Polygon::each_edge`]'s order.
-    pub(crate) fn edges(&self) -> Edges {
-        let mut edges = [Vec2::ZERO; MAX_POLYGON_VERTICES];
-        let mut k = 0;
-        self.each_edge(Vec2::ZERO, |e, _, _| {
-            if let Some(slot) = edges.get_mut(k) {
-                *slot = e;
-            }
-            k += 1;
-        });
-        edges
     }
 
     /// `f(e, w, 1/|e|²)` for each edge from a to b (e = b − a, w = p − a), the closing edge
@@ -494,24 +476,6 @@ impl Polygon {
         let mut inv_a = inv_last;
         for (&b, &inv_b) in v.iter().zip(inv) {
             f(b - a, p - a, inv_a);
-            a = b;
-            inv_a = inv_b;
-        }
-    }
-
-    /// As [`Polygon::each_edge`], the edge vectors taken from `edges`.
-    #[inline(always)]
-    fn each_edge_with(&self, edges: &Edges, p: Vec2, mut f: impl FnMut(Vec2, Vec2, f32)) {
-        let n = usize::from(self.len).min(MAX_POLYGON_VERTICES);
-        let v = self.vertices.get(..n).unwrap_or(&[]);
-        let inv = self.inv_len2.get(..n).unwrap_or(&[]);
-        let (Some(&last), Some(&inv_last)) = (v.last(), inv.last()) else {
-            return;
-        };
-        let mut a = last;
-        let mut inv_a = inv_last;
-        for ((&b, &inv_b), &e) in v.iter().zip(inv).zip(edges) {
-            f(e, p - a, inv_a);
             a = b;
             inv_a = inv_b;
         }
@@ -544,12 +508,9 @@ impl Polygon {
     }
 }
 
-/// A polygon's edge vectors ([`Polygon::edges`]).
-pub(crate) type Edges = [Vec2; MAX_POLYGON_VERTICES];
-
 /// Squared distance from p to the segment from a along e (w = p − a, `inv` = 1/|e|²).
 #[inline(always)]
-fn segment_distance2(e: Vec2, w: Vec2, inv: f32) -> f32 {
+pub(crate) fn segment_distance2(e: Vec2, w: Vec2, inv: f32) -> f32 {
     let t = min(max(w.dot(e) * inv, 0.0), 1.0);
     (w - e * t).norm2()
 }
@@ -693,7 +654,6 @@ mod tests {
                 // one of its edges where the definition takes the lesser of both roundings.
                 // (w − e differs from p − b by the rounding of coordinates of size |p|.)
                 let got = g.signed_distance(p);
-                assert_eq!(got, g.signed_distance_with(&g.edges(), p));
                 let scale = v.iter().fold(p.norm(), |m, a| m.max(a.norm()));
                 assert!(
                     (got - want).abs() <= 4.0 * f32::EPSILON * scale,

@@ -16,6 +16,7 @@
 //! holds a stalled vehicle (`escape.rs`). Keeping the potential's terms apart costs three
 //! additions per sample instead of two more passes.
 
+use crate::field::edges::EdgeTable;
 use crate::field::{GoalPdf, Shape, Stator};
 use crate::math::{Vec2, TAU};
 use crate::params::N_GAMMA_MAX;
@@ -273,9 +274,9 @@ impl Field<'_> {
                     st.potential(e.signed_distance(x))
                 }),
                 Shape::Polygon(g) => {
-                    let edges = g.edges();
+                    let edges = EdgeTable::around(g, origin, shift, epsilon);
                     add_samples(fixed, origin, offsets, shift, centre, |x| {
-                        st.potential(g.signed_distance_with(&edges, x))
+                        st.potential(edges.signed_distance(x))
                     })
                 }
             }
