@@ -136,6 +136,20 @@ impl Planner {
             // Same capacity as the obstacle table: never full.
             let _ = distances.push(o.shape.distance_gradient(p - shift));
         }
+        // The clearance as things are now: a still obstacle's distance is the one just found
+        // (bit for bit `signed_distance`), a moving one is measured where it is.
+        let nearest_map = crate::world::nearest_cell(world.map_cells(), p);
+        let clearance = super::clearance(
+            world,
+            p,
+            nearest_map.map_or(f32::INFINITY, |(_, d)| d - world.map_radius()),
+            prm.agent_radius_m,
+            |i, o| match (distances.get(i), cx.shifts.get(i)) {
+                (Some(&(r, _)), Some(&shift)) if shift == Vec2::ZERO => r,
+                _ => o.shape.signed_distance(p),
+            },
+        );
+        let cx = &Context { clearance, ..*cx };
         // The rotor terms: one normal per obstacle, and one for the map (one obstacle: its
         // normal points away from the nearest believed cell). The normal is ∇r/|∇r| (for the
         // exact distances ∇r is already a unit vector).
@@ -151,7 +165,7 @@ impl Planner {
                     .unwrap_or(Vec2::new(1.0, 0.0));
                 let _ = normals.push((n, o.stator().reach(r)));
             }
-            if let Some((c, d)) = crate::world::nearest_cell(world.map_cells(), p) {
+            if let Some((c, d)) = nearest_map {
                 if let Some(n) = (p - c).normalized(1e-6) {
                     let _ = normals.push((n, self.map_stator.reach(d - world.map_radius())));
                 }
