@@ -481,20 +481,29 @@ impl Polygon {
         }
     }
 
-    /// The nearest edge's segment gives r and the unit vector from its nearest point.
+    /// The nearest edge's segment gives r and the unit vector from its nearest point. One
+    /// walk round the edges: r is [`Polygon::signed_distance`]'s, bit for bit (outside the
+    /// least of the facing segments, inside the least of all, the same numbers; the test
+    /// `distance_gradient_is_the_distance_and_its_slope` holds it to that).
     fn distance_gradient(&self, p: Vec2) -> (f32, Vec2) {
-        let r = self.signed_distance(p);
+        let mut facing2 = f32::INFINITY;
+        let mut inside = true;
         let mut best = (f32::INFINITY, Vec2::new(1.0, 0.0), Vec2::ZERO);
         self.each_edge(p, |e, w, inv| {
             let t = min(max(w.dot(e) * inv, 0.0), 1.0);
             let from = w - e * t;
             let d2 = from.norm2();
+            if e.cross(w) < 0.0 {
+                inside = false;
+                facing2 = min(d2, facing2);
+            }
             if d2 < best.0 {
                 best = (d2, from, e);
             }
         });
         let (d2, from, e) = best;
         let len = sqrt(d2);
+        let r = if inside { -len } else { sqrt(facing2) };
         if len > 0.0 {
             let n = from * (1.0 / len);
             (r, if r < 0.0 { -n } else { n })
