@@ -168,28 +168,6 @@ struct Context<'a> {
     clearance: f32,
 }
 
-/// The signed distance from `p` to the nearest obstacle (those left to the evidence map
-/// excepted), map cell (`map`: the map's own, [`World::map_distance`]) or vehicle circle, m,
-/// with `distance(i, o)` obstacle `i`'s signed distance at `p`.
-fn clearance(
-    world: &World,
-    p: Vec2,
-    map: f32,
-    agent_radius: f32,
-    distance: impl Fn(usize, &crate::world::Obstacle) -> f32,
-) -> f32 {
-    let mut clearance = map;
-    for (i, o) in world.obstacles().iter().enumerate() {
-        if !world.left_to_map(o) {
-            clearance = clearance.min(distance(i, o));
-        }
-    }
-    for a in world.agents() {
-        clearance = clearance.min((p - a.position).norm() - agent_radius);
-    }
-    clearance
-}
-
 impl Context<'_> {
     /// The obstacles' shapes at their predicted positions (those left to the evidence map
     /// excepted: [`World::left_to_map`]).
@@ -523,13 +501,9 @@ impl Planner {
         // is where it is: it finds the clearance from those distances (`plan_vpf`).
         let clearance = match self.params.strategy {
             Strategy::Vpf => f32::INFINITY,
-            Strategy::Multipoint | Strategy::Navfn => clearance(
-                world,
-                p,
-                world.map_distance(p),
-                self.params.agent_radius_m,
-                |_, o| o.shape.signed_distance(p),
-            ),
+            Strategy::Multipoint | Strategy::Navfn => {
+                world.clearance(p, self.params.agent_radius_m)
+            }
         };
         let leg = self.leg();
         let reach = vpf::cruise_reach(&self.params);

@@ -132,23 +132,25 @@ impl Planner {
         // Each obstacle's distance r and its gradient ∇r at the vehicle (the obstacle at its
         // predicted position), once: the rotor's normals and the field's far test share them.
         let mut distances: Vec<(f32, Vec2), MAX_OBSTACLES> = Vec::new();
-        for (o, &shift) in world.obstacles().iter().zip(cx.shifts) {
-            // Same capacity as the obstacle table: never full.
-            let _ = distances.push(o.shape.distance_gradient(p - shift));
-        }
-        // The clearance as things are now: a still obstacle's distance is the one just found
-        // (bit for bit `signed_distance`), a moving one is measured where it is.
+        // With them the clearance as things are now: a still obstacle's distance is the one
+        // found here (bit for bit `signed_distance`), a moving one is measured where it is.
         let nearest_map = crate::world::nearest_cell(world.map_cells(), p);
-        let clearance = super::clearance(
-            world,
-            p,
-            nearest_map.map_or(f32::INFINITY, |(_, d)| d - world.map_radius()),
-            prm.agent_radius_m,
-            |i, o| match (distances.get(i), cx.shifts.get(i)) {
-                (Some(&(r, _)), Some(&shift)) if shift == Vec2::ZERO => r,
-                _ => o.shape.signed_distance(p),
-            },
-        );
+        let mut clearance = nearest_map.map_or(f32::INFINITY, |(_, d)| d - world.map_radius());
+        for (o, &shift) in world.obstacles().iter().zip(cx.shifts) {
+            let (r, g) = o.shape.distance_gradient(p - shift);
+            if !world.left_to_map(o) {
+                clearance = clearance.min(if shift == Vec2::ZERO {
+                    r
+                } else {
+                    o.shape.signed_distance(p)
+                });
+            }
+            // Same capacity as the obstacle table: never full.
+            let _ = distances.push((r, g));
+        }
+        for a in world.agents() {
+            clearance = clearance.min((p - a.position).norm() - prm.agent_radius_m);
+        }
         let cx = &Context { clearance, ..*cx };
         // The rotor terms: one normal per obstacle, and one for the map (one obstacle: its
         // normal points away from the nearest believed cell). The normal is ∇r/|∇r| (for the
