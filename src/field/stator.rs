@@ -14,7 +14,7 @@
 //! everywhere, finite for any finite r, and its gradient inside an obstacle still points out, so
 //! a vehicle that finds itself inside is pushed out instead of sitting on a flat plateau.
 
-use crate::math::{exp, exp_within, sqrt};
+use crate::math::{exp, exp_nonnegative, exp_within, sqrt};
 
 /// Largest exponent A⁺/r² evaluated with the paper's formula. e²⁰ ≈ 4.9·10⁸: at that level the
 /// force is far beyond any F_max, and 32 obstacles plus the continuation stay well inside `f32`
@@ -67,8 +67,8 @@ impl Stator {
                 x * (1.0 + x * (0.5 + x * (1.0 / 6.0 + x * (1.0 / 24.0))))
             } else {
                 // Above r_c the exponent is at most EXP_CAP (to its rounding): within `exp`'s
-                // range, so without its clamps (here and below).
-                exp_within(x) - 1.0
+                // range, so without its clamps (here and below), and here positive.
+                exp_nonnegative(x) - 1.0
             }
         } else {
             self.f_c + self.slope_c * (self.r_c - r)
@@ -80,7 +80,7 @@ impl Stator {
     pub fn slope(&self, r: f32) -> f32 {
         if r > self.r_c {
             let x = self.a_plus / (r * r);
-            -2.0 * x / r * exp_within(x)
+            -2.0 * x / r * exp_nonnegative(x)
         } else {
             -self.slope_c
         }
