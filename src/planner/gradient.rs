@@ -267,9 +267,14 @@ impl Field<'_> {
                 Shape::Circle(c) => add_samples(fixed, origin, offsets, shift, centre, |x| {
                     st.potential(c.signed_distance(x))
                 }),
-                Shape::Rectangle(r) => add_samples(fixed, origin, offsets, shift, centre, |x| {
-                    st.potential(r.signed_distance(x))
-                }),
+                Shape::Rectangle(r) => match r.disc_around(origin, shift, epsilon) {
+                    Some(disc) => add_samples(fixed, origin, offsets, shift, centre, |x| {
+                        st.potential(r.outside_distance(x, disc))
+                    }),
+                    None => add_samples(fixed, origin, offsets, shift, centre, |x| {
+                        st.potential(r.signed_distance(x))
+                    }),
+                },
                 Shape::Ellipse(e) => add_samples(fixed, origin, offsets, shift, centre, |x| {
                     st.potential(e.signed_distance(x))
                 }),
