@@ -6,13 +6,14 @@
 //! things here cost less and change no number:
 //!
 //! - **Rows.** Each edge's start vertex a, vector e = b − a and 1/|e|² side by side, found once
-//!   per polygon and step, where the polygon keeps vertices and 1/|e|² in two arrays and
+//!   per polygon and step (in one pass with the sides), where the polygon keeps vertices and 1/|e|² in two arrays and
 //!   walks them round from the closing edge at every point.
 //! - **Sides.** Which side of an edge's line a point lies on is decided, for all points of the
 //!   circle at once, from the circle's centre when the circle is clear of the line (below):
 //!   an edge every point lies outside of is measured without its test; an edge no point lies
-//!   outside of is not visited (except inside the polygon, where every segment is measured).
-//!   Only the edges whose line crosses the circle (or comes near it) are tested per point.
+//!   outside of is not visited. Only the edges whose line crosses the circle (or comes near
+//!   it) are tested per point. A point found inside the polygon (no edge faces it: rare on
+//!   the sample circle) is measured by the polygon itself.
 //!
 //! **Why the sides agree with the per-point test, bit for bit.** The points are
 //! x = fl(fl(o + d) − s), |d| ≤ ε, o the vehicle, s the obstacle's shift; the centre is
@@ -38,89 +39,67 @@ struct EdgeRow {
 }
 
 /// A polygon's edges for the points of one circle: rows `..outside` have every point outside
-/// their line, rows `outside..tested` are tested per point, the rest have no point outside.
+/// their line, rows `tested..` are tested per point; the edges no point lies outside of are
+/// left out. One table serves a step's polygons in turn ([`EdgeTable::fill`]).
 pub(crate) struct EdgeTable {
     rows: [EdgeRow; MAX_POLYGON_VERTICES],
     outside: usize,
     tested: usize,
-    n: usize,
 }
 
 impl EdgeTable {
-    /// Every edge tested per point: valid for any point.
-    #[cfg(test)]
-    fn new(g: &Polygon) -> Self {
-        let mut t = EdgeTable::empty();
-        g.each_edge_from(|a, e, inv| {
-            if let Some(slot) = t.rows.get_mut(t.n) {
-                *slot = EdgeRow { a, e, inv };
-                t.n += 1;
-            }
-        });
-        t.tested = t.n;
-        t
-    }
-
-    /// For the points fl(fl(`o` + d) − `s`) with |d| ≤ `epsilon`: the sides decided from the
-    /// centre where the circle is clear of an edge's line (module notes).
-    pub(crate) fn around(g: &Polygon, o: Vec2, s: Vec2, epsilon: f32) -> Self {
-        let c = o - s;
-        let scale = o.x.abs() + o.y.abs() + s.x.abs() + s.y.abs() + 2.0 * epsilon;
-        // Each edge's side (0 outside, 1 tested, 2 no point outside) and how many of each.
-        let mut sides = [1u8; MAX_POLYGON_VERTICES];
-        let mut count = [0usize; 3];
-        let mut i = 0;
-        g.each_edge_from(|a, e, inv| {
-            let k = e.cross(c - a);
-            let m = 1.01 * epsilon + 1e-5 * (scale + a.x.abs() + a.y.abs());
-            // |k|/|e| > m, without a root.
-            let side = match (k * k * inv > m * m, k < 0.0) {
-                (false, _) => 1,
-                (true, true) => 0,
-                (true, false) => 2,
-            };
-            if let (Some(slot), Some(n)) = (sides.get_mut(i), count.get_mut(usize::from(side))) {
-                *slot = side;
-                *n += 1;
-            }
-            i += 1;
-        });
-        // The rows grouped by side (order within a group changes no minimum).
-        let mut t = EdgeTable::empty();
-        let [outside, tested, _] = count;
-        let mut next = [0, outside, outside + tested];
-        let mut i = 0;
-        g.each_edge_from(|a, e, inv| {
-            let side = sides.get(i).copied().unwrap_or(1);
-            if let Some(k) = next.get_mut(usize::from(side)) {
-                if let Some(row) = t.rows.get_mut(*k) {
-                    *row = EdgeRow { a, e, inv };
-                    *k += 1;
-                    t.n += 1;
-                }
-            }
-            i += 1;
-        });
-        t.outside = outside;
-        t.tested = outside + tested;
-        t
-    }
-
-    fn empty() -> Self {
+    /// An empty table (every point inside: [`EdgeTable::signed_distance`] asks the polygon).
+    pub(crate) fn new() -> Self {
         EdgeTable {
             rows: [EdgeRow::default(); MAX_POLYGON_VERTICES],
             outside: 0,
-            tested: 0,
-            n: 0,
+            tested: MAX_POLYGON_VERTICES,
         }
     }
 
-    /// [`Polygon::signed_distance`] at `p`, one of the points the table was made for.
+    /// The table of `g` for the points fl(fl(`o` + d) − `s`) with |d| ≤ `epsilon`: the sides
+    /// decided from the centre where the circle is clear of an edge's line (module notes). One
+    /// pass: the outside rows fill the table from the front, the tested ones from the back.
+    pub(crate) fn fill(&mut self, g: &Polygon, o: Vec2, s: Vec2, epsilon: f32) {
+        let c = o - s;
+        let scale = o.x.abs() + o.y.abs() + s.x.abs() + s.y.abs() + 2.0 * epsilon;
+        let (mut outside, mut tested) = (0, MAX_POLYGON_VERTICES);
+        let (vertices, inv) = g.edge_arrays();
+        let (Some(&last), Some(&inv_last)) = (vertices.last(), inv.last()) else {
+            return;
+        };
+        // As `Polygon::each_edge`: the closing edge first, each edge from its start vertex a.
+        let (mut a, mut inv_a) = (last, inv_last);
+        for (&b, &inv_b) in vertices.iter().zip(inv) {
+            let e = b - a;
+            let k = e.cross(c - a);
+            let m = 1.01 * epsilon + 1e-5 * (scale + a.x.abs() + a.y.abs());
+            // |k|/|e| > m, without a root.
+            let slot = if k * k * inv_a > m * m {
+                (k < 0.0).then(|| {
+                    outside += 1;
+                    outside - 1
+                })
+            } else {
+                // Near the line, or NaN: tested per point.
+                tested -= 1;
+                Some(tested)
+            };
+            if let Some(row) = slot.and_then(|i| self.rows.get_mut(i)) {
+                *row = EdgeRow { a, e, inv: inv_a };
+            }
+            a = b;
+            inv_a = inv_b;
+        }
+        self.outside = outside;
+        self.tested = tested;
+    }
+
+    /// [`Polygon::signed_distance`] of `g` at `p`, one of the points the table was filled for.
     #[inline(always)]
-    pub(crate) fn signed_distance(&self, p: Vec2) -> f32 {
-        let rows = self.rows.get(..self.n).unwrap_or(&[]);
-        let outside = rows.get(..self.outside).unwrap_or(&[]);
-        let tested = rows.get(self.outside..self.tested).unwrap_or(&[]);
+    pub(crate) fn signed_distance(&self, g: &Polygon, p: Vec2) -> f32 {
+        let outside = self.rows.get(..self.outside).unwrap_or(&[]);
+        let tested = self.rows.get(self.tested..).unwrap_or(&[]);
         let mut best2 = f32::INFINITY;
         let mut inside = outside.is_empty();
         for r in outside {
@@ -134,10 +113,7 @@ impl EdgeTable {
             }
         }
         if inside {
-            for r in rows {
-                best2 = min(segment_distance2(r.e, p - r.a, r.inv), best2);
-            }
-            -sqrt(best2)
+            g.signed_distance(p)
         } else {
             sqrt(best2)
         }
@@ -158,6 +134,7 @@ mod tests {
         let mut rng = XorShift32::new(31);
         let mut u = move || (rng.next_u32() >> 8) as f32 / (1u32 << 24) as f32;
         let (mut decided, mut edges, mut inside) = (0usize, 0usize, 0usize);
+        let (mut t, mut all) = (EdgeTable::new(), EdgeTable::new());
         for case in 0..4000 {
             let far = [0.0, 100.0, 3000.0][case % 3];
             let c = Vec2::from_angle(TAU * u()) * (far * u());
@@ -181,9 +158,11 @@ mod tests {
                 let along = a + (b - a) * (2.0 * u() - 0.5);
                 o = along + s + normal * (epsilon * (1.0 + 0.1 * (u() - 0.5)));
             }
-            let t = EdgeTable::around(&g, o, s, epsilon);
-            decided += t.outside + (t.n - t.tested);
-            edges += t.n;
+            // One table for every polygon in turn, as in a step.
+            t.fill(&g, o, s, epsilon);
+            all.fill(&g, o, s, f32::INFINITY);
+            decided += n + t.tested - MAX_POLYGON_VERTICES;
+            edges += n;
             let circle: [Vec2; 16] =
                 core::array::from_fn(|i| Vec2::from_angle(TAU * i as f32 / 16.0) * epsilon);
             for d in circle.into_iter().chain([Vec2::ZERO]) {
@@ -191,14 +170,11 @@ mod tests {
                 let want = g.signed_distance(x);
                 inside += usize::from(want < 0.0);
                 assert_eq!(
-                    t.signed_distance(x).to_bits(),
+                    t.signed_distance(&g, x).to_bits(),
                     want.to_bits(),
                     "{g:?} {o:?} {s:?} {d:?}"
                 );
-                assert_eq!(
-                    EdgeTable::new(&g).signed_distance(x).to_bits(),
-                    want.to_bits()
-                );
+                assert_eq!(all.signed_distance(&g, x).to_bits(), want.to_bits());
             }
         }
         assert!(

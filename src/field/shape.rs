@@ -480,21 +480,14 @@ impl Polygon {
         }
     }
 
-    /// The edges `(a, e = b − a, 1/|e|²)` in [`Polygon::each_edge`]'s order, each from its
-    /// start vertex a (for [`super::edges::EdgeTable`]).
-    pub(crate) fn each_edge_from(&self, mut f: impl FnMut(Vec2, Vec2, f32)) {
+    /// The vertices and each edge's 1/|e|² (edge i from vertex i to i + 1, the last one
+    /// closing), for [`super::edges::EdgeTable`].
+    pub(crate) fn edge_arrays(&self) -> (&[Vec2], &[f32]) {
         let n = usize::from(self.len).min(MAX_POLYGON_VERTICES);
-        let v = self.vertices.get(..n).unwrap_or(&[]);
-        let inv = self.inv_len2.get(..n).unwrap_or(&[]);
-        let (Some(&last), Some(&inv_last)) = (v.last(), inv.last()) else {
-            return;
-        };
-        let (mut a, mut inv_a) = (last, inv_last);
-        for (&b, &inv_b) in v.iter().zip(inv) {
-            f(a, b - a, inv_a);
-            a = b;
-            inv_a = inv_b;
-        }
+        (
+            self.vertices.get(..n).unwrap_or(&[]),
+            self.inv_len2.get(..n).unwrap_or(&[]),
+        )
     }
 
     /// `f(e, w, 1/|e|²)` for each edge from a to b (e = b − a, w = p − a), the closing edge

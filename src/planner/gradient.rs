@@ -249,6 +249,7 @@ impl Field<'_> {
         }
         // The obstacles, in table order: a near one sampled, a far one's gradient summed.
         let mut far = Vec2::ZERO;
+        let mut edges = EdgeTable::new();
         for (i, (o, &shift)) in self.obstacles.iter().zip(self.shifts).enumerate() {
             if self.leave_to_map && o.origin == Origin::Sonar && o.velocity == Vec2::ZERO {
                 continue;
@@ -279,9 +280,9 @@ impl Field<'_> {
                     st.potential(e.signed_distance(x))
                 }),
                 Shape::Polygon(g) => {
-                    let edges = EdgeTable::around(g, origin, shift, epsilon);
+                    edges.fill(g, origin, shift, epsilon);
                     add_samples(fixed, origin, offsets, shift, centre, |x| {
-                        st.potential(edges.signed_distance(x))
+                        st.potential(edges.signed_distance(g, x))
                     })
                 }
             }
