@@ -249,7 +249,8 @@ impl Field<'_> {
         }
         // The obstacles, in table order: a near one sampled, a far one's gradient summed.
         let mut far = Vec2::ZERO;
-        let mut edges = EdgeTable::new();
+        // A polygon's edge table, made when the first near polygon comes.
+        let mut edges: Option<EdgeTable> = None;
         for (i, (o, &shift)) in self.obstacles.iter().zip(self.shifts).enumerate() {
             if self.leave_to_map && o.origin == Origin::Sonar && o.velocity == Vec2::ZERO {
                 continue;
@@ -280,6 +281,7 @@ impl Field<'_> {
                     st.potential(e.signed_distance(x))
                 }),
                 Shape::Polygon(g) => {
+                    let edges = edges.get_or_insert_with(EdgeTable::new);
                     edges.fill(g, origin, shift, epsilon);
                     add_samples(fixed, origin, offsets, shift, centre, |x| {
                         st.potential(edges.signed_distance(g, x))
