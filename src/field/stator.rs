@@ -88,6 +88,7 @@ impl Stator {
 
     /// The rotor's distance weight h(r) = 1 − e^{−A⁺/r²} ∈ (0, 1]: 1 at and inside the surface,
     /// ≈ A⁺/r² far away, so the rotor reaches exactly as far as this stator does.
+    #[inline(always)]
     pub fn reach(&self, r: f32) -> f32 {
         if r > self.r_c {
             1.0 - exp_within(-self.a_plus / (r * r))
