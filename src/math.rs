@@ -184,6 +184,17 @@ pub fn min(a: f32, b: f32) -> f32 {
     }
 }
 
+/// `f32::min` as the Cortex-M4F's `fminf` computes it (x if x < y or y is NaN, else y), inline
+/// instead of a call: the same number there.
+#[inline(always)]
+pub fn min_num(x: f32, y: f32) -> f32 {
+    if x < y || y.is_nan() {
+        x
+    } else {
+        y
+    }
+}
+
 /// Four-quadrant arc tangent (libm; micromath's returns NaN at the origin).
 pub fn atan2(y: f32, x: f32) -> f32 {
     libm::atan2f(y, x)
@@ -353,6 +364,27 @@ mod tests {
             x += 0.0137;
         }
         assert!(worst < 2e-7 * 4.0, "worst relative error {worst}");
+    }
+
+    #[test]
+    fn min_num_is_f32_min() {
+        let v = [
+            f32::NAN,
+            -3.0,
+            -1.0,
+            -0.5,
+            0.5,
+            1.0,
+            2.0,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+        ];
+        for x in v {
+            for y in v {
+                let (got, want) = (min_num(x, y), x.min(y));
+                assert!(got == want || (got.is_nan() && want.is_nan()), "{x} {y}");
+            }
+        }
     }
 
     #[test]

@@ -11,7 +11,7 @@ use super::escape::StallCause;
 use super::gradient::Field;
 use super::{Context, Motion, Planner};
 use crate::field::{GoalPdf, RotorSense, RotorTerm};
-use crate::math::Vec2;
+use crate::math::{min_num, Vec2};
 use crate::planner::Command;
 use crate::world::MAX_OBSTACLES;
 
@@ -139,17 +139,20 @@ impl Planner {
         for (o, &shift) in world.obstacles().iter().zip(cx.shifts) {
             let (r, g) = o.shape.distance_gradient(p - shift);
             if !world.left_to_map(o) {
-                clearance = clearance.min(if shift == Vec2::ZERO {
-                    r
-                } else {
-                    o.shape.signed_distance(p)
-                });
+                clearance = min_num(
+                    clearance,
+                    if shift == Vec2::ZERO {
+                        r
+                    } else {
+                        o.shape.signed_distance(p)
+                    },
+                );
             }
             // Same capacity as the obstacle table: never full.
             let _ = distances.push((r, g));
         }
         for a in world.agents() {
-            clearance = clearance.min((p - a.position).norm() - prm.agent_radius_m);
+            clearance = min_num(clearance, (p - a.position).norm() - prm.agent_radius_m);
         }
         let cx = &Context { clearance, ..*cx };
         // The rotor terms: one normal per obstacle, and one for the map (one obstacle: its
