@@ -2,18 +2,21 @@
 //! signed distance ([`crate::field::shape`]) at n_γ points, bit for bit, for less.
 //!
 //! [`Polygon::signed_distance`] measures, at each point, the segments of the edges the point
-//! lies strictly outside of (cross product < 0), or every segment when it is inside. Two
+//! lies strictly outside of (cross product < 0), or every segment when it is inside. Three
 //! things here cost less and change no number:
 //!
 //! - **Rows.** Each edge's start vertex a, vector e = b − a and 1/|e|² side by side, found once
-//!   per polygon and step (in one pass with the sides), where the polygon keeps vertices and 1/|e|² in two arrays and
-//!   walks them round from the closing edge at every point.
+//!   per polygon and step (in one pass with the sides), where the polygon keeps vertices and
+//!   1/|e|² in two arrays and walks them round from the closing edge at every point.
 //! - **Sides.** Which side of an edge's line a point lies on is decided, for all points of the
 //!   circle at once, from the circle's centre when the circle is clear of the line (below):
 //!   an edge every point lies outside of is measured without its test; an edge no point lies
 //!   outside of is not visited. Only the edges whose line crosses the circle (or comes near
 //!   it) are tested per point. A point found inside the polygon (no edge faces it: rare on
 //!   the sample circle) is measured by the polygon itself.
+//! - **Ends.** For an edge every point lies outside of, whether the nearest point of its
+//!   segment is its start (or its end) for every point is decided the same way, from the
+//!   centre's projection ([`nearest`]); the projection is then not computed per point.
 //!
 //! **Why the sides agree with the per-point test, bit for bit.** The points are
 //! x = fl(fl(o + d) − s), |d| ≤ ε, o the vehicle, s the obstacle's shift; the centre is
