@@ -184,6 +184,17 @@ pub fn min(a: f32, b: f32) -> f32 {
     }
 }
 
+/// `f32::min` as the Cortex-M4F's `fminf` computes it (x if x < y or y is NaN, else y), inline
+/// instead of a call: the same number there.
+#[inline(always)]
+pub fn min_num(x: f32, y: f32) -> f32 {
+    if x < y || y.is_nan() {
+        x
+    } else {
+        y
+    }
+}
+
 /// Four-quadrant arc tangent (libm; micromath's returns NaN at the origin).
 pub fn atan2(y: f32, x: f32) -> f32 {
     libm::atan2f(y, x)
@@ -265,20 +276,45 @@ pub fn exp(x: f32) -> f32 {
     } else {
         return 0.0;
     };
-    const LOG2E: f32 = core::f32::consts::LOG2_E;
+    exp_within(x)
+}
+
+/// [`exp`] without its clamps, for a caller that knows its argument lies in
+/// [[`EXP_ARG_MIN`], [`EXP_ARG_MAX`]] (the stator PDF's exponents, `field::stator`): there the
+/// same number, bit for bit, for five instructions less. Outside that range the result is not
+/// e^x (but no panic: the exponent's bits wrap).
+#[inline(always)]
+pub fn exp_within(x: f32) -> f32 {
+    // Round half away from zero with one conversion instruction (x is in range, so it fits).
+    let y = x * LOG2E;
+    exp_reduced(x, y + if y >= 0.0 { 0.5 } else { -0.5 })
+}
+
+/// [`exp_within`] for x ∈ [0, [`EXP_ARG_MAX`]], where x·log₂e ≥ 0 always rounds up by ½: the
+/// same number, without the sign test.
+#[inline(always)]
+pub fn exp_nonnegative(x: f32) -> f32 {
+    exp_reduced(x, x * LOG2E + 0.5)
+}
+
+/// log₂e, for the range reduction of [`exp`].
+const LOG2E: f32 = core::f32::consts::LOG2_E;
+
+/// 2ⁿ·e^r with n = ⌊`half_up`⌋ towards zero (x·log₂e rounded half away from zero) and
+/// r = x − n·ln2.
+#[inline(always)]
+fn exp_reduced(x: f32, half_up: f32) -> f32 {
     // ln2 split in a short high part (exact products with n) and a low correction.
     const LN2_HI: f32 = 0.693_145_75;
     const LN2_LO: f32 = 1.428_606_8e-6;
-    // Round half away from zero with one conversion instruction (x is clamped, so it fits).
-    let y = x * LOG2E;
-    let n = (y + if y >= 0.0 { 0.5 } else { -0.5 }) as i32 as f32;
+    let n = half_up as i32 as f32;
     let r = (x - n * LN2_HI) - n * LN2_LO;
     let p = 1.0
         + r * (1.0
             + r * (0.5
                 + r * (1.0 / 6.0 + r * (1.0 / 24.0 + r * (1.0 / 120.0 + r * (1.0 / 720.0))))));
-    // n ∈ [−126, 127] after the clamp, so the biased exponent is a normal one.
-    let bits = ((n as i32 + 127) as u32) << 23;
+    // n ∈ [−126, 127] for x in range, so the biased exponent is a normal one.
+    let bits = ((n as i32).wrapping_add(127) as u32) << 23;
     p * f32::from_bits(bits)
 }
 
@@ -320,10 +356,35 @@ mod tests {
         while x < 88.0 {
             let want = libm::expf(x);
             let got = exp(x);
+            assert_eq!(got.to_bits(), exp_within(x).to_bits(), "{x}");
+            if x >= 0.0 {
+                assert_eq!(got.to_bits(), exp_nonnegative(x).to_bits(), "{x}");
+            }
             worst = worst.max(((got - want) / want).abs());
             x += 0.0137;
         }
         assert!(worst < 2e-7 * 4.0, "worst relative error {worst}");
+    }
+
+    #[test]
+    fn min_num_is_f32_min() {
+        let v = [
+            f32::NAN,
+            -3.0,
+            -1.0,
+            -0.5,
+            0.5,
+            1.0,
+            2.0,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+        ];
+        for x in v {
+            for y in v {
+                let (got, want) = (min_num(x, y), x.min(y));
+                assert!(got == want || (got.is_nan() && want.is_nan()), "{x} {y}");
+            }
+        }
     }
 
     #[test]

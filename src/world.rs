@@ -372,7 +372,9 @@ impl World {
             .agents
             .iter()
             .map(|a| (p - a.position).norm() - agent_radius);
-        obstacles.chain(agents).fold(self.map_distance(p), f32::min)
+        obstacles
+            .chain(agents)
+            .fold(self.map_distance(p), crate::math::min_num)
     }
 
     /// Replaces this period's map cells: `centers` (the nearest first; those beyond

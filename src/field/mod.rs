@@ -4,8 +4,10 @@
 //! - [`stator`]: the repulsion of an obstacle as a function of its distance r (000 eq. 9, 12);
 //! - [`goal`]: the Gaussian attraction of a goal-point (000 eq. 13, 001 eq. 12);
 //! - [`rotor`]: the tangential rotor term that is zero at the vehicle (001 eq. 2–3);
-//! - [`shape`]: the distance r(p) for circles, rectangles, ellipses and convex polygons.
+//! - [`shape`]: the distance r(p) for circles, rectangles, ellipses and convex polygons;
+//! - `edges`: a polygon's edges laid out for the points of one sample circle.
 
+pub(crate) mod edges;
 pub mod goal;
 pub mod rotor;
 pub mod shape;

@@ -280,6 +280,41 @@ impl Rectangle {
         outside + inside
     }
 
+    /// Eq. 10–11's disc for every point fl(fl(`o` + d) − `s`) with |d| ≤ `epsilon`, decided
+    /// once from the centre: for each axis 1 if every point has |q| beyond the half-size, 0 if
+    /// every point has it within; `None` if an axis is undecided (the circle comes within
+    /// 1.01ε + 10⁻⁵·U of a side's line, U = |o|₁ + |s|₁ + |p_cen|₁ + 2ε: the margin and its
+    /// reasons are `field::edges`'s) or if every point is inside.
+    pub(crate) fn disc_around(&self, o: Vec2, s: Vec2, epsilon: f32) -> Option<Vec2> {
+        let q = self.local(o - s);
+        let c = self.center;
+        let scale = o.x.abs() + o.y.abs() + s.x.abs() + s.y.abs() + c.x.abs() + c.y.abs();
+        let m = 1.01 * epsilon + 1e-5 * (scale + 2.0 * epsilon);
+        let disc = |q: f32, half: f32| {
+            let d = q.abs() - half;
+            if d > m {
+                Some(1.0)
+            } else if d < -m {
+                Some(0.0)
+            } else {
+                None
+            }
+        };
+        let disc = Vec2::new(disc(q.x, self.half.x)?, disc(q.y, self.half.y)?);
+        (disc != Vec2::ZERO).then_some(disc)
+    }
+
+    /// [`Rectangle::signed_distance`] at a point outside the box whose `disc` is known
+    /// ([`Rectangle::disc_around`]): eq. 10–11 as printed, ‖disc ⊙ (|q| − [a b]ᵀ)‖, the same
+    /// number without the comparisons (the element-wise max with 0 is the product with the
+    /// disc, inside's term is +0, and x·0 squares to +0).
+    #[inline(always)]
+    pub(crate) fn outside_distance(&self, p: Vec2, disc: Vec2) -> f32 {
+        let q = self.local(p);
+        let d = Vec2::new(q.x.abs() - self.half.x, q.y.abs() - self.half.y);
+        Vec2::new(d.x * disc.x, d.y * disc.y).norm()
+    }
+
     /// Outside, the unit vector from the nearest point of the box; inside, the normal of the
     /// nearest side. Both in the box's frame, turned back by φ.
     fn distance_gradient(&self, p: Vec2) -> (f32, Vec2) {
@@ -445,39 +480,14 @@ impl Polygon {
         }
     }
 
-    /// [`Polygon::signed_distance`] with the edge vectors of [`Polygon::edges`] given, for
-    /// many points (the same numbers, bit for bit).
-    #[inline(always)]
-    pub(crate) fn signed_distance_with(&self, edges: &Edges, p: Vec2) -> f32 {
-        let mut best2 = f32::INFINITY;
-        let mut inside = true;
-        self.each_edge_with(edges, p, |e, w, inv| {
-            if e.cross(w) < 0.0 {
-                inside = false;
-                best2 = min(segment_distance2(e, w, inv), best2);
-            }
-        });
-        if inside {
-            self.each_edge_with(edges, p, |e, w, inv| {
-                best2 = min(segment_distance2(e, w, inv), best2)
-            });
-            -sqrt(best2)
-        } else {
-            sqrt(best2)
-        }
-    }
-
-    /// The edge vectors b − a in [`Polygon::each_edge`]'s order.
-    pub(crate) fn edges(&self) -> Edges {
-        let mut edges = [Vec2::ZERO; MAX_POLYGON_VERTICES];
-        let mut k = 0;
-        self.each_edge(Vec2::ZERO, |e, _, _| {
-            if let Some(slot) = edges.get_mut(k) {
-                *slot = e;
-            }
-            k += 1;
-        });
-        edges
+    /// The vertices and each edge's 1/|e|² (edge i from vertex i to i + 1, the last one
+    /// closing), for [`super::edges::EdgeTable`].
+    pub(crate) fn edge_arrays(&self) -> (&[Vec2], &[f32]) {
+        let n = usize::from(self.len).min(MAX_POLYGON_VERTICES);
+        (
+            self.vertices.get(..n).unwrap_or(&[]),
+            self.inv_len2.get(..n).unwrap_or(&[]),
+        )
     }
 
     /// `f(e, w, 1/|e|²)` for each edge from a to b (e = b − a, w = p − a), the closing edge
@@ -499,38 +509,29 @@ impl Polygon {
         }
     }
 
-    /// As [`Polygon::each_edge`], the edge vectors taken from `edges`.
-    #[inline(always)]
-    fn each_edge_with(&self, edges: &Edges, p: Vec2, mut f: impl FnMut(Vec2, Vec2, f32)) {
-        let n = usize::from(self.len).min(MAX_POLYGON_VERTICES);
-        let v = self.vertices.get(..n).unwrap_or(&[]);
-        let inv = self.inv_len2.get(..n).unwrap_or(&[]);
-        let (Some(&last), Some(&inv_last)) = (v.last(), inv.last()) else {
-            return;
-        };
-        let mut a = last;
-        let mut inv_a = inv_last;
-        for ((&b, &inv_b), &e) in v.iter().zip(inv).zip(edges) {
-            f(e, p - a, inv_a);
-            a = b;
-            inv_a = inv_b;
-        }
-    }
-
-    /// The nearest edge's segment gives r and the unit vector from its nearest point.
+    /// The nearest edge's segment gives r and the unit vector from its nearest point. One
+    /// walk round the edges: r is [`Polygon::signed_distance`]'s, bit for bit (outside the
+    /// least of the facing segments, inside the least of all, the same numbers; the test
+    /// `distance_gradient_is_the_distance_and_its_slope` holds it to that).
     fn distance_gradient(&self, p: Vec2) -> (f32, Vec2) {
-        let r = self.signed_distance(p);
+        let mut facing2 = f32::INFINITY;
+        let mut inside = true;
         let mut best = (f32::INFINITY, Vec2::new(1.0, 0.0), Vec2::ZERO);
         self.each_edge(p, |e, w, inv| {
             let t = min(max(w.dot(e) * inv, 0.0), 1.0);
             let from = w - e * t;
             let d2 = from.norm2();
+            if e.cross(w) < 0.0 {
+                inside = false;
+                facing2 = min(d2, facing2);
+            }
             if d2 < best.0 {
                 best = (d2, from, e);
             }
         });
         let (d2, from, e) = best;
         let len = sqrt(d2);
+        let r = if inside { -len } else { sqrt(facing2) };
         if len > 0.0 {
             let n = from * (1.0 / len);
             (r, if r < 0.0 { -n } else { n })
@@ -544,12 +545,9 @@ impl Polygon {
     }
 }
 
-/// A polygon's edge vectors ([`Polygon::edges`]).
-pub(crate) type Edges = [Vec2; MAX_POLYGON_VERTICES];
-
 /// Squared distance from p to the segment from a along e (w = p − a, `inv` = 1/|e|²).
 #[inline(always)]
-fn segment_distance2(e: Vec2, w: Vec2, inv: f32) -> f32 {
+pub(crate) fn segment_distance2(e: Vec2, w: Vec2, inv: f32) -> f32 {
     let t = min(max(w.dot(e) * inv, 0.0), 1.0);
     (w - e * t).norm2()
 }
@@ -693,7 +691,6 @@ mod tests {
                 // one of its edges where the definition takes the lesser of both roundings.
                 // (w − e differs from p − b by the rounding of coordinates of size |p|.)
                 let got = g.signed_distance(p);
-                assert_eq!(got, g.signed_distance_with(&g.edges(), p));
                 let scale = v.iter().fold(p.norm(), |m, a| m.max(a.norm()));
                 assert!(
                     (got - want).abs() <= 4.0 * f32::EPSILON * scale,
@@ -736,6 +733,53 @@ mod tests {
                 );
             }
         }
+    }
+
+    /// Eq. 10–11 with the disc decided once for a sample circle gives the rectangle's own
+    /// distance at every point of it, bit for bit: circles clear of the sides, grazing a
+    /// side's line, far from the origin.
+    #[test]
+    fn a_decided_disc_gives_the_rectangles_distance_bit_for_bit() {
+        let mut rng = crate::math::XorShift32::new(17);
+        let mut u = move || (rng.next_u32() >> 8) as f32 / (1u32 << 24) as f32;
+        let tau = core::f32::consts::TAU;
+        let (mut decided, mut cases) = (0, 0);
+        for case in 0..6000 {
+            let far = [0.0, 100.0, 3000.0][case % 3];
+            let c = Vec2::from_angle(tau * u()) * (far * u());
+            let half = Vec2::new(0.05 + 2.0 * u(), 0.05 + 2.0 * u());
+            let Shape::Rectangle(r) = Shape::rectangle(c, half, tau * u()).unwrap() else {
+                unreachable!()
+            };
+            let epsilon = 0.01 + 0.5 * u();
+            let s = Vec2::new(u() - 0.5, u() - 0.5) * (4.0 * u());
+            // In the box's frame: anywhere near it, or just clear of a side's line.
+            let mut q = Vec2::new(u() - 0.5, u() - 0.5) * (6.0 * half.norm());
+            if case % 2 == 0 {
+                q.x = (half.x + epsilon * (1.0 + 0.1 * (u() - 0.5)))
+                    * if u() < 0.5 { -1.0 } else { 1.0 };
+            }
+            let o = c + q.rotate_cs(r.cos, r.sin) + s;
+            cases += 1;
+            let Some(disc) = r.disc_around(o, s, epsilon) else {
+                continue;
+            };
+            decided += 1;
+            for i in 0..16 {
+                let x = (o + Vec2::from_angle(tau * i as f32 / 16.0) * epsilon) - s;
+                let want = r.signed_distance(x);
+                assert!(want > 0.0);
+                assert_eq!(
+                    r.outside_distance(x, disc).to_bits(),
+                    want.to_bits(),
+                    "{r:?} {x:?}"
+                );
+            }
+        }
+        assert!(
+            decided * 3 > cases && decided < cases,
+            "{decided} of {cases}"
+        );
     }
 
     #[test]

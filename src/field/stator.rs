@@ -14,7 +14,7 @@
 //! everywhere, finite for any finite r, and its gradient inside an obstacle still points out, so
 //! a vehicle that finds itself inside is pushed out instead of sitting on a flat plateau.
 
-use crate::math::{exp, sqrt};
+use crate::math::{exp, exp_nonnegative, exp_within, sqrt};
 
 /// Largest exponent A⁺/r² evaluated with the paper's formula. e²⁰ ≈ 4.9·10⁸: at that level the
 /// force is far beyond any F_max, and 32 obstacles plus the continuation stay well inside `f32`
@@ -66,7 +66,9 @@ impl Stator {
             if x < SERIES_MAX {
                 x * (1.0 + x * (0.5 + x * (1.0 / 6.0 + x * (1.0 / 24.0))))
             } else {
-                exp(x) - 1.0
+                // Above r_c the exponent is at most EXP_CAP (to its rounding): within `exp`'s
+                // range, so without its clamps (here and below), and here positive.
+                exp_nonnegative(x) - 1.0
             }
         } else {
             self.f_c + self.slope_c * (self.r_c - r)
@@ -78,7 +80,7 @@ impl Stator {
     pub fn slope(&self, r: f32) -> f32 {
         if r > self.r_c {
             let x = self.a_plus / (r * r);
-            -2.0 * x / r * exp(x)
+            -2.0 * x / r * exp_nonnegative(x)
         } else {
             -self.slope_c
         }
@@ -86,9 +88,10 @@ impl Stator {
 
     /// The rotor's distance weight h(r) = 1 − e^{−A⁺/r²} ∈ (0, 1]: 1 at and inside the surface,
     /// ≈ A⁺/r² far away, so the rotor reaches exactly as far as this stator does.
+    #[inline(always)]
     pub fn reach(&self, r: f32) -> f32 {
         if r > self.r_c {
-            1.0 - exp(-self.a_plus / (r * r))
+            1.0 - exp_within(-self.a_plus / (r * r))
         } else {
             1.0
         }

@@ -16,6 +16,7 @@
 //! holds a stalled vehicle (`escape.rs`). Keeping the potential's terms apart costs three
 //! additions per sample instead of two more passes.
 
+use crate::field::edges::EdgeTable;
 use crate::field::{GoalPdf, Shape, Stator};
 use crate::math::{Vec2, TAU};
 use crate::params::N_GAMMA_MAX;
@@ -248,6 +249,8 @@ impl Field<'_> {
         }
         // The obstacles, in table order: a near one sampled, a far one's gradient summed.
         let mut far = Vec2::ZERO;
+        // A polygon's edge table, made when the first near polygon comes.
+        let mut edges: Option<EdgeTable> = None;
         for (i, (o, &shift)) in self.obstacles.iter().zip(self.shifts).enumerate() {
             if self.leave_to_map && o.origin == Origin::Sonar && o.velocity == Vec2::ZERO {
                 continue;
@@ -266,16 +269,22 @@ impl Field<'_> {
                 Shape::Circle(c) => add_samples(fixed, origin, offsets, shift, centre, |x| {
                     st.potential(c.signed_distance(x))
                 }),
-                Shape::Rectangle(r) => add_samples(fixed, origin, offsets, shift, centre, |x| {
-                    st.potential(r.signed_distance(x))
-                }),
+                Shape::Rectangle(r) => match r.disc_around(origin, shift, epsilon) {
+                    Some(disc) => add_samples(fixed, origin, offsets, shift, centre, |x| {
+                        st.potential(r.outside_distance(x, disc))
+                    }),
+                    None => add_samples(fixed, origin, offsets, shift, centre, |x| {
+                        st.potential(r.signed_distance(x))
+                    }),
+                },
                 Shape::Ellipse(e) => add_samples(fixed, origin, offsets, shift, centre, |x| {
                     st.potential(e.signed_distance(x))
                 }),
                 Shape::Polygon(g) => {
-                    let edges = g.edges();
+                    let edges = edges.get_or_insert_with(EdgeTable::new);
+                    edges.fill(g, origin, shift, epsilon);
                     add_samples(fixed, origin, offsets, shift, centre, |x| {
-                        st.potential(g.signed_distance_with(&edges, x))
+                        st.potential(edges.signed_distance(g, x))
                     })
                 }
             }

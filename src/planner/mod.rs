@@ -149,6 +149,7 @@ struct Leg {
 type Shifts = Vec<Vec2, MAX_OBSTACLES>;
 
 /// What one step reads, shared by the strategies.
+#[derive(Clone, Copy)]
 struct Context<'a> {
     now_ms: u64,
     nav: &'a NavState,
@@ -162,7 +163,8 @@ struct Context<'a> {
     routed: bool,
     /// Where each obstacle is planned against, relative to where it is.
     shifts: &'a Shifts,
-    /// Signed distance to the nearest obstacle or vehicle circle as they are now, m.
+    /// Signed distance to the nearest obstacle or vehicle circle as they are now, m (for the
+    /// VPF infinite until `plan_vpf` has measured the obstacles).
     clearance: f32,
 }
 
@@ -490,18 +492,19 @@ impl Planner {
         };
         let p = nav.position;
         let mut shifts = Shifts::new();
-        let mut clearance = world.map_distance(p);
         for o in world.obstacles() {
-            if !world.left_to_map(o) {
-                clearance = clearance.min(o.shape.signed_distance(p));
-            }
             let shift = o.predicted_shift(now_ms, p, nav.velocity, self.params.horizon_s);
             // Same capacity as the obstacle table: never full.
             let _ = shifts.push(shift);
         }
-        for a in world.agents() {
-            clearance = clearance.min((p - a.position).norm() - self.params.agent_radius_m);
-        }
+        // The VPF measures every obstacle where it is planned against, which for a still one
+        // is where it is: it finds the clearance from those distances (`plan_vpf`).
+        let clearance = match self.params.strategy {
+            Strategy::Vpf => f32::INFINITY,
+            Strategy::Multipoint | Strategy::Navfn => {
+                world.clearance(p, self.params.agent_radius_m)
+            }
+        };
         let leg = self.leg();
         let reach = vpf::cruise_reach(&self.params);
         let aim = match (leg.loiter, self.route, leg.from) {

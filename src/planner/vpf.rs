@@ -11,7 +11,7 @@ use super::escape::StallCause;
 use super::gradient::Field;
 use super::{Context, Motion, Planner};
 use crate::field::{GoalPdf, RotorSense, RotorTerm};
-use crate::math::Vec2;
+use crate::math::{min_num, Vec2};
 use crate::planner::Command;
 use crate::world::MAX_OBSTACLES;
 
@@ -132,10 +132,29 @@ impl Planner {
         // Each obstacle's distance r and its gradient ∇r at the vehicle (the obstacle at its
         // predicted position), once: the rotor's normals and the field's far test share them.
         let mut distances: Vec<(f32, Vec2), MAX_OBSTACLES> = Vec::new();
+        // With them the clearance as things are now: a still obstacle's distance is the one
+        // found here (bit for bit `signed_distance`), a moving one is measured where it is.
+        let nearest_map = crate::world::nearest_cell(world.map_cells(), p);
+        let mut clearance = nearest_map.map_or(f32::INFINITY, |(_, d)| d - world.map_radius());
         for (o, &shift) in world.obstacles().iter().zip(cx.shifts) {
+            let (r, g) = o.shape.distance_gradient(p - shift);
+            if !world.left_to_map(o) {
+                clearance = min_num(
+                    clearance,
+                    if shift == Vec2::ZERO {
+                        r
+                    } else {
+                        o.shape.signed_distance(p)
+                    },
+                );
+            }
             // Same capacity as the obstacle table: never full.
-            let _ = distances.push(o.shape.distance_gradient(p - shift));
+            let _ = distances.push((r, g));
         }
+        for a in world.agents() {
+            clearance = min_num(clearance, (p - a.position).norm() - prm.agent_radius_m);
+        }
+        let cx = &Context { clearance, ..*cx };
         // The rotor terms: one normal per obstacle, and one for the map (one obstacle: its
         // normal points away from the nearest believed cell). The normal is ∇r/|∇r| (for the
         // exact distances ∇r is already a unit vector).
@@ -151,7 +170,7 @@ impl Planner {
                     .unwrap_or(Vec2::new(1.0, 0.0));
                 let _ = normals.push((n, o.stator().reach(r)));
             }
-            if let Some((c, d)) = crate::world::nearest_cell(world.map_cells(), p) {
+            if let Some((c, d)) = nearest_map {
                 if let Some(n) = (p - c).normalized(1e-6) {
                     let _ = normals.push((n, self.map_stator.reach(d - world.map_radius())));
                 }
