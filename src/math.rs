@@ -185,13 +185,25 @@ pub fn min(a: f32, b: f32) -> f32 {
 }
 
 /// `f32::min` as the Cortex-M4F's `fminf` computes it (x if x < y or y is NaN, else y), inline
-/// instead of a call: the same number there.
+/// instead of a call: the same number there, and on the host (see [`max_num`]).
 #[inline(always)]
 pub fn min_num(x: f32, y: f32) -> f32 {
     if x < y || y.is_nan() {
         x
     } else {
         y
+    }
+}
+
+/// `f32::max` as the Cortex-M4F's `fmaxf` computes it (y if x < y or x is NaN, else x): the
+/// same number on the host, where `f32::max` may pick the other zero of ±0 (a `−0` speed
+/// set-point on the host against `0` on the board split their lockstep trajectories).
+#[inline(always)]
+pub fn max_num(x: f32, y: f32) -> f32 {
+    if x < y || x.is_nan() {
+        y
+    } else {
+        x
     }
 }
 

@@ -388,7 +388,7 @@ impl World {
             }
         }
         self.map.radius = if radius.is_finite() {
-            radius.max(0.0)
+            crate::math::max_num(radius, 0.0)
         } else {
             0.0
         };

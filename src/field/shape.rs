@@ -415,7 +415,9 @@ impl Polygon {
         }
         let used = vertices.get(..n).unwrap_or(&[]);
         // Strict convexity: every corner turns left by a non-negligible amount.
-        let scale = used.iter().fold(0.0f32, |m, v| m.max((*v - first).norm()));
+        let scale = used
+            .iter()
+            .fold(0.0f32, |m, v| crate::math::max_num(m, (*v - first).norm()));
         let mut inv_len2 = [0.0; MAX_POLYGON_VERTICES];
         for i in 0..n {
             let (a, b) = edge(used, i);

@@ -421,7 +421,8 @@ pub fn check(
         hull: prm.agent_radius_m + cfg.hull_margin_m,
         agent_r: prm.agent_radius_m,
         r_map,
-        here: world.clearance(p, prm.agent_radius_m).min(
+        here: crate::math::min_num(
+            world.clearance(p, prm.agent_radius_m),
             crate::world::nearest_cell(world.map_cells(), p)
                 .map_or(f32::INFINITY, |(_, d)| d - r_map),
         ),

@@ -7,7 +7,7 @@
 //!   perpendicular part (the turn) is bounded first. A vehicle cruising at v_max towards an
 //!   obstacle thus keeps the authority to turn instead of spending it all on braking.
 
-use crate::math::{sqrt, Vec2};
+use crate::math::{max_num, min_num, sqrt, Vec2};
 use crate::params::Bounding;
 
 /// Bounds `v` to modulus `max` with the chosen method. `e1` is the unit direction of travel;
@@ -24,13 +24,13 @@ fn split(v: Vec2, max: f32, e1: Vec2) -> Vec2 {
     let e2 = Vec2::new(e1.y, -e1.x);
     let par = v.dot(e1);
     let perp = v.dot(e2);
-    let rest = |first: f32| sqrt((max * max - first * first).max(0.0));
+    let rest = |first: f32| sqrt(max_num(max * max - first * first, 0.0));
     let (par_b, perp_b) = if par < 0.0 {
-        let par_b = -max.min(-par);
-        (par_b, perp.signum() * perp.abs().min(rest(par_b)))
+        let par_b = -min_num(max, -par);
+        (par_b, perp.signum() * min_num(perp.abs(), rest(par_b)))
     } else {
-        let perp_b = perp.signum() * perp.abs().min(max);
-        (par.min(rest(perp_b)), perp_b)
+        let perp_b = perp.signum() * min_num(perp.abs(), max);
+        (min_num(par, rest(perp_b)), perp_b)
     };
     e1 * par_b + e2 * perp_b
 }

@@ -626,7 +626,7 @@ impl Planner {
         };
         Command {
             psi_set: sp.phi_c,
-            v_set: v_set.min(v_lim),
+            v_set: crate::math::min_num(v_set, v_lim),
             setpoints: sp,
             mode: self.mode(m, cx),
             force: f_bar,

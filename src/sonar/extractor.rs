@@ -308,7 +308,7 @@ mod tests {
                 }
             };
             if let Some(t) = t {
-                best = Some(best.map_or(t, |b: f32| b.min(t)));
+                best = Some(best.map_or(t, |b: f32| crate::math::min_num(b, t)));
             }
         }
         best

@@ -131,13 +131,13 @@ impl Moments {
         let inv_n = 1.0 / n;
         let mean_rel = Vec2::new(self.sx * inv_n, self.sy * inv_n);
         let mean = self.origin + mean_rel;
-        let a = (self.sxx * inv_n - mean_rel.x * mean_rel.x).max(0.0);
+        let a = crate::math::max_num(self.sxx * inv_n - mean_rel.x * mean_rel.x, 0.0);
         let b = self.sxy * inv_n - mean_rel.x * mean_rel.y;
-        let c = (self.syy * inv_n - mean_rel.y * mean_rel.y).max(0.0);
+        let c = crate::math::max_num(self.syy * inv_n - mean_rel.y * mean_rel.y, 0.0);
         let half_trace = 0.5 * (a + c);
         let disc = sqrt(0.25 * (a - c) * (a - c) + b * b);
-        let sigma1 = sqrt((half_trace + disc).max(0.0));
-        let sigma2 = sqrt((half_trace - disc).max(0.0));
+        let sigma1 = sqrt(crate::math::max_num(half_trace + disc, 0.0));
+        let sigma2 = sqrt(crate::math::max_num(half_trace - disc, 0.0));
         let phi = 0.5 * atan2(2.0 * b, a - c);
         // Unit vectors never cancel within a half turn of head travel; the fallback is for safety.
         let look = self.look.normalized(1e-6).unwrap_or(Vec2::new(1.0, 0.0));
