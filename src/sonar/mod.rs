@@ -228,6 +228,8 @@ impl core::fmt::Display for ConfigError {
     }
 }
 
+impl core::error::Error for ConfigError {}
+
 /// `lo ..= hi`, false for NaN.
 fn within(v: f32, lo: f32, hi: f32) -> bool {
     (lo..=hi).contains(&v)
