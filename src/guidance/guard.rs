@@ -580,6 +580,11 @@ mod tests {
         }
     }
 
+    /// The verdict on `c` for a vehicle at rest at the origin at time 0, without tracks.
+    fn at_rest(g: &GuardConfig, p: &Params, w: &World, c: Command) -> Verdict {
+        check(g, p, 0, &nav(Vec2::ZERO), w, &Tracks::default(), c, 1.0).1
+    }
+
     fn nav(v: Vec2) -> NavState {
         NavState {
             position: Vec2::ZERO,
@@ -744,36 +749,10 @@ mod tests {
         w.upsert_obstacle(still).unwrap();
         let g = GuardConfig::default();
         let p = Params::default();
-        assert_eq!(
-            check(
-                &g,
-                &p,
-                0,
-                &nav(Vec2::ZERO),
-                &w,
-                &Tracks::default(),
-                cmd(0.0, 1.0),
-                1.0
-            )
-            .1,
-            Verdict::Clear
-        );
+        assert_eq!(at_rest(&g, &p, &w, cmd(0.0, 1.0)), Verdict::Clear);
         w.upsert_obstacle(still.moving(Vec2::new(0.0, 1.4)).unwrap())
             .unwrap();
-        assert_ne!(
-            check(
-                &g,
-                &p,
-                0,
-                &nav(Vec2::ZERO),
-                &w,
-                &Tracks::default(),
-                cmd(0.0, 1.0),
-                1.0
-            )
-            .1,
-            Verdict::Clear
-        );
+        assert_ne!(at_rest(&g, &p, &w, cmd(0.0, 1.0)), Verdict::Clear);
     }
 
     fn mover(at: Vec2, v: Vec2, seen_ms: u64) -> World {
@@ -826,35 +805,9 @@ mod tests {
         assert!(out.v_set > 0.0, "{out:?}");
         // Moving away, or passing well astern: nothing to do.
         let w = mover(Vec2::new(6.0, -6.0), Vec2::new(0.0, -1.0), 0);
-        assert_eq!(
-            check(
-                &g,
-                &p,
-                0,
-                &nav(Vec2::ZERO),
-                &w,
-                &Tracks::default(),
-                cmd(0.0, 1.0),
-                1.0
-            )
-            .1,
-            Verdict::Clear
-        );
+        assert_eq!(at_rest(&g, &p, &w, cmd(0.0, 1.0)), Verdict::Clear);
         let w = mover(Vec2::new(-8.0, -6.0), Vec2::new(0.0, 1.0), 0);
-        assert_eq!(
-            check(
-                &g,
-                &p,
-                0,
-                &nav(Vec2::ZERO),
-                &w,
-                &Tracks::default(),
-                cmd(0.0, 1.0),
-                1.0
-            )
-            .1,
-            Verdict::Clear
-        );
+        assert_eq!(at_rest(&g, &p, &w, cmd(0.0, 1.0)), Verdict::Clear);
     }
 
     #[test]
@@ -916,20 +869,7 @@ mod tests {
             Verdict::Clear
         );
         // The same sighting, had it been made just now, is no threat within the horizon.
-        assert_eq!(
-            check(
-                &g,
-                &p,
-                0,
-                &nav(Vec2::ZERO),
-                &w,
-                &Tracks::default(),
-                cmd(0.0, 1.0),
-                1.0
-            )
-            .1,
-            Verdict::Clear
-        );
+        assert_eq!(at_rest(&g, &p, &w, cmd(0.0, 1.0)), Verdict::Clear);
     }
 
     #[test]

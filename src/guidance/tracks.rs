@@ -675,36 +675,22 @@ mod tests {
 
     #[test]
     fn a_wall_seen_from_new_places_never_moves_and_a_short_box_may() {
-        let cfg = TrackConfig::default();
-        let mut w = World::new();
-        let mut t = Tracks::default();
         // A vehicle running along a quay at 1 m/s: each sweep's fit is centred abeam of it.
-        for k in 0..6u64 {
-            let x = 9.0 * k as f32;
-            t.admit(
-                &cfg,
-                2.5,
-                &mut w,
-                &wall(x, 5.0, 6.0, 9000 * k),
-                Vec2::new(x, 0.0),
-            );
-        }
+        let run_along = |half_len: f32| {
+            let (cfg, mut w, mut t) = (TrackConfig::default(), World::new(), Tracks::default());
+            for k in 0..6u64 {
+                let x = 9.0 * k as f32;
+                let f = wall(x, 5.0, half_len, 9000 * k);
+                t.admit(&cfg, 2.5, &mut w, &f, Vec2::new(x, 0.0));
+            }
+            (w, t)
+        };
+        let (w, t) = run_along(6.0);
         assert_eq!(w.obstacles().len(), 1, "one track along the quay");
         assert_eq!(w.obstacles()[0].velocity, Vec2::ZERO);
         assert_eq!(t.extent(w.obstacles()[0].id), Some(0.0), "no mover extent");
         // A 2 m box doing the same is a mover.
-        let mut w = World::new();
-        let mut t = Tracks::default();
-        for k in 0..6u64 {
-            let x = 9.0 * k as f32;
-            t.admit(
-                &cfg,
-                2.5,
-                &mut w,
-                &wall(x, 5.0, 1.0, 9000 * k),
-                Vec2::new(x, 0.0),
-            );
-        }
+        let (w, _) = run_along(1.0);
         let v = w.obstacles()[0].velocity;
         assert!((v - Vec2::new(1.0, 0.0)).norm() < 0.05, "{v:?}");
     }
