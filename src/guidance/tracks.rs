@@ -251,16 +251,10 @@ impl Track {
     }
 }
 
-/// `r` in decimetres, rounded up, within one byte (NaN and negatives give 0).
+/// `r` in decimetres, rounded up, within one byte (`as` saturates: NaN and negatives give 0,
+/// 25.5 m and more 255).
 fn decimetres(r: f32) -> u8 {
-    let dm = libm::ceilf(r * 10.0);
-    if dm >= 255.0 {
-        255
-    } else if dm > 0.0 {
-        dm as u8
-    } else {
-        0
-    }
+    libm::ceilf(r * 10.0) as u8
 }
 
 /// Track table and id allocation for sonar obstacles.

@@ -381,14 +381,9 @@ fn last_pass_growth(hull_m: f32, cell_m: f32) -> u8 {
     if !(hull_m > 0.0 && cell_m > 0.0) {
         return 0;
     }
-    let g = libm::ceilf((2.0 * hull_m / cell_m - 1.0) * 0.5);
-    if g >= f32::from(KEEP_OFF_CELLS) {
-        KEEP_OFF_CELLS
-    } else if g > 0.0 {
-        g as u8
-    } else {
-        0
-    }
+    // `as` saturates: a negative count gives 0.
+    let g = libm::ceilf((2.0 * hull_m / cell_m - 1.0) * 0.5) as u8;
+    g.min(KEEP_OFF_CELLS)
 }
 
 /// Grows the set cells by one cell in all eight directions, in place.

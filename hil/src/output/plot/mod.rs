@@ -533,30 +533,29 @@ fn legend(s: &mut Svg, f: &Frame, run: &RunOutput, any_collision: bool, believed
     );
     text(s, y, "ghost goal-point");
     y += 18.0;
-    s.rect(
-        x + 2.0,
-        y - 7.0,
-        20.0,
-        14.0,
+    // An area's swatch and its label.
+    let swatch = |s: &mut Svg, y: f64, style: &str, label: &str| {
+        s.rect(x + 2.0, y - 7.0, 20.0, 14.0, style);
+        text(s, y, label);
+    };
+    swatch(
+        s,
+        y,
         "fill=\"#b8b8b8\" stroke=\"#444\" stroke-width=\"1.2\"",
+        "obstacle at t = 0",
     );
-    text(s, y, "obstacle at t = 0");
     y += 18.0;
-    s.rect(
-        x + 2.0,
-        y - 7.0,
-        20.0,
-        14.0,
+    swatch(
+        s,
+        y,
         "fill=\"none\" stroke=\"#666\" stroke-dasharray=\"4 3\"",
+        "moving obstacle at the end",
     );
-    text(s, y, "moving obstacle at the end");
     y += 18.0;
     if believed {
-        s.rect(x + 2.0, y - 7.0, 20.0, 14.0, BELIEF_EVER);
-        text(s, y, "believed by the firmware (sonar map)");
+        swatch(s, y, BELIEF_EVER, "believed by the firmware (sonar map)");
         y += 18.0;
-        s.rect(x + 2.0, y - 7.0, 20.0, 14.0, BELIEF_NOW);
-        text(s, y, "... and still believed at the end");
+        swatch(s, y, BELIEF_NOW, "... and still believed at the end");
         y += 18.0;
     }
     if any_collision {
