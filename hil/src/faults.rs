@@ -71,6 +71,31 @@ impl FaultTap {
     }
 }
 
+impl FaultTap {
+    /// The same log without the faults, for the scenario's set-up requests: a fault run tests
+    /// the flight, not the set-up, and the frame log must still hold every byte the firmware
+    /// was sent (`hil beliefs` replays it).
+    pub fn clean(&mut self) -> CleanTap<'_> {
+        CleanTap(self)
+    }
+}
+
+/// [`FaultTap::clean`]: logs both ways, changes nothing.
+pub struct CleanTap<'a>(&'a mut FaultTap);
+
+impl Tap for CleanTap<'_> {
+    fn outgoing(&mut self, frame: &[u8]) -> Option<Vec<u8>> {
+        if let Some(log) = self.0.log.as_mut() {
+            let _ = log.log(self.0.t, Dir::ToFirmware, frame);
+        }
+        Some(frame.to_vec())
+    }
+
+    fn incoming(&mut self, bytes: &[u8]) {
+        self.0.incoming(bytes);
+    }
+}
+
 impl Tap for FaultTap {
     fn outgoing(&mut self, frame: &[u8]) -> Option<Vec<u8>> {
         self.counts.frames += 1;
@@ -127,6 +152,24 @@ mod tests {
         let kept = counts.frames - counts.dropped;
         let per_frame = counts.bits_flipped as f64 / kept as f64;
         assert!((0.6..1.0).contains(&per_frame), "{per_frame}");
+    }
+
+    #[test]
+    fn the_clean_tap_logs_what_it_sends_and_spares_it_the_faults() {
+        let dir = std::env::temp_dir().join(format!("vpf-clean-tap-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let log = FrameLog::create(&dir, "v0").unwrap();
+        let path = dir.join("frames_v0.log");
+        // Every frame dropped, every bit flipped: the faulty side sends nothing.
+        let mut tap = FaultTap::new(1.0, 1.0, 3, Some(log));
+        assert_eq!(tap.outgoing(&[9]), None);
+        tap.t = 1.5;
+        assert_eq!(tap.clean().outgoing(&[1, 2, 3]), Some(vec![1, 2, 3]));
+        assert_eq!(tap.counts.frames, 1, "the clean frame is not a faulted one");
+        drop(tap);
+        let frames = FrameLog::replay(&path).unwrap();
+        assert_eq!(frames, vec![(1.5, Dir::ToFirmware, vec![1, 2, 3])]);
+        let _ = std::fs::remove_dir_all(&dir);
     }
 
     #[test]

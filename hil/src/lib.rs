@@ -15,8 +15,10 @@
 //! - [`runner`]: the lockstep / real-time loop that ties the rest together;
 //! - [`error`]: the commands' errors;
 //! - [`compare`]: the same scenarios flown with each guidance strategy, side by side;
-//! - [`sweep`]: parameter tuning sweeps over scenario batches, and their recipes (seed 002).
+//! - [`sweep`]: parameter tuning sweeps over scenario batches, and their recipes (seed 002);
+//! - [`beliefs`]: what the firmware believed at given moments of a run, from its frame log.
 
+pub mod beliefs;
 pub mod bench;
 pub mod campaign;
 pub mod compare;

@@ -11,6 +11,7 @@
 //! hil merge DIR... [--out DIR]
 //! hil compare [SCENARIO.toml...] [--strategies vpf,multipoint,navfn] [--firmware host|qemu]
 //! hil bench [--families ...] [--seeds N] [--strategies ...] [--models ...] [--sensing ...]
+//! hil beliefs FRAMES.log --at T1,T2,... [--radius M]
 //! hil sonar-replay --ping360 FILE [--plot FILE.svg] [detection options]
 //! hil ping360-raw DUMP.txt OUT.bin
 //! ```
@@ -55,6 +56,8 @@ enum Command {
     Bench(hil::bench::Args),
     #[command(about = "fly each scenario under each fault, print a table")]
     Faults(hil::campaign::Args),
+    #[command(about = "what the firmware believed at given times of a run, from its frame log")]
+    Beliefs(hil::beliefs::Args),
     #[command(about = "raw Ping360 bytes through the firmware's parser and extractor")]
     SonarReplay(hil::ping360::replay::Args),
     #[command(
@@ -318,6 +321,7 @@ fn main() -> ExitCode {
         Command::Compare(a) => hil::compare::cli(a),
         Command::Bench(a) => hil::bench::cli(a),
         Command::Faults(a) => hil::campaign::cli(a),
+        Command::Beliefs(a) => hil::beliefs::cli(&a),
         Command::SonarReplay(a) => hil::ping360::replay::cli(a),
         Command::Ping360Raw(a) => hil::ping360::replay::cli_raw(a),
     }

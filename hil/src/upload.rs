@@ -16,7 +16,7 @@ use vpf::link::{
 use vpf::planner::Formation;
 use vpf::{Mission, Params};
 
-use crate::firmware::{Firmware, NoTap};
+use crate::firmware::{Firmware, Tap};
 use crate::scenario::VehicleMission;
 use crate::types::P2;
 
@@ -103,9 +103,15 @@ impl Uploader {
         self.pending.is_empty() && self.in_flight.is_empty()
     }
 
-    /// Sends what fits in flight (without faults: a scenario's set-up is not what a fault run
-    /// tests), at `period`.
-    pub fn send(&mut self, fw: &mut Firmware, period: u64) -> std::io::Result<()> {
+    /// Sends what fits in flight at `period`, through `tap` (the run's frame log without its
+    /// faults, `crate::faults::FaultTap::clean`: a scenario's set-up is not what a fault run
+    /// tests).
+    pub fn send(
+        &mut self,
+        fw: &mut Firmware,
+        period: u64,
+        tap: &mut dyn Tap,
+    ) -> std::io::Result<()> {
         if self
             .in_flight
             .iter()
@@ -117,7 +123,7 @@ impl Uploader {
             let Some(m) = self.pending.pop_front() else {
                 break;
             };
-            fw.send(&m, &mut NoTap)?;
+            fw.send(&m, tap)?;
             self.in_flight.push((fw.last_seq(), m, period));
         }
         Ok(())

@@ -219,7 +219,7 @@ pub(super) fn simulate(
     // Parameters and missions go out next; the firmware answers them at its next period. A
     // waypoint mission's items follow as the replies come (`upload`).
     for s in sims.iter_mut() {
-        s.upload.send(&mut s.fw, 0)?;
+        s.upload.send(&mut s.fw, 0, &mut s.tap.clean())?;
     }
 
     let steps = (sc.duration_s / sc.dt_s).round().max(1.0) as u64;
@@ -273,7 +273,7 @@ pub(super) fn simulate(
         for (i, s) in sims.iter_mut().enumerate() {
             collect(s, sc.mode, t_ms)?;
             if !s.upload.done() {
-                s.upload.send(&mut s.fw, k)?;
+                s.upload.send(&mut s.fw, k, &mut s.tap.clean())?;
             }
             let state = s.model.state();
             let near = nearest(sc, t, &state, hull_radius(s.kind), &hulls, i);

@@ -1,0 +1,105 @@
+//! `hil beliefs` on a real run: the frame log replayed through the host firmware gives back
+//! what the firmware believed — the mission's route (so the log holds the set-up requests), a
+//! rock where it is, and a crossing target moving the way it moves.
+
+use std::path::{Path, PathBuf};
+
+use hil::beliefs::{beliefs, BeliefsError};
+use hil::firmware::Target;
+use hil::runner::{run, RunConfig};
+use vpf::world::Origin;
+use vpf::Vec2;
+
+const SCENARIO: &str = r#"
+name = "beliefs"
+duration_s = 40.0
+dt_s = 0.1
+seed = 2
+
+[sonar]
+mode = "scanlines"
+
+[[vehicle]]
+name = "v0"
+model = "videoray"
+start = [0.0, 0.0]
+heading_deg = 0.0
+goal = [1.0, 0.0]
+sensing = "sonar"
+
+[[obstacle]]
+shape = "circle"
+center = [-12.0, 6.0]
+radius = 2.0
+
+[[obstacle]]
+shape = "circle"
+center = [8.0, -20.0]
+radius = 1.5
+velocity = [0.0, 0.8]
+"#;
+
+fn out_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../target/hil-tests/beliefs")
+}
+
+#[test]
+fn a_replayed_frame_log_gives_back_the_route_the_rock_and_the_mover() {
+    let _ = std::fs::remove_dir_all(out_dir());
+    std::fs::create_dir_all(out_dir()).unwrap();
+    let file = out_dir().join("beliefs.toml");
+    std::fs::write(&file, SCENARIO).unwrap();
+    let sc = hil::scenario::load(&file).unwrap_or_else(|e| panic!("{e}"));
+    let cfg = RunConfig {
+        target: Target::Host,
+        out_dir: out_dir(),
+        progress: false,
+    };
+    run(&sc, &cfg).unwrap_or_else(|e| panic!("run failed: {e}"));
+    let frames = out_dir().join("frames_v0.log");
+
+    let all = beliefs(&frames, &[5.0, 39.0, 1e6], 10.0).unwrap();
+    // The time after the log's end is left out.
+    assert_eq!(all.len(), 2);
+    let end = &all[1];
+    print!("{end}");
+    assert!(
+        end.now_ms > 38_000 && end.now_ms <= 39_000,
+        "{}",
+        end.now_ms
+    );
+    // The mission went out before the first period: without it in the log there is no goal
+    // and no route.
+    assert!(
+        all[0].route.is_some(),
+        "no route at 5 s: the set-up is not in the log"
+    );
+    let sonar = || end.obstacles.iter().filter(|o| o.origin == Origin::Sonar);
+    let rock = Vec2::new(-12.0, 6.0);
+    assert!(
+        sonar().any(|o| (o.shape.center() - rock).norm() < 1.5 && o.velocity == Vec2::ZERO),
+        "no still track at the rock"
+    );
+    // The target moves north at 0.8 m/s: its track, seen at least twice by now, says so.
+    assert!(
+        sonar().any(|o| o.velocity.y > 0.5 && o.velocity.x.abs() < 0.3),
+        "no track moving north"
+    );
+}
+
+#[test]
+fn times_out_of_order_and_a_missing_log_are_refused() {
+    let missing = out_dir().join("no_such_frames.log");
+    assert!(matches!(
+        beliefs(&missing, &[3.0, 2.0], 10.0),
+        Err(BeliefsError::Times(_))
+    ));
+    assert!(matches!(
+        beliefs(&missing, &[f64::NAN], 10.0),
+        Err(BeliefsError::Times(_))
+    ));
+    assert!(matches!(
+        beliefs(&missing, &[1.0], 10.0),
+        Err(BeliefsError::Log(_))
+    ));
+}
