@@ -298,13 +298,7 @@ impl Firmware {
             None
         };
         std::thread::spawn(move || for _ in lines.map_while(Result::ok) {});
-        let mut stdin = child
-            .stdin
-            .take()
-            .ok_or_else(|| std::io::Error::other("no qemu stdin"))?;
-        stdin.write_all(b"cont\n")?;
-        stdin.flush()?;
-        std::mem::forget(stdin); // the monitor stays open while QEMU runs
+        resume(&mut child)?;
         let port = Port::File(File::from(std::os::fd::OwnedFd::from(ours)));
         let mut fw = Self::new(Some(child), port, Target::Qemu);
         fw.ethernet = true;
@@ -382,13 +376,7 @@ impl Firmware {
             Some(p) => Some(open_raw(p)?),
             None => None,
         };
-        let mut stdin = child
-            .stdin
-            .take()
-            .ok_or_else(|| std::io::Error::other("no qemu stdin"))?;
-        stdin.write_all(b"cont\n")?;
-        stdin.flush()?;
-        std::mem::forget(stdin); // the monitor stays open while QEMU runs
+        resume(&mut child)?;
         let mut fw = Self::new(Some(child), port, Target::QemuUart);
         fw.sonar_port = sonar_port;
         Ok(fw)
@@ -572,6 +560,19 @@ impl Firmware {
         }
         Ok(std::mem::take(&mut self.inbox))
     }
+}
+
+/// Lets a QEMU started stopped (`-S`) run: `cont` on its monitor (stdin), which stays open
+/// while QEMU runs.
+fn resume(child: &mut Child) -> std::io::Result<()> {
+    let mut stdin = child
+        .stdin
+        .take()
+        .ok_or_else(|| std::io::Error::other("no qemu stdin"))?;
+    stdin.write_all(b"cont\n")?;
+    stdin.flush()?;
+    std::mem::forget(stdin);
+    Ok(())
 }
 
 #[cfg(test)]
