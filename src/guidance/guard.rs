@@ -25,7 +25,8 @@
 //! 3. a heading within ±`max_turn_rad` of the commanded one, tried nearest first in steps of
 //!    `turn_step_rad`, is clear at the commanded speed → **turn** to it;
 //! 4. a lower speed (halving down to `min_speed`) is clear on the commanded heading → **slow**;
-//! 5. otherwise → **stop**.
+//! 5. otherwise → **stop** (a craft that turns slowly turns on the spot meanwhile, towards
+//!    the planner's target: [`turn_on_the_spot`]).
 //!
 //! **A craft that turns slowly** (`Params::turn_rate_rps` > 0, e.g. the flat-fish AUV of seed 003
 //! at ≈ 0.046 rad/s, a 22 m turning radius at 1 m/s) does not go where it is told but where it
@@ -486,8 +487,16 @@ pub fn check(
         }
         s *= 0.5;
     }
-    // 5. Nothing is clear: stop, unless a mover would run into the stopped vehicle.
+    // 5. Nothing is clear: stop, unless a mover would run into the stopped vehicle; a craft
+    //    that turns slowly turns on the spot meanwhile, to where it can go.
     if can_stop {
+        if helm.turns_slowly() {
+            let psi = turn_on_the_spot(cfg, &helm, &b, &cmd, v);
+            return (
+                with_motion(cmd, psi, 0.0, Verdict::Stopped),
+                Verdict::Stopped,
+            );
+        }
         return stopped(cmd);
     }
     evade(cfg, &helm, &b, cmd, evasion)
@@ -549,6 +558,31 @@ fn evade(
         Some((a, _)) => (with_motion(cmd, a, speed, Verdict::Turned), Verdict::Turned),
         None => stopped(cmd),
     }
+}
+
+/// Where a slow-turning craft stopped by the guard turns on the spot: from rest it can only
+/// go nearly straight on (every heading it is offered sweeps the same arc, module notes), so
+/// if straight on is blocked it would wait for ever — in a bend of a channel, at a corner of a
+/// detour. It turns instead towards the planner's target (`Command::target`: the route's
+/// goal-point, a ghost, or the goal), or, if the way there is blocked, the heading nearest it
+/// that a craft already pointing that way could take at `v` (a straight segment). The planner
+/// keeps planning; once the vehicle points where it can go, the guard lets its command out.
+fn turn_on_the_spot(cfg: &GuardConfig, helm: &Helm, b: &Believed, cmd: &Command, v: f32) -> f32 {
+    let Some(u) = (cmd.target - helm.p).normalized(1e-3) else {
+        return cmd.psi_set;
+    };
+    let aim = u.angle();
+    let len = reach(v, helm.prm, cfg);
+    let clear = |a: f32| !b.blocked(helm.p, Vec2::from_angle(a), len, v);
+    if clear(aim) {
+        return aim;
+    }
+    let step = max(cfg.turn_step_rad, 1e-3);
+    let turns = min(crate::math::PI / step, 64.0) as u32;
+    (1..=turns)
+        .flat_map(|k| [1.0, -1.0].map(|side| aim + side * k as f32 * step))
+        .find(|&a| clear(a))
+        .unwrap_or(aim)
 }
 
 /// `cmd` brought to a stop on its heading (the vehicle turns while it brakes).
@@ -870,6 +904,61 @@ mod tests {
         );
         // The same sighting, had it been made just now, is no threat within the horizon.
         assert_eq!(at_rest(&g, &p, &w, cmd(0.0, 1.0)), Verdict::Clear);
+    }
+
+    #[test]
+    fn a_slow_turning_craft_stopped_by_the_guard_turns_on_the_spot_towards_its_target() {
+        // The flat-fish (seed 003) at rest, a wall 3.2 m ahead that ends at y = 2: straight on
+        // is blocked and, from rest, so is every heading it could turn to while moving.
+        let prm = Params {
+            agent_radius_m: 2.25,
+            turn_rate_rps: 0.046,
+            brake_mps2: 0.1,
+            v_max: 0.567,
+            ..Params::default()
+        };
+        let mut w = World::new();
+        w.set_map((-20..=4).map(|k| Vec2::new(3.2, k as f32 * 0.5)), 0.25);
+        let mut c = cmd(0.0, 0.5);
+        c.target = Vec2::new(10.0, 8.0);
+        let g = GuardConfig::default();
+        let (out, v) = check(
+            &g,
+            &prm,
+            0,
+            &nav(Vec2::ZERO),
+            &w,
+            &Tracks::default(),
+            c,
+            1.0,
+        );
+        assert_eq!(v, Verdict::Stopped);
+        assert_eq!((out.v_set, out.mode), (0.0, Mode::Guarded));
+        // The target's bearing (39°) runs into the wall too: the nearest heading past its end.
+        let deg = out.psi_set.to_degrees();
+        assert!((60.0..=100.0).contains(&deg), "turns to {deg}°");
+        // Pointing there, it may go.
+        let turned = NavState {
+            heading: out.psi_set,
+            ..nav(Vec2::ZERO)
+        };
+        let go = cmd(out.psi_set, 0.5);
+        assert_eq!(
+            check(&g, &prm, 0, &turned, &w, &Tracks::default(), go, 1.0).1,
+            Verdict::Clear
+        );
+        // Without a target apart from where it is, it keeps the planner's heading.
+        let (out, _) = check(
+            &g,
+            &prm,
+            0,
+            &nav(Vec2::ZERO),
+            &w,
+            &Tracks::default(),
+            cmd(0.0, 0.5),
+            1.0,
+        );
+        assert_eq!(out.psi_set, 0.0);
     }
 
     #[test]

@@ -10,7 +10,7 @@
 //! 1. moves its [`grid::Grid`] with the vehicle and takes in the evidence map (charted
 //!    obstacles and still contacts are marked as they arrive);
 //! 2. spreads a [`wavefront::Wavefront`] from the goal (or the window cell nearest a goal
-//!    beyond the window) through free cells — first with the obstacles grown by two cells, so
+//!    beyond the window) through free cells — first with the obstacles grown by 4 m, so
 //!    the route keeps its distance; if that finds no way, grown only as much as keeps every
 //!    way as wide as the hull (none for a small craft);
 //! 3. walks down the wavefront from the vehicle and takes the farthest cell of the walk it can
@@ -145,6 +145,8 @@ const STILL_SPEED: f32 = 0.1;
 #[derive(Clone, Debug)]
 pub struct Router {
     cfg: RouteConfig,
+    /// Cells the first pass grows obstacles by ([`keep_off_cells`]).
+    keep_off: u8,
     /// Cells the last pass grows obstacles by ([`last_pass_growth`]).
     narrowest: u8,
     grid: Grid,
@@ -166,6 +168,7 @@ impl Router {
     pub const fn new(cfg: RouteConfig) -> Self {
         Router {
             cfg,
+            keep_off: keep_off_cells(cfg.cell_m),
             narrowest: 0,
             grid: Grid::new(cfg.cell_m),
             wave: Wavefront::new(),
@@ -200,7 +203,8 @@ impl Router {
             self.grid = Grid::new(cell_m);
             self.last_ms = None;
         }
-        self.narrowest = last_pass_growth(prm.agent_radius_m, self.cfg.cell_m);
+        self.keep_off = keep_off_cells(self.cfg.cell_m);
+        self.narrowest = last_pass_growth(prm.agent_radius_m, self.cfg.cell_m, self.keep_off);
     }
 
     /// A new mission goal (replanned at the next navigation), or none.
@@ -273,7 +277,7 @@ impl Router {
         };
         let inside = self.grid.cell_of(goal);
         let source = inside.unwrap_or_else(|| self.grid.clamp(goal));
-        for growth in [KEEP_OFF_CELLS, self.narrowest] {
+        for growth in [self.keep_off, self.narrowest] {
             self.fill_blocked(growth, start, source);
             if self.wave.spread(&self.blocked, source, start, MAX_LAYERS) {
                 let end = if inside.is_some() {
@@ -368,22 +372,39 @@ impl Router {
     }
 }
 
-/// Cells the first pass grows obstacles by, so the route keeps its distance.
-const KEEP_OFF_CELLS: u8 = 2;
+/// Distance the first pass keeps the route off obstacles, m: two of the default 2 m cells.
+const KEEP_OFF_M: f32 = 4.0;
+/// Most cells a pass grows obstacles by.
+const MAX_GROWTH: u8 = 8;
+
+/// Cells the first pass grows obstacles by, so the route keeps [`KEEP_OFF_M`] from them
+/// whatever the cell size (a finer grid is a finer route, not one that hugs obstacles): at
+/// least one, at most [`MAX_GROWTH`]; 2 on the default 2 m cells, 4 on 1 m cells.
+const fn keep_off_cells(cell_m: f32) -> u8 {
+    // Rounded up; `as` saturates, and takes NaN (no cell size) to 0.
+    let g = (KEEP_OFF_M / cell_m + 0.999) as u8;
+    if g < 1 {
+        1
+    } else if g > MAX_GROWTH {
+        MAX_GROWTH
+    } else {
+        g
+    }
+}
 
 /// Cells the last pass grows obstacles by: the fewest that leave open only ways as wide as a
 /// hull of radius `hull_m`. A way k free cells across is at least k cells wide, and growing
 /// both sides by g leaves a free cell only where k ≥ 2g + 1; so g = ⌈(2·hull/cell − 1)/2⌉,
-/// at least 0, at most [`KEEP_OFF_CELLS`]. 0 for a VideoRay (0.5 m) on 2 m cells, as before;
-/// 1 for the flat-fish (2.25 m), which would otherwise be routed through 2 m gaps it cannot
-/// pass and stop before them, held by the guard.
-fn last_pass_growth(hull_m: f32, cell_m: f32) -> u8 {
+/// at least 0, at most the first pass's `keep_off`. 0 for a VideoRay (0.5 m) on 2 m cells, as
+/// before; 1 for the flat-fish (2.25 m), which would otherwise be routed through 2 m gaps it
+/// cannot pass and stop before them, held by the guard.
+fn last_pass_growth(hull_m: f32, cell_m: f32, keep_off: u8) -> u8 {
     if !(hull_m > 0.0 && cell_m > 0.0) {
         return 0;
     }
     // `as` saturates: a negative count gives 0.
     let g = libm::ceilf((2.0 * hull_m / cell_m - 1.0) * 0.5) as u8;
-    g.min(KEEP_OFF_CELLS)
+    g.min(keep_off)
 }
 
 /// Grows the set cells by one cell in all eight directions, in place.
@@ -431,6 +452,18 @@ mod tests {
         // No replan before `replan_ms`.
         assert_eq!(r.on_nav(Vec2::ZERO, 500, None), None);
         assert!(r.on_nav(Vec2::ZERO, 1000, None).is_some());
+    }
+
+    #[test]
+    fn the_route_keeps_the_same_distance_off_whatever_the_cell() {
+        assert_eq!(keep_off_cells(2.0), 2, "the default 2 m cells: as before");
+        assert_eq!(keep_off_cells(1.0), 4);
+        assert_eq!(keep_off_cells(0.25), MAX_GROWTH);
+        assert_eq!(keep_off_cells(f32::NAN), 1);
+        // The last pass: the VideoRay none, the flat-fish one 2 m cell or two 1 m cells.
+        assert_eq!(last_pass_growth(0.5, 2.0, 2), 0);
+        assert_eq!(last_pass_growth(2.25, 2.0, 2), 1);
+        assert_eq!(last_pass_growth(2.25, 1.0, 4), 2);
     }
 
     #[test]
