@@ -490,14 +490,15 @@ pub fn check(
     // 5. Nothing is clear: stop, unless a mover would run into the stopped vehicle; a craft
     //    that turns slowly turns on the spot meanwhile, to where it can go.
     if can_stop {
-        if helm.turns_slowly() {
-            let psi = turn_on_the_spot(cfg, &helm, &b, &cmd, v);
-            return (
-                with_motion(cmd, psi, 0.0, Verdict::Stopped),
-                Verdict::Stopped,
-            );
-        }
-        return stopped(cmd);
+        let psi = if helm.turns_slowly() {
+            turn_on_the_spot(cfg, &helm, &b, &cmd, v)
+        } else {
+            cmd.psi_set
+        };
+        return (
+            with_motion(cmd, psi, 0.0, Verdict::Stopped),
+            Verdict::Stopped,
+        );
     }
     evade(cfg, &helm, &b, cmd, evasion)
 }
@@ -511,11 +512,15 @@ fn nearest_clear(
     v: f32,
     max_turn: f32,
 ) -> Option<f32> {
+    turns_from(cfg, psi, max_turn).find(|&a| !helm.blocked(b, a, v))
+}
+
+/// Headings within ±`max_turn` of `psi` (itself excepted) in steps of `turn_step_rad`, nearest
+/// first, left before right.
+fn turns_from(cfg: &GuardConfig, psi: f32, max_turn: f32) -> impl Iterator<Item = f32> {
     let step = max(cfg.turn_step_rad, 1e-3);
     let turns = min(max_turn / step, 64.0) as u32;
-    (1..=turns)
-        .flat_map(|k| [1.0, -1.0].map(|side| psi + side * k as f32 * step))
-        .find(|&a| !helm.blocked(b, a, v))
+    (1..=turns).flat_map(move |k| [1.0, -1.0].map(|side| psi + side * k as f32 * step))
 }
 
 /// A mover closes in and stopping will not do: the clear heading nearest the command, all
@@ -577,10 +582,7 @@ fn turn_on_the_spot(cfg: &GuardConfig, helm: &Helm, b: &Believed, cmd: &Command,
     if clear(aim) {
         return aim;
     }
-    let step = max(cfg.turn_step_rad, 1e-3);
-    let turns = min(crate::math::PI / step, 64.0) as u32;
-    (1..=turns)
-        .flat_map(|k| [1.0, -1.0].map(|side| aim + side * k as f32 * step))
+    turns_from(cfg, aim, crate::math::PI)
         .find(|&a| clear(a))
         .unwrap_or(aim)
 }
