@@ -42,7 +42,13 @@ impl Host {
 
     fn send_bytes(&mut self, bytes: &[u8]) {
         let mut out = Vec::new();
-        self.fw.on_bytes(bytes, &mut || 0, &mut |f: &[u8]| {
+        // A clock that ticks once per reading: a planner step costs 1.
+        let mut clock = 0u32;
+        let mut cost = || {
+            clock += 1;
+            clock
+        };
+        self.fw.on_bytes(bytes, &mut cost, &mut |f: &[u8]| {
             out.extend_from_slice(f);
             true
         });
@@ -199,6 +205,25 @@ fn late_navigation_is_dead_reckoned_and_slowed_then_stale_navigation_holds() {
         .any(|c| c.mode == Mode::Hold(HoldReason::StaleNav)));
     host.nav(7000, p, Vec2::ZERO);
     assert_eq!(host.tick(7000).mode, Mode::Transit);
+}
+
+/// A held period reports no step cost, not the last step's: the self-test's and the harness's
+/// cost figures count only periods that planned.
+#[test]
+fn a_held_period_reports_no_step_cost() {
+    let mut host = Host::new(Params::default());
+    host.send(mission(Vec2::new(30.0, 0.0)));
+    host.nav(0, Vec2::ZERO, Vec2::ZERO);
+    assert_eq!(host.tick(0).mode, Mode::Transit);
+    assert_eq!(
+        host.telemetry.last().unwrap().step_cost,
+        1,
+        "one reading of the clock"
+    );
+    let timeout = FailsafeConfig::default().nav_timeout_ms;
+    let held = host.tick(timeout + 200);
+    assert_eq!(held.mode, Mode::Hold(HoldReason::StaleNav));
+    assert_eq!(host.telemetry.last().unwrap().step_cost, 0);
 }
 
 /// A parameter set with a bad value gets a typed rejection naming the parameter, and the old

@@ -215,7 +215,9 @@ impl Periodic {
         (self.planner.params().period_s * 1000.0) as u32
     }
 
-    /// Cost of the last planner step, in the board's unit.
+    /// Cost of the last planner step, in the board's unit; 0 when the last period held the
+    /// vehicle without a step (a failsafe's hold), so a held period is never reported with an
+    /// older step's cost.
     pub fn last_cost(&self) -> u32 {
         self.last_cost
     }
@@ -446,6 +448,7 @@ impl Periodic {
             .or(spent.then_some(crate::planner::HoldReason::SonarBlind));
         let (Some(n), None) = (nav, hold) else {
             self.planner.reset_motion();
+            self.last_cost = 0;
             let heading = nav.map_or(self.last_heading, |n| n.nav.heading);
             let reason = hold.unwrap_or(crate::planner::HoldReason::StaleNav);
             let mut c = Command::hold(reason, heading);

@@ -74,7 +74,7 @@ pub struct TelemetryRepr {
     pub agents: u8,
     /// Stacked ghost goal-points.
     pub ghost_depth: u8,
-    /// Cost of the last planner step, in `cost_unit`.
+    /// Cost of the last planner step, in `cost_unit`; 0 in a period held without a step.
     pub step_cost: u32,
     /// What `step_cost` counts.
     pub cost_unit: CostUnit,
