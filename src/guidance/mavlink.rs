@@ -666,10 +666,12 @@ pub fn sectors(world: &World, nav: &NavState) -> [u16; SECTORS] {
         let r = o.shape.center() - p;
         let dist = r.norm();
         let radius = o.shape.bounding_radius();
+        // asin(radius / dist) as an arc tangent: libm's `asinf` works in double precision,
+        // software floating point on the Cortex-M4F.
         let half = if dist <= radius {
             PI
         } else {
-            libm::asinf(radius / dist)
+            crate::math::atan2(radius, crate::math::sqrt(dist * dist - radius * radius))
         };
         mark(libm::atan2f(r.y, r.x), half, o.shape.signed_distance(p));
     }

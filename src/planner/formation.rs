@@ -74,7 +74,7 @@ impl Formation {
             return self.orientation;
         }
         let fit: f32 = neighbours
-            .map(|a| libm::cosf(3.0 * ((a.position - p).angle() - self.orientation)))
+            .map(|a| crate::math::cos(3.0 * ((a.position - p).angle() - self.orientation)))
             .sum();
         if fit >= 0.0 {
             self.orientation + core::f32::consts::PI
