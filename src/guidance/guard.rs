@@ -52,6 +52,21 @@
 //! one period at F_max, within `speed_cap`: v_max, or less while navigation is late or the
 //! sonar loses pings), then half of it.
 //!
+//! **Head-on.** A sonar contact seen once has no velocity yet, and the next look is a sweep
+//! (9 s) away. Another vehicle meeting this one head-on closes at twice the cruise speed: seen
+//! at 10–15 m, it arrives before the second look, and both vehicles, each believing the other
+//! still, steered round where it had been (generated head-on worlds, own sonar: 8 contacts in
+//! 400). So a contact seen once within [`HEAD_ON_CONE_RAD`] of the bow that stands alone
+//! (nothing else believed within [`HEAD_ON_ALONE_M`] of it: a pier's end or a rock's far
+//! face is structure) is also judged as a mover on the reciprocal course at `head_on_mps`
+//! (default 1 m/s, a VideoRay's cruise; 0: off), carried from its sighting like any mover. A
+//! rock seen for the first time ahead costs at most a turn off it until its second look
+//! finds it where it was. This is COLREG rule 14's situation (*International Regulations for
+//! Preventing Collisions at Sea*, 1972), judged without knowing the other's course; the
+//! rule's "both alter to starboard" was tried too (a contact dead ahead must pass to port)
+//! and made navfn's head-on contacts 2 → 12 in 400 worlds: each vehicle's planner had
+//! already chosen a side.
+//!
 //! Cost: one point-to-segment distance per map cell and still agent per heading tried, samples
 //! every [`SAMPLE_M`] along the segment for the table's still obstacles near enough to matter,
 //! and one closest-approach per mover.
@@ -67,6 +82,12 @@ pub const SAMPLE_M: f32 = 0.25;
 /// How long a motion is held when it is judged against movers, s: about a sonar sweep (9 s for
 /// a Micron at 30 m), the longest a mover goes unseen.
 pub const CPA_HORIZON_S: f32 = 10.0;
+/// Bearings off the bow within which a contact seen once may be a vehicle meeting this one
+/// head-on (module notes), rad.
+pub const HEAD_ON_CONE_RAD: f32 = crate::math::PI / 3.0;
+/// Such a contact is taken for a vehicle only if nothing else believed is within this of its
+/// extent, m.
+pub const HEAD_ON_ALONE_M: f32 = 2.0;
 /// Chords of the arc a slow-turning craft sweeps (module notes): enough to follow a turn of up
 /// to a few tenths of a radian within a braking distance.
 pub const ARC_SEGMENTS: usize = 4;
@@ -88,6 +109,10 @@ pub struct GuardConfig {
     pub max_turn_rad: f32,
     /// Slowest speed tried before stopping, m/s.
     pub min_speed: f32,
+    /// Speed of the head-on hypothesis, m/s (0: off): a sonar contact seen once, within
+    /// [`HEAD_ON_CONE_RAD`] of the bow, is also judged as a mover on the reciprocal course at
+    /// this speed (module notes).
+    pub head_on_mps: f32,
 }
 
 impl Default for GuardConfig {
@@ -99,6 +124,7 @@ impl Default for GuardConfig {
             turn_step_rad: crate::math::PI / 12.0,
             max_turn_rad: crate::math::PI / 2.0,
             min_speed: 0.1,
+            head_on_mps: 1.0,
         }
     }
 }
@@ -407,6 +433,55 @@ pub fn check(
                 _ => r,
             },
         });
+    }
+    // Head-on: a contact seen once ahead may be another vehicle coming the other way, which
+    // the sonar sees again only a sweep later, too late at twice the cruise speed.
+    let bow = Vec2::from_angle(nav.heading);
+    let reciprocal = bow * -cfg.head_on_mps;
+    for o in world
+        .obstacles()
+        .iter()
+        .filter(|o| o.velocity == Vec2::ZERO && o.origin == Origin::Sonar && cfg.head_on_mps > 0.0)
+    {
+        let c = o.shape.center();
+        let ahead = (c - p)
+            .normalized(1e-3)
+            .is_some_and(|u| u.dot(bow) >= cos(HEAD_ON_CONE_RAD));
+        let r = o.shape.bounding_radius();
+        let extent = tracks.extent(o.id).map_or(r, |e| max(r, e));
+        // A fragment of structure (a pier's end, a rock's far face) lies against other
+        // believed obstacles; a vehicle in open water stands alone.
+        let alone = || {
+            let apart = extent + HEAD_ON_ALONE_M;
+            world
+                .obstacles()
+                .iter()
+                .filter(|q| q.id != o.id)
+                // The bounding circle first: no nearer than the shape, and cheaper.
+                .all(|q| {
+                    (q.shape.center() - c).norm() - q.shape.bounding_radius() > apart
+                        || q.shape.signed_distance(c) > apart
+                })
+                // Its own echoes are believed cells within a cell of its extent; a wall's run on.
+                && world.map_cells().iter().all(|&m| {
+                    let d = (m - c).norm() - extent;
+                    d <= 2.0 * r_map || d > HEAD_ON_ALONE_M + r_map
+                })
+        };
+        // A vehicle's echo is fitted as a circle; a wall's run of echoes as a rectangle.
+        let compact = matches!(o.shape, crate::field::Shape::Circle { .. });
+        // Farther than it may have come since it was seen and both can close within the
+        // horizon, it cannot meet the hull: left out, to save the checks below.
+        let reach = (2.0 * cfg.head_on_mps + prm.v_max) * CPA_HORIZON_S;
+        let within = (c - p).norm() <= reach + extent + prm.agent_radius_m + cfg.hull_margin_m;
+        if ahead && within && compact && tracks.unrated(o.id) && alone() {
+            let center = c + reciprocal * age(o.seen_ms);
+            let _ = movers.push(Mover {
+                center,
+                velocity: reciprocal,
+                radius: extent,
+            });
+        }
     }
     for a in world.agents().iter().filter(|a| a.velocity != Vec2::ZERO) {
         let _ = movers.push(Mover {
@@ -882,6 +957,77 @@ mod tests {
         assert_eq!(last_fit.1, Verdict::Clear);
         let largest = check(&g, &p, 27_000, &moving, &w, &tracks, cmd(0.0, 1.0), 1.0);
         assert_ne!(largest.1, Verdict::Clear, "{:?}", largest.0);
+    }
+
+    /// A world and tracks with sonar contacts `(x, y, r)` seen at 9 s; with `twice`, each also
+    /// seen a sweep before in the same place (so known to stand still).
+    fn sonar_contacts(contacts: &[(f32, f32, f32)], twice: bool) -> (World, Tracks) {
+        use crate::sonar::{Feature, FeatureKind};
+        let mut w = World::new();
+        let mut tracks = Tracks::default();
+        let cfg = crate::guidance::TrackConfig::default();
+        for time_ms in if twice {
+            [0, 9000].as_slice()
+        } else {
+            [9000].as_slice()
+        } {
+            for &(x, y, r) in contacts {
+                let f = Feature {
+                    center: Vec2::new(x, y),
+                    radius: r,
+                    kind: FeatureKind::Circle { radius: r },
+                    confidence: 0.2,
+                    time_ms: *time_ms,
+                    beams: 2,
+                };
+                tracks.admit(&cfg, 2.5, &mut w, &f, Vec2::ZERO);
+            }
+        }
+        (w, tracks)
+    }
+
+    #[test]
+    fn a_contact_seen_once_dead_ahead_is_met_as_a_vehicle_on_the_reciprocal_course() {
+        // A VideoRay-sized echo 8 m ahead on the track, seen once, 1 s ago: at 1 m/s each way
+        // it would be here in 3.5 s. Straight on is blocked; the guard turns off the track.
+        let (g, p) = (GuardConfig::default(), Params::default());
+        let moving = nav(Vec2::new(1.0, 0.0));
+        let (w, once) = sonar_contacts(&[(8.0, 0.0, 0.3)], false);
+        let (out, v) = check(&g, &p, 10_000, &moving, &w, &once, cmd(0.0, 1.0), 1.0);
+        assert_eq!(v, Verdict::Turned, "{out:?}");
+        assert!(out.psi_set.abs() >= g.turn_step_rad, "{}", out.psi_set);
+        // Seen twice in one place, it stands still: 8 m ahead is beyond the braking distance.
+        let (w, twice) = sonar_contacts(&[(8.0, 0.0, 0.3)], true);
+        assert_eq!(
+            check(&g, &p, 10_000, &moving, &w, &twice, cmd(0.0, 1.0), 1.0).1,
+            Verdict::Clear
+        );
+        // Off: as before.
+        let off = GuardConfig {
+            head_on_mps: 0.0,
+            ..g
+        };
+        let (w, once) = sonar_contacts(&[(8.0, 0.0, 0.3)], false);
+        assert_eq!(
+            check(&off, &p, 10_000, &moving, &w, &once, cmd(0.0, 1.0), 1.0).1,
+            Verdict::Clear
+        );
+    }
+
+    #[test]
+    fn only_a_contact_ahead_and_standing_alone_is_taken_for_a_vehicle() {
+        let (g, p) = (GuardConfig::default(), Params::default());
+        let moving = nav(Vec2::new(1.0, 0.0));
+        // Astern, or abeam beyond the cone: no vehicle on the reciprocal course can reach us.
+        for at in [(-8.0, 0.0), (0.5, 8.0)] {
+            let (w, once) = sonar_contacts(&[(at.0, at.1, 0.3)], false);
+            let v = check(&g, &p, 10_000, &moving, &w, &once, cmd(0.0, 1.0), 1.0).1;
+            assert_eq!(v, Verdict::Clear, "{at:?}");
+        }
+        // Against another believed obstacle (a pier's end, a rock's far face) it is structure.
+        let (w, once) = sonar_contacts(&[(8.0, 0.0, 0.3), (10.0, 2.2, 1.0)], false);
+        let v = check(&g, &p, 10_000, &moving, &w, &once, cmd(0.0, 1.0), 1.0).1;
+        assert_eq!(v, Verdict::Clear);
     }
 
     #[test]

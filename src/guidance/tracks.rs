@@ -40,8 +40,9 @@
 //!
 //! The defaults are measured, not derived: α = 1 (the obstacle is where the sonar saw it last),
 //! β = 1/3 (the velocity closes a third of its error per sweep), a 0.5 m/s floor, two hits, a
-//! confidence floor of 0.3 (three beams: a 1 m target at 20 m is seen by three or four beams of
-//! 1.8°, and with a floor of 0.5 such movers were dropped until they were 10 m away). As the
+//! confidence floor of 0.15 (two strong beams, the extractor's floor: a 1 m target at 20 m is
+//! seen by three or four beams of 1.8°, and with a floor of 0.5 such movers were dropped until
+//! they were 10 m away; another VideoRay is never seen on more than two). As the
 //! vehicle passes a still rock the sonar sees other faces of it and the fitted centre wanders,
 //! at up to about 0.3 m/s; reported as motion and extrapolated over the planning horizon, those
 //! speeds, and equally a smoothed (α < 1) centre that lags the improving fits, led the VideoRay
@@ -64,8 +65,8 @@
 //! are dropped before a new one is opened, so the track table cannot fill while the world has
 //! room; if it ever did, the obstacle is kept without a velocity.
 //!
-//! Features below the confidence floor are dropped (one or two beams of speckle or a false
-//! target cannot be told from a small object; see the sonar module). When the table is full, the sensed
+//! Features below the confidence floor are dropped (one beam of speckle or a false target
+//! cannot be told from a small object; see the sonar module). When the table is full, the sensed
 //! obstacle farthest from the vehicle is evicted if the newcomer is nearer
 //! ([`World::upsert_obstacle_or_evict`]); otherwise the newcomer is dropped.
 
@@ -137,7 +138,7 @@ pub struct TrackConfig {
 impl Default for TrackConfig {
     fn default() -> Self {
         TrackConfig {
-            min_confidence: 0.3,
+            min_confidence: 0.15,
             gate_m: 1.0,
             gate_speed_mps: 1.0,
             revisit_ms: 4000,
@@ -291,6 +292,12 @@ impl Tracks {
             .iter()
             .find(|t| t.id == id)
             .map(|t| f32::from(t.largest_dm) * 0.1)
+    }
+
+    /// Whether obstacle `id` is a sonar track seen only once so far (no velocity can have been
+    /// estimated for it: it may be still, or a mover seen once).
+    pub fn unrated(&self, id: u16) -> bool {
+        self.tracks.iter().any(|t| t.id == id && !t.rated)
     }
 
     /// Puts `f` into `world` with repulsiveness `a_plus` (the planner's A_s⁺), seen from the
@@ -635,7 +642,8 @@ mod tests {
         let cfg = TrackConfig::default();
         let mut w = World::new();
         let mut t = Tracks::default();
-        let weak = feature(10.0, 0.0, 1.0, 0.2);
+        // Below the floor of two strong beams (one beam, or two faint ones).
+        let weak = feature(10.0, 0.0, 1.0, 0.1);
         assert_eq!(
             t.admit(&cfg, 2.5, &mut w, &weak, Vec2::ZERO),
             Admission::LowConfidence

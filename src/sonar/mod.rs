@@ -30,9 +30,15 @@
 //!    spread and whose centre is pushed away from the sensor (the sonar sees only the near
 //!    face). Plus a confidence in `0 ..= 1` from the number of hits, the fill of the beams
 //!    spanned and the echo intensity. Closed clusters with at least `min_beams` hits and
-//!    `min_confidence` leave as a [`Feature`]; a single sweep cannot tell a three-beam target
-//!    from a chance chain of speckle (both ≈ 0.39), so consumers wanting sonar-only obstacles
-//!    to be sure should ask for ≥ 0.5 (four or more consistent beams) or for persistence.
+//!    `min_confidence` leave as a [`Feature`]. The defaults take a strong echo on two adjacent
+//!    beams (confidence ≈ 0.2): a target narrower than the beam — another VideoRay, 0.4 m
+//!    across, is on one or two 1.8° pings of a 3° beam at any range — is never on three, and
+//!    with three required two VideoRays meeting head-on never saw each other (generated
+//!    head-on worlds, own sonar). A false target is one ping, so two beams agreeing within the
+//!    cluster gap is also what the evidence map asks of a far echo (`evidence`). A single
+//!    sweep cannot tell such a target from a chance chain of speckle, so consumers wanting
+//!    sonar-only obstacles to be sure should ask for ≥ 0.5 (four or more consistent beams) or
+//!    for persistence.
 //!
 //! **Frames.** [`Pose::heading`] is the bow's direction, radians counter-clockwise from the world
 //! +x axis (as [`Vec2::from_angle`]); [`Scanline::bearing_rad`] is the head angle relative to the
@@ -170,8 +176,8 @@ impl Default for ExtractorConfig {
             runs_per_beam: 2,
             cluster_gap_m: 1.0,
             max_missed_beams: 1,
-            min_beams: 3,
-            min_confidence: 0.3,
+            min_beams: 2,
+            min_confidence: 0.15,
             elongation: 4.0,
             max_span_rad: PI / 2.0,
             wall_half_thickness_m: 0.25,
