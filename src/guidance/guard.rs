@@ -416,6 +416,14 @@ pub fn check(
         }
     }
     let age = |seen_ms: u64| min(now_ms.saturating_sub(seen_ms) as f32 * 1e-3, CPA_HORIZON_S);
+    // A sonar track's last fit may be a sliver of it: take its largest sighting.
+    let extent = |o: &crate::world::Obstacle| {
+        let r = o.shape.bounding_radius();
+        match o.origin {
+            Origin::Sonar => tracks.extent(o.id).map_or(r, |e| max(r, e)),
+            _ => r,
+        }
+    };
     let mut movers = heapless::Vec::new();
     for o in world
         .obstacles()
@@ -423,32 +431,27 @@ pub fn check(
         .filter(|o| o.velocity != Vec2::ZERO)
     {
         // Room for every obstacle and agent: never full.
-        // A sonar mover's last fit may be a sliver of it: take its largest sighting.
-        let r = o.shape.bounding_radius();
         let _ = movers.push(Mover {
             center: o.shape.center() + o.velocity * age(o.seen_ms),
             velocity: o.velocity,
-            radius: match o.origin {
-                Origin::Sonar => tracks.extent(o.id).map_or(r, |e| max(r, e)),
-                _ => r,
-            },
+            radius: extent(o),
         });
     }
     // Head-on: a contact seen once ahead may be another vehicle coming the other way, which
     // the sonar sees again only a sweep later, too late at twice the cruise speed.
     let bow = Vec2::from_angle(nav.heading);
     let reciprocal = bow * -cfg.head_on_mps;
+    let head_on = cfg.head_on_mps > 0.0;
     for o in world
         .obstacles()
         .iter()
-        .filter(|o| o.velocity == Vec2::ZERO && o.origin == Origin::Sonar && cfg.head_on_mps > 0.0)
+        .filter(|o| head_on && o.velocity == Vec2::ZERO && o.origin == Origin::Sonar)
     {
         let c = o.shape.center();
         let ahead = (c - p)
             .normalized(1e-3)
             .is_some_and(|u| u.dot(bow) >= cos(HEAD_ON_CONE_RAD));
-        let r = o.shape.bounding_radius();
-        let extent = tracks.extent(o.id).map_or(r, |e| max(r, e));
+        let extent = extent(o);
         // A fragment of structure (a pier's end, a rock's far face) lies against other
         // believed obstacles; a vehicle in open water stands alone.
         let alone = || {
