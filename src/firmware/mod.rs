@@ -196,6 +196,17 @@ pub struct Started {
     pub mav_transmitter: Transmitter<MAV_TX_SLOTS>,
 }
 
+/// The runtime's settings: the defaults; the self-test scans the evidence map as far as any
+/// craft's stopping distance may make it (`MAX_REACH_CELLS`), so its step cost is the worst.
+fn runtime_config() -> RuntimeConfig {
+    let mut c = RuntimeConfig::default();
+    if cfg!(feature = "selftest") {
+        let cell = vpf::sonar::EvidenceConfig::default().cell_m;
+        c.map_reach_m = vpf::sonar::MAX_REACH_CELLS as f32 * cell;
+    }
+    c
+}
+
 /// Builds the runtime with `params` in `memory` and `router`, splits the queues into their
 /// ends and starts the period timer. `None` only if the defaults were invalid (they are tested
 /// not to be).
@@ -206,7 +217,7 @@ pub fn start(
     timer: PeriodTimer,
     watchdog: board::Watchdog,
 ) -> Option<Started> {
-    let runtime = Periodic::new(params, RuntimeConfig::default(), board::COST_UNIT).ok()?;
+    let runtime = Periodic::new(params, runtime_config(), board::COST_UNIT).ok()?;
     let runtime = memory.runtime.write(runtime);
     // Contacts get the planner's A_s⁺ when the periodic task admits them.
     let background = Background::new(ExtractorConfig::default(), params.a_plus).ok()?;

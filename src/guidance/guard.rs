@@ -36,8 +36,12 @@
 //! [`ARC_SEGMENTS`] chords (each sampled at its time's midpoint) and the margin straight on, and
 //! stopping (step 1 below) is braking along the arc it turns on meanwhile. Headings beyond the
 //! turn it can make before it stops all sweep the same, hardest, arc: for such a craft the
-//! guard's choices are the turns it can make, slower, or a stop. With the rate 0 (the default)
-//! the check is the straight segment above, unchanged.
+//! guard's choices are the turns it can make, slower, or a stop. Against movers (below) such a
+//! craft is judged on its course over the horizon ([`Helm::course`]: the heading turning at
+//! its rate, the speed changing at F_max or its braking), not on the velocity it is told:
+//! held to "turn away north at once", the flat-fish was judged clear of a mover that met it
+//! while it was still turning. With the rate 0 (the default) the check is the straight
+//! segment above, unchanged.
 //!
 //! **Movers** (obstacles and other vehicles with a velocity) are judged by their closest point
 //! of approach instead: each is carried from its last sighting to now on its velocity, and a
@@ -69,7 +73,7 @@
 //!
 //! Cost: one point-to-segment distance per map cell and still agent per heading tried, samples
 //! every [`SAMPLE_M`] along the segment for the table's still obstacles near enough to matter,
-//! and one closest-approach per mover.
+//! and one closest-approach per mover ([`TRACK_STEPS`] of them for a slow-turning craft).
 
 use super::tracks::Tracks;
 use crate::math::{cos, max, min, sin, wrap_angle, Vec2};
@@ -88,6 +92,9 @@ pub const HEAD_ON_CONE_RAD: f32 = crate::math::PI / 3.0;
 /// Such a contact is taken for a vehicle only if nothing else believed is within this of its
 /// extent, m.
 pub const HEAD_ON_ALONE_M: f32 = 2.0;
+/// Steps of the course a slow-turning craft is predicted on over [`CPA_HORIZON_S`] when it is
+/// judged against movers (one a second).
+pub const TRACK_STEPS: usize = 10;
 /// Chords of the arc a slow-turning craft sweeps (module notes): enough to follow a turn of up
 /// to a few tenths of a radian within a braking distance.
 pub const ARC_SEGMENTS: usize = 4;
@@ -259,6 +266,36 @@ impl Believed<'_> {
             min(worst, closest - min(self.hull, now - 1e-3))
         })
     }
+
+    /// [`Believed::mover_margin`] for a craft that follows `track` (positions at
+    /// [`TRACK_STEPS`] equal steps over [`CPA_HORIZON_S`]) rather than holding one velocity:
+    /// within each step both it and the mover move straight, so the closest approach of that
+    /// step is the distance from the origin to the segment their offsets trace.
+    fn mover_margin_along(&self, track: &[Vec2; TRACK_STEPS + 1]) -> f32 {
+        let dt = CPA_HORIZON_S / TRACK_STEPS as f32;
+        let p = track[0];
+        self.movers.iter().fold(f32::INFINITY, |worst, m| {
+            let at = |k: usize, x: Vec2| m.center + m.velocity * (k as f32 * dt) - x;
+            let closest = track
+                .windows(2)
+                .enumerate()
+                .fold(f32::INFINITY, |c, (k, w)| match w {
+                    [a, b] => {
+                        let (d0, d1) = (at(k, *a), at(k + 1, *b));
+                        let len = (d1 - d0).norm();
+                        let d = match (d1 - d0).normalized(1e-6) {
+                            Some(u) => to_segment(Vec2::ZERO, d0, u, len),
+                            None => d0.norm(),
+                        };
+                        min(c, d)
+                    }
+                    _ => c,
+                })
+                - m.radius;
+            let now = (m.center - p).norm() - m.radius;
+            min(worst, closest - min(self.hull, now - 1e-3))
+        })
+    }
 }
 
 /// Whether `c` is not behind the vehicle (a disc behind cannot be entered by moving forward,
@@ -344,13 +381,49 @@ impl Helm<'_> {
         )
     }
 
+    /// Where a slow-turning craft is over [`CPA_HORIZON_S`] under the command (`psi`, `v`):
+    /// its heading turns towards `psi` at its rate, its speed goes from the present one
+    /// towards `v` at F_max or its braking; [`TRACK_STEPS`] + 1 positions, now first.
+    fn course(&self, psi: f32, v: f32) -> [Vec2; TRACK_STEPS + 1] {
+        let prm = self.prm;
+        let turn = wrap_angle(psi - self.heading);
+        let rate = prm.turn_rate_rps;
+        let dt = CPA_HORIZON_S / TRACK_STEPS as f32;
+        let change = v - self.speed;
+        let mut pts = [self.p; TRACK_STEPS + 1];
+        let mut at = self.p;
+        for (k, pt) in pts.iter_mut().enumerate().skip(1) {
+            let t = (k as f32 - 0.5) * dt;
+            let heading = self.heading + max(-rate * t, min(turn, rate * t));
+            let speed = self.speed + max(-prm.brake() * t, min(change, prm.f_max * t));
+            at += Vec2::from_angle(heading) * (max(0.0, speed) * dt);
+            *pt = at;
+        }
+        pts
+    }
+
+    /// How far, at the worst, the command (`psi`, `v`) keeps clear of the movers, m
+    /// ([`Believed::mover_margin`]): held as a velocity by a craft that turns at once, along
+    /// its [`Helm::course`] by one that turns slowly (it goes where it points, not where it
+    /// is told, and cannot stop at once either).
+    fn mover_margin(&self, b: &Believed, psi: f32, v: f32) -> f32 {
+        if !self.turns_slowly() {
+            return b.mover_margin(self.p, Vec2::from_angle(psi) * v);
+        }
+        b.mover_margin_along(&self.course(psi, v))
+    }
+
     /// Whether the command (`psi`, `v`) is blocked ([`Believed::blocked`]).
     fn blocked(&self, b: &Believed, psi: f32, v: f32) -> bool {
-        let u = Vec2::from_angle(psi);
         if !self.turns_slowly() {
-            return b.blocked(self.p, u, reach(v, self.prm, self.cfg), v);
+            return b.blocked(
+                self.p,
+                Vec2::from_angle(psi),
+                reach(v, self.prm, self.cfg),
+                v,
+            );
         }
-        b.blocked_path(&self.commanded(psi, v)) || b.meets_mover(self.p, u * v)
+        b.blocked_path(&self.commanded(psi, v)) || self.mover_margin(b, psi, v) < 0.0
     }
 
     /// Whether the command (`psi`, `v`) is blocked by what stands still.
@@ -514,7 +587,7 @@ pub fn check(
         speed,
     };
     // A mover may run into a vehicle that stops: then stopping is no way out.
-    let can_stop = !b.meets_mover(p, Vec2::ZERO);
+    let can_stop = helm.mover_margin(&b, cmd.psi_set, 0.0) >= 0.0;
     let evasion = min(speed_cap, min(prm.v_max, speed + prm.f_max * prm.period_s));
     // 1. Where the vehicle is going now, within its braking distance (a slow-turning craft
     //    turning towards the commanded heading as it brakes).
@@ -627,12 +700,11 @@ fn evade(
             return (with_motion(cmd, a, v, Verdict::Turned), Verdict::Turned);
         }
     }
-    let p = helm.p;
     let step = max(cfg.turn_step_rad, 1e-3);
     let best = (0..min(2.0 * crate::math::PI / step, 128.0) as u32)
         .map(|k| cmd.psi_set + k as f32 * step)
         .filter(|&a| !helm.blocked_still(b, a, speed))
-        .map(|a| (a, b.mover_margin(p, Vec2::from_angle(a) * speed)))
+        .map(|a| (a, helm.mover_margin(b, a, speed)))
         .fold(None, |best: Option<(f32, f32)>, (a, m)| match best {
             Some((_, bm)) if bm >= m => best,
             _ => Some((a, m)),
@@ -882,6 +954,27 @@ mod tests {
         .unwrap();
         w.upsert_obstacle(o).unwrap();
         w
+    }
+
+    #[test]
+    fn a_slow_turning_craft_is_judged_where_it_will_be_not_where_it_is_told() {
+        // Heading east at 1 m/s; a mover 10 m ahead and 6 m to port crosses the track at
+        // 0.6 m/s, reaching it in 10 s. Told to turn north, a craft that turns at once is
+        // clear of it; the flat-fish, turning 26° in those 10 s, is still on the mover's way.
+        let g = GuardConfig::default();
+        let w = mover(Vec2::new(10.0, 6.0), Vec2::new(0.0, -0.6), 0);
+        let moving = nav(Vec2::new(1.0, 0.0));
+        let north = cmd(crate::math::PI / 2.0, 1.0);
+        let quick = Params::default();
+        let slow = Params {
+            agent_radius_m: 2.25,
+            turn_rate_rps: 0.046,
+            brake_mps2: 0.1,
+            ..Params::default()
+        };
+        let verdict = |p: &Params| check(&g, p, 0, &moving, &w, &Tracks::default(), north, 1.0).1;
+        assert_eq!(verdict(&quick), Verdict::Clear);
+        assert_ne!(verdict(&slow), Verdict::Clear);
     }
 
     #[test]

@@ -501,8 +501,8 @@ impl Periodic {
 
     /// How far round the vehicle the evidence map's cells enter the world, m: `map_reach_m`,
     /// or farther when the guard needs it to see a whole stopping distance beyond the hull at
-    /// v_max (a large craft that brakes gently: the flat-fish's 2.25 m hull and 3.3 m from
-    /// 1 m/s at 0.15 m/s²). The map's scan stops at `MAX_REACH_CELLS` cells either way.
+    /// v_max (a large craft that brakes gently: the flat-fish's 2.25 m hull and 5 m from
+    /// 1 m/s at 0.1 m/s²). The map's scan stops at `MAX_REACH_CELLS` cells (12 m) either way.
     fn map_reach(&self, cell_m: f32) -> f32 {
         let p = self.planner.params();
         let g = &self.config.guard;

@@ -77,7 +77,9 @@ pub use crate::types::scanline::{
     ScanError, Scanline, MAX_BINS, MAX_RANGE_M, MAX_STEP_RAD, MIN_RANGE_M, MIN_STEP_RAD,
 };
 pub use detect::Echo;
-pub use evidence::{Beam, EvidenceConfig, EvidenceError, EvidenceMap, Near, Window, MAP_SIDE};
+pub use evidence::{
+    Beam, EvidenceConfig, EvidenceError, EvidenceMap, Near, Window, MAP_SIDE, MAX_REACH_CELLS,
+};
 pub use extractor::Extractor;
 
 /// Largest accepted vehicle coordinate, m (100 km, as the planner's limit: `f32` still resolves
