@@ -39,9 +39,13 @@ pub struct Args {
     /// Run times to stop at, s, comma-separated and increasing.
     #[arg(long, value_delimiter = ',', required = true, value_name = "T1,T2,...")]
     pub at: Vec<f64>,
-    /// Map cells within this distance of the vehicle are listed, m.
+    /// Map cells within this distance of the vehicle are counted, m.
     #[arg(long, default_value_t = 10.0)]
     pub radius: f32,
+    /// List every one of those cells' centres (one `cell X Y` line each), not only the nearest:
+    /// to lay what was believed over the world file's true surfaces.
+    #[arg(long)]
+    pub cells: bool,
 }
 
 /// Why `hil beliefs` stopped.
@@ -85,6 +89,11 @@ pub fn cli(a: &Args) -> std::process::ExitCode {
         Ok(all) => {
             for b in all {
                 print!("{b}");
+                if a.cells {
+                    for c in &b.cells {
+                        println!("    cell {:.2} {:.2}", c.x, c.y);
+                    }
+                }
             }
             std::process::ExitCode::SUCCESS
         }

@@ -791,6 +791,24 @@ mod tests {
     }
 
     #[test]
+    fn the_window_always_holds_the_farthest_reach_round_the_vehicle() {
+        // Walked out and back on a spiral, the vehicle never has the window's
+        // edge nearer than `MAX_REACH_CELLS` cells in any direction.
+        let m = map();
+        for k in 0..2000 {
+            let t = k as f32 * 0.01;
+            let p = Vec2::from_angle(5.0 * t) * (30.0 * crate::math::sin(0.5 * t));
+            m.follow(p);
+            let w = m.window().unwrap();
+            let (ci, cj) = m.cell_of(p);
+            for (di, dj) in [(1, 0), (-1, 0), (0, 1), (0, -1)] {
+                let (i, j) = (ci + di * MAX_REACH_CELLS, cj + dj * MAX_REACH_CELLS);
+                assert!(w.contains(i, j), "at {p:?}: cell ({i}, {j}) outside {w:?}");
+            }
+        }
+    }
+
+    #[test]
     fn bad_input_changes_nothing() {
         let m = map();
         ping(&m, Vec2::new(f32::NAN, 0.0), 0.0, Some(3.0));
