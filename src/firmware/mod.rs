@@ -197,7 +197,8 @@ pub struct Started {
 }
 
 /// The runtime's settings: the defaults; the self-test scans the evidence map as far as any
-/// craft's stopping distance may make it (`MAX_REACH_CELLS`), so its step cost is the worst.
+/// craft's stopping distance may make it (`MAX_REACH_CELLS`), so the periods it measures carry
+/// the largest map snapshot.
 fn runtime_config() -> RuntimeConfig {
     let mut c = RuntimeConfig::default();
     if cfg!(feature = "selftest") {
