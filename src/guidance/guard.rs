@@ -261,10 +261,16 @@ impl Believed<'_> {
             } else {
                 0.0
             };
-            let now = d.norm() - m.radius;
-            let closest = (d + w * t).norm() - m.radius;
-            min(worst, closest - min(self.hull, now - 1e-3))
+            min(worst, self.clear_of(m, p, (d + w * t).norm() - m.radius))
         })
+    }
+
+    /// How far a closest approach of `closest` m to mover `m` keeps clear of the limit: the
+    /// hull, or the clearance the vehicle at `p` has now if that is less (moving away from a
+    /// mover already close is allowed), m.
+    fn clear_of(&self, m: &Mover, p: Vec2, closest: f32) -> f32 {
+        let now = (m.center - p).norm() - m.radius;
+        closest - min(self.hull, now - 1e-3)
     }
 
     /// [`Believed::mover_margin`] for a craft that follows `track` (positions at
@@ -292,8 +298,7 @@ impl Believed<'_> {
                     _ => c,
                 })
                 - m.radius;
-            let now = (m.center - p).norm() - m.radius;
-            min(worst, closest - min(self.hull, now - 1e-3))
+            min(worst, self.clear_of(m, p, closest))
         })
     }
 }
