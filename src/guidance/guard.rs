@@ -1039,6 +1039,7 @@ mod tests {
                 confidence: 0.9,
                 time_ms: 9000 * k as u64,
                 beams: 6,
+                runs_on: false,
             };
             let cfg = crate::guidance::TrackConfig::default();
             tracks.admit(&cfg, 2.5, &mut w, &f, Vec2::ZERO);
@@ -1080,6 +1081,7 @@ mod tests {
                     confidence: 0.2,
                     time_ms: *time_ms,
                     beams: 2,
+                    runs_on: false,
                 };
                 tracks.admit(&cfg, 2.5, &mut w, &f, Vec2::ZERO);
             }

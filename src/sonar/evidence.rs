@@ -63,6 +63,9 @@ pub const SECTORS: usize = 32;
 /// and boxes nothing had believed in time (bench, seeds 0–16: contacts with still structure
 /// 17 in 204 worlds, 15 with the 12 m reach alone, 1 with both).
 const RECENTRE_CELLS: i32 = SIDE_I / 8;
+/// How far beyond a sonar feature's extent [`EvidenceMap::runs_on`] looks for the structure it
+/// is a fragment of, m.
+pub const RUN_ON_M: f32 = 2.0;
 
 /// Tuning of the evidence map. [`Default`] suits a Micron-class sonar at 0–30 m.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -534,6 +537,42 @@ impl EvidenceMap {
         true
     }
 
+    /// Whether believed structure runs on through a sonar feature at `center` of radius
+    /// `extent`: believed cells lie in the ring from two half-diagonals to [`RUN_ON_M`] plus
+    /// one beyond the extent, on two sides at least a right angle apart as seen from the
+    /// centre. Its own echoes are believed cells within the ring's inside; a wall's fragment
+    /// has the rest of the wall on both sides; a mover has at most its wake on one side (the
+    /// last sweep's echoes, a sweep's travel behind it) and a rock it passes on another —
+    /// with any believed cell in the ring, real movers of the bench's crossing worlds lost
+    /// their velocity (contacts 6 → 26 in 300 runs).
+    /// Cost: O(((extent + [`RUN_ON_M`]) / cell)²) nibble loads; for the background.
+    pub fn runs_on(&self, center: Vec2, extent: f32) -> bool {
+        let Some(w) = self.window() else { return false };
+        if !center.is_finite() || !extent.is_finite() || extent < 0.0 {
+            return false;
+        }
+        let cell = self.cfg.cell_m;
+        let half_diagonal = core::f32::consts::FRAC_1_SQRT_2 * cell;
+        let inner = extent + 2.0 * half_diagonal;
+        let outer = extent + RUN_ON_M + half_diagonal;
+        // At most the window: extents are bounded by the extractor, but not here.
+        let r = min(outer / cell + 1.0, SIDE_I as f32) as i32;
+        let (ci, cj) = self.cell_of(center);
+        // Bit k: a believed ring cell lies in sector k (of SECTORS) round the centre.
+        let mut sides = 0u32;
+        for j in cj.saturating_sub(r)..=cj.saturating_add(r) {
+            for i in ci.saturating_sub(r)..=ci.saturating_add(r) {
+                let d2 = (self.center_of(i, j) - center).norm2();
+                if d2 > inner * inner && d2 <= outer * outer && self.is_occupied(w, i, j) {
+                    sides |= 1 << sector(i - ci, j - cj);
+                }
+            }
+        }
+        // Sectors k + 8 ..= k + 24 are a right angle or more from sector k.
+        (0..SECTORS as u32)
+            .any(|k| sides & (1 << k) != 0 && sides & 0x1_FFFF_u32.rotate_left(k + 8) != 0)
+    }
+
     /// Row `r` (0 ..= [`MAP_SIDE`] − 1) of window `w` as a bitmap, bit k = column `w.x0 + k`.
     pub fn row_bits(&self, w: Window, r: i32) -> u64 {
         let j = w.y0.wrapping_add(r);
@@ -650,6 +689,31 @@ mod tests {
             ping(&m, Vec2::ZERO, 0.0, Some(3.2));
         }
         assert!(m.is_occupied(w, 6, 0));
+    }
+
+    #[test]
+    fn a_wall_runs_on_through_its_fragment_and_a_wake_does_not() {
+        let m = map();
+        // A fragment of radius 1 m at (5, 0), fitted behind the face of a wall along x = 4.
+        let (c, extent) = (Vec2::new(5.0, 0.0), 1.0);
+        assert!(!m.runs_on(c, extent), "nothing believed");
+        // Its own echoes, on the face within its extent: not structure beyond it.
+        (-2..=2).for_each(|k| m.believe(Vec2::new(4.2, 0.4 * k as f32)));
+        assert!(!m.runs_on(c, extent));
+        // A mover's wake: last sweep's echoes on one side only.
+        (0..4).for_each(|k| m.believe(Vec2::new(5.0 + 0.4 * k as f32, -2.6)));
+        assert!(!m.runs_on(c, extent), "one side is a wake, not a wall");
+        // The wall on both sides of it.
+        for y in [-2.5, -2.0, 2.0, 2.5] {
+            m.believe(Vec2::new(4.2, y));
+        }
+        assert!(m.runs_on(c, extent));
+        // Farther than the ring's outer edge (extent + RUN_ON_M), it does not count.
+        let far = map();
+        for y in [-4.5, 4.5] {
+            far.believe(Vec2::new(4.2, y));
+        }
+        assert!(!far.runs_on(c, extent));
     }
 
     #[test]

@@ -95,7 +95,8 @@ impl Extractor {
     }
 
     /// [`Extractor::push_scanline`], also putting the ping into `map` (the same detection
-    /// feeds both, so a scanline is thresholded once). The map follows the vehicle.
+    /// feeds both, so a scanline is thresholded once). The map follows the vehicle, and marks
+    /// each feature whose structure runs on beyond it ([`Feature::runs_on`]).
     pub fn push_scanline_mapped(
         &mut self,
         scan: &Scanline<'_>,
@@ -103,6 +104,10 @@ impl Extractor {
         map: Option<&EvidenceMap>,
         out: &mut impl FnMut(Feature) -> bool,
     ) -> Result<usize, ScanError> {
+        let out = &mut |mut f: Feature| {
+            f.runs_on = map.is_some_and(|m| m.runs_on(f.center, f.radius));
+            out(f)
+        };
         if let Err(e) = scan.validate().and_then(|()| pose.validate()) {
             self.counters.rejected = self.counters.rejected.saturating_add(1);
             return Err(e);

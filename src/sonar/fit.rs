@@ -223,6 +223,7 @@ impl Moments {
             confidence,
             time_ms,
             beams: u16::try_from(self.n).unwrap_or(u16::MAX),
+            runs_on: false,
         })
     }
 }

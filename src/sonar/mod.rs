@@ -321,6 +321,10 @@ pub struct Feature {
     pub time_ms: u64,
     /// Beams with an echo in this feature.
     pub beams: u16,
+    /// Believed structure runs on beyond it in the evidence map (set by
+    /// `Extractor::push_scanline_mapped`, [`EvidenceMap::runs_on`]): a fragment of a wall, a
+    /// pier or a cluster of rocks, which the tracker never gives a velocity.
+    pub runs_on: bool,
 }
 
 impl Feature {
@@ -532,6 +536,7 @@ mod tests {
             confidence: 0.9,
             time_ms: 10,
             beams: 7,
+            runs_on: false,
         };
         let s = c.to_shape().unwrap();
         assert!((s.signed_distance(Vec2::new(3.0, 0.0)) - 2.5).abs() < 1e-5);
