@@ -62,14 +62,22 @@
 //! still, steered round where it had been (generated head-on worlds, own sonar: 8 contacts in
 //! 400). So a contact seen once within [`HEAD_ON_CONE_RAD`] of the bow that stands alone
 //! (nothing else believed within [`HEAD_ON_ALONE_M`] of it: a pier's end or a rock's far
-//! face is structure) is also judged as a mover on the reciprocal course at `head_on_mps`
-//! (default 1 m/s, a VideoRay's cruise; 0: off), carried from its sighting like any mover. A
-//! rock seen for the first time ahead costs at most a turn off it until its second look
-//! finds it where it was. This is COLREG rule 14's situation (*International Regulations for
-//! Preventing Collisions at Sea*, 1972), judged without knowing the other's course; the
-//! rule's "both alter to starboard" was tried too (a contact dead ahead must pass to port)
-//! and made navfn's head-on contacts 2 → 12 in 400 worlds: each vehicle's planner had
-//! already chosen a side.
+//! face is structure) is also judged as a mover at `head_on_mps` (default 1 m/s, a
+//! VideoRay's cruise; 0: off), carried from its sighting like any mover: if it stands in open
+//! water (nothing within twice that distance), on the course that meets this vehicle's
+//! present velocity first (the worst of the courses it may be on, [`intercept`]); otherwise,
+//! or if at that speed it cannot meet it, on the reciprocal course. Dead ahead the two are
+//! the same; off the bow, the reciprocal course alone let two vehicles that had rounded an
+//! obstacle on opposite sides meet at 65°, each seen once 9 m off, neither guard acting.
+//! Generated worlds, own sonar, seeds 0–599 × 3 strategies, contacts: head-on 41 → 26,
+//! channels 56 → 63 (a wall's first echo ahead is such a contact; with the meeting course
+//! for every contact, 29 and 67). A rock seen for the
+//! first time ahead costs at most a turn off it until its second look finds it where it
+//! was. This is COLREG rule 14's situation (*International Regulations for Preventing
+//! Collisions at Sea*, 1972), judged without knowing the other's course; the rule's "both
+//! alter to starboard" was tried too (a contact dead ahead must pass to port) and made
+//! navfn's head-on contacts 2 → 12 in 400 worlds: each vehicle's planner had already chosen
+//! a side.
 //!
 //! Cost: one point-to-segment distance per map cell and still agent per heading tried, samples
 //! every [`SAMPLE_M`] along the segment for the table's still obstacles near enough to matter,
@@ -117,8 +125,8 @@ pub struct GuardConfig {
     /// Slowest speed tried before stopping, m/s.
     pub min_speed: f32,
     /// Speed of the head-on hypothesis, m/s (0: off): a sonar contact seen once, within
-    /// [`HEAD_ON_CONE_RAD`] of the bow, is also judged as a mover on the reciprocal course at
-    /// this speed (module notes).
+    /// [`HEAD_ON_CONE_RAD`] of the bow, is also judged as a mover at this speed on the course
+    /// that meets this vehicle, or the reciprocal one (module notes).
     pub head_on_mps: f32,
 }
 
@@ -176,6 +184,33 @@ struct Believed<'a> {
     r_map: f32,
     /// Clearance at the vehicle's position, m.
     here: f32,
+}
+
+/// The velocity of speed `s` on which something at the origin meets a point that starts at
+/// `d` and moves at `v`, the first time it can (within [`CPA_HORIZON_S`]); `None` if it
+/// cannot catch it.
+fn intercept(d: Vec2, v: Vec2, s: f32) -> Option<Vec2> {
+    // |d + v·t| = s·t: (|v|² − s²)·t² + 2·(d·v)·t + |d|² = 0, the smallest t > 0.
+    let (a, b, c) = (v.norm2() - s * s, 2.0 * d.dot(v), d.norm2());
+    let t = if a.abs() < 1e-6 {
+        (b < 0.0).then(|| -c / b)?
+    } else {
+        let disc = b * b - 4.0 * a * c;
+        if disc < 0.0 {
+            return None;
+        }
+        let q = crate::math::sqrt(disc);
+        let (t1, t2) = ((-b - q) / (2.0 * a), (-b + q) / (2.0 * a));
+        let (lo, hi) = (min(t1, t2), max(t1, t2));
+        if lo > 0.0 {
+            lo
+        } else if hi > 0.0 {
+            hi
+        } else {
+            return None;
+        }
+    };
+    (t.is_finite() && t > 1e-3 && t <= CPA_HORIZON_S).then(|| (d + v * t) * (1.0 / t))
 }
 
 /// Distance from `c` to the segment from `a` along unit `u` for `len` m.
@@ -515,8 +550,9 @@ pub fn check(
             radius: extent(o),
         });
     }
-    // Head-on: a contact seen once ahead may be another vehicle coming the other way, which
-    // the sonar sees again only a sweep later, too late at twice the cruise speed.
+    // Head-on: a contact seen once ahead may be another vehicle coming this way, which the
+    // sonar sees again only a sweep later, too late at twice the cruise speed: it is met on
+    // the course that meets ours, or on the reciprocal one if none does.
     let bow = Vec2::from_angle(nav.heading);
     let reciprocal = bow * -cfg.head_on_mps;
     let head_on = cfg.head_on_mps > 0.0;
@@ -532,8 +568,8 @@ pub fn check(
         let extent = extent(o);
         // A fragment of structure (a pier's end, a rock's far face) lies against other
         // believed obstacles; a vehicle in open water stands alone.
-        let alone = || {
-            let apart = extent + HEAD_ON_ALONE_M;
+        let alone = |room: f32| {
+            let apart = extent + room;
             world
                 .obstacles()
                 .iter()
@@ -546,7 +582,7 @@ pub fn check(
                 // Its own echoes are believed cells within a cell of its extent; a wall's run on.
                 && world.map_cells().iter().all(|&m| {
                     let d = (m - c).norm() - extent;
-                    d <= 2.0 * r_map || d > HEAD_ON_ALONE_M + r_map
+                    d <= 2.0 * r_map || d > room + r_map
                 })
         };
         // A vehicle's echo is fitted as a circle; a wall's run of echoes as a rectangle.
@@ -555,11 +591,16 @@ pub fn check(
         // horizon, it cannot meet the hull: left out, to save the checks below.
         let reach = (2.0 * cfg.head_on_mps + prm.v_max) * CPA_HORIZON_S;
         let within = (c - p).norm() <= reach + extent + prm.agent_radius_m + cfg.hull_margin_m;
-        if ahead && within && compact && tracks.unrated(o.id) && alone() {
-            let center = c + reciprocal * age(o.seen_ms);
+        if ahead && within && compact && tracks.unrated(o.id) && alone(HEAD_ON_ALONE_M) {
+            let a = age(o.seen_ms);
+            // In open water it may be on any course; near structure, it comes along it.
+            let velocity = alone(2.0 * HEAD_ON_ALONE_M)
+                .then(|| intercept(p - nav.velocity * a - c, nav.velocity, cfg.head_on_mps))
+                .flatten()
+                .unwrap_or(reciprocal);
             let _ = movers.push(Mover {
-                center,
-                velocity: reciprocal,
+                center: c + velocity * a,
+                velocity,
                 radius: extent,
             });
         }
@@ -1114,6 +1155,28 @@ mod tests {
         assert_eq!(
             check(&off, &p, 10_000, &moving, &w, &once, cmd(0.0, 1.0), 1.0).1,
             Verdict::Clear
+        );
+    }
+
+    #[test]
+    fn a_contact_seen_once_off_the_bow_is_met_on_the_course_that_meets_ours() {
+        // Seen just now 9 m off, 30° to port: on the reciprocal course it would pass 4.5 m
+        // abeam, clear; a vehicle converging at 1 m/s meets us in under 5 s.
+        let (g, p) = (GuardConfig::default(), Params::default());
+        let moving = nav(Vec2::new(1.0, 0.0));
+        let at = Vec2::from_angle(crate::math::PI / 6.0) * 9.0;
+        let (w, once) = sonar_contacts(&[(at.x, at.y, 0.3)], false);
+        let (out, v) = check(&g, &p, 10_000, &moving, &w, &once, cmd(0.0, 1.0), 1.0);
+        assert_ne!(v, Verdict::Clear, "{out:?}");
+        // The course: from the contact to where we will be, at 1 m/s.
+        let u = intercept(-at, Vec2::new(1.0, 0.0), 1.0).unwrap();
+        let t = (at.x / (1.0 - u.x)).abs();
+        assert!((u.norm() - 1.0).abs() < 1e-4, "{u:?}");
+        assert!((at + u * t - Vec2::new(t, 0.0)).norm() < 1e-3, "{u:?} {t}");
+        // Outrun (it is slower and astern of the meeting point), no course meets us.
+        assert_eq!(
+            intercept(Vec2::new(5.0, 0.0), Vec2::new(1.0, 0.0), 0.5),
+            None
         );
     }
 
