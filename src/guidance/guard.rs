@@ -54,7 +54,11 @@
 //! motion above is blocked and stopping is too, the guard **evades**: the clear heading nearest
 //! the commanded one, all round, at the fastest speed it may ask for (the present speed plus
 //! one period at F_max, within `speed_cap`: v_max, or less while navigation is late or the
-//! sonar loses pings), then half of it.
+//! sonar loses pings), then half of it. A slow-turning craft does not evade; it stops: at
+//! 2.6°/s the flat-fish moves sideways 0.4 m in the 7 s two of them take to close from 8 m,
+//! while stopping halves the closing speed and leaves the other's guard room to stop too
+//! (flat-fish bench with its recipe, seeds 0–67: contacts 8 → 5, successes 552 → 553 of 816;
+//! head-on 6 → 3).
 //!
 //! **Head-on.** A sonar contact seen once has no velocity yet, and the next look is a sweep
 //! (9 s) away. Another vehicle meeting this one head-on closes at twice the cruise speed: seen
@@ -633,7 +637,7 @@ pub fn check(
         speed,
     };
     // A mover may run into a vehicle that stops: then stopping is no way out.
-    let can_stop = helm.mover_margin(&b, cmd.psi_set, 0.0) >= 0.0;
+    let can_stop = helm.turns_slowly() || helm.mover_margin(&b, cmd.psi_set, 0.0) >= 0.0;
     let evasion = min(speed_cap, min(prm.v_max, speed + prm.f_max * prm.period_s));
     // 1. Where the vehicle is going now, within its braking distance (a slow-turning craft
     //    turning towards the commanded heading as it brakes).
@@ -1061,6 +1065,23 @@ mod tests {
         assert_eq!(at_rest(&g, &p, &w, cmd(0.0, 1.0)), Verdict::Clear);
         let w = mover(Vec2::new(-8.0, -6.0), Vec2::new(0.0, 1.0), 0);
         assert_eq!(at_rest(&g, &p, &w, cmd(0.0, 1.0)), Verdict::Clear);
+        // A craft that turns at 2.6°/s (the flat-fish) cannot evade by turning: it stops.
+        let slow = Params {
+            turn_rate_rps: 0.046,
+            ..p
+        };
+        let w = mover(Vec2::new(0.0, -6.0), Vec2::new(0.0, 1.0), 0);
+        let (out, v) = check(
+            &g,
+            &slow,
+            0,
+            &nav(Vec2::ZERO),
+            &w,
+            &Tracks::default(),
+            cmd(0.0, 0.0),
+            1.0,
+        );
+        assert_eq!((v, out.v_set), (Verdict::Clear, 0.0), "{out:?}");
     }
 
     #[test]
