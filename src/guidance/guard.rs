@@ -75,9 +75,8 @@
 //! obstacle on opposite sides meet at 65°, each seen once 9 m off, neither guard acting.
 //! Generated worlds, own sonar, seeds 0–599 × 3 strategies, contacts: head-on 41 → 26,
 //! channels 56 → 63 (a wall's first echo ahead is such a contact; with the meeting course
-//! for every contact, 29 and 67). A rock seen for the
-//! first time ahead costs at most a turn off it until its second look finds it where it
-//! was. This is COLREG rule 14's situation (*International Regulations for Preventing
+//! for every contact, 29 and 67). A rock seen for the first time ahead costs at most a turn
+//! off it until its second look finds it where it was. This is COLREG rule 14's situation (*International Regulations for Preventing
 //! Collisions at Sea*, 1972), judged without knowing the other's course; the rule's "both
 //! alter to starboard" was tried too (a contact dead ahead must pass to port) and made
 //! navfn's head-on contacts 2 → 12 in 400 worlds: each vehicle's planner had already chosen

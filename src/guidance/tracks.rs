@@ -60,8 +60,8 @@
 //! so a feature the evidence map's believed structure runs on through, on both sides
 //! ([`Feature::runs_on`]), is structure too. Without it, such fragments "moving" at the
 //! vehicle's speed turned it back in its channel, and the route layer then led it through a
-//! stretch of wall the sonar had only grazed (bench channels, 300 worlds × 3 strategies:
-//! contacts 28 → 26, successes 672 → 678; all families, seeds 0–99: contacts 23 → 20).
+//! stretch of wall the sonar had only grazed (bench channels × 3 strategies, contacts: seeds
+//! 0–299 28 → 26, seeds 300–599 42 → 30; all families, seeds 0–99: 23 → 20).
 //!
 //! **Extent.** Each track keeps the largest radius of its compact sightings
 //! ([`Tracks::extent`]), which the guard uses for a mover (`crate::guidance::guard`).
