@@ -1069,18 +1069,9 @@ mod tests {
             turn_rate_rps: 0.046,
             ..p
         };
+        // (Clear passes the command, a stop, through unchanged.)
         let w = mover(Vec2::new(0.0, -6.0), Vec2::new(0.0, 1.0), 0);
-        let (out, v) = check(
-            &g,
-            &slow,
-            0,
-            &nav(Vec2::ZERO),
-            &w,
-            &Tracks::default(),
-            cmd(0.0, 0.0),
-            1.0,
-        );
-        assert_eq!((v, out.v_set), (Verdict::Clear, 0.0), "{out:?}");
+        assert_eq!(at_rest(&g, &slow, &w, cmd(0.0, 0.0)), Verdict::Clear);
     }
 
     #[test]
