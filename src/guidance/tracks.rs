@@ -33,8 +33,8 @@
 //! sweep (Δt taken as no less than `revisit_ms`): a fit is a metre or so off, another face of
 //! the target, and a vehicle that turns meets a target twice within a second or two. Over the
 //! true gap, such a second look made a 0.84 m/s mover 1.5 m/s, and the guard met it 5 m from
-//! where it was (bench crossing and head-on worlds, seeds 0–399 × 3 strategies: contacts
-//! 61 → 54, of which seeds 200–399, not looked at before, 26 → 22).
+//! where it was (bench crossing and head-on worlds, seeds 0–599 × 3 strategies: contacts
+//! 99 → 81; on seeds 200–599, not looked at before, 64 → 49).
 //!
 //! The velocity is handed to the planner (`Obstacle::velocity`) once a track has `min_hits`
 //! updates (and, if `min_steady` > 0, that many of them after the velocity was set landing
@@ -45,7 +45,8 @@
 //! will be (`crate::guidance::guard`).
 //!
 //! The defaults are measured, not derived: α = 1 (the obstacle is where the sonar saw it last),
-//! β = 1/3 (the velocity closes a third of its error per sweep), a 0.3 m/s floor, two hits, a
+//! β = 1/3 (the velocity closes a third of its error per sweep), a 0.3 m/s floor (confirmed
+//! below 0.5 m/s, "Slow movers" below), two hits, a
 //! confidence floor of 0.15 (two strong beams, the extractor's floor: a 1 m target at 20 m is
 //! seen by three or four beams of 1.8°, and with a floor of 0.5 such movers were dropped until
 //! they were 10 m away; another VideoRay is never seen on more than two). As the
@@ -55,15 +56,18 @@
 //! into rocks of the random-clutter scenario under link faults (`hil/tests/e2e.rs`). A target
 //! crossing at 0.8 m/s is tracked within 0.1 m/s after 8 sweeps (`hil/tests/tracker.rs`).
 //! Slower sonar targets are planned as still; contacts from the host carry their own
-//! velocity. Speeds are capped at `max_speed_mps`. The floor was 0.5 m/s: a diver or a
-//! drifting craft at 0.3–0.5 m/s was then a still rock to the guard, which let it run into a
-//! vehicle that had slowed or stopped beside it (navfn, seeds 0–199: 9 of 13 crossing
-//! contacts). At 0.3 m/s, crossing and head-on contacts over seeds 200–399 × 3 strategies
-//! 22 → 15; with the change above, all families over seeds 0–199 (VPF, multipoint, navfn)
-//! 13, 23, 20 → 12, 17, 11, successes 2 370, 2 331, 2 212 → 2 369, 2 337, 2 225 of 2 400.
-//! Asking a velocity under 0.5 m/s to have predicted a sighting first (`steady` ≥ 1; a rock's
-//! wandering fits would not) gave back ten of those contacts on seeds 0–599 (64 against 54),
-//! though the flat-fish, whose guard stops for a mover, reached more (285 against 270 of 408).
+//! velocity. Speeds are capped at `max_speed_mps`.
+//!
+//! **Slow movers.** The floor was 0.5 m/s: a diver or a drifting craft at 0.3–0.5 m/s was
+//! then a still rock to the guard, which let it run into a vehicle that had slowed or stopped
+//! beside it (navfn, seeds 0–199: 9 of its 13 crossing contacts). Below 0.5 m/s
+//! ([`SURE_MPS`]) a velocity is used once a sighting has landed where it predicted (`steady`
+//! ≥ 1): a rock's fits wander at such speeds, but not where a velocity says. Bench crossing and
+//! head-on worlds, seeds 0–599 × 3 strategies, contacts: 99 before this round, 81 with the
+//! half-sweep correction above, 64 with both. Without the confirmation the slow floor gave 54,
+//! but rocks' wander made phantom movers: the flat-fish, whose guard stops for a mover,
+//! reached 270 of 408 worlds against 285, and the shipped survey took 100 s longer, detouring
+//! round a rock.
 //!
 //! **Structure does not move.** A feature longer than `max_mover_half_m` (an elongated fit of
 //! a wall or a pier) is never given a velocity: running along a channel, each sweep fits the
@@ -106,6 +110,10 @@ pub const MAX_TRACKS: usize = MAX_OBSTACLES;
 /// A sighting confirms a track's velocity when it lands within `gate_m` plus this fraction of
 /// the predicted motion of where the velocity put it.
 const STEADY_FRACTION: f32 = 0.25;
+
+/// Below this speed, m/s, a track's velocity is used only once a sighting has landed where it
+/// predicted (`Track::steady` ≥ 1): a still rock's fits wander about this fast (module notes).
+const SURE_MPS: f32 = 0.5;
 
 /// Speed change allowed to a track whose motion is known, between two sightings, m/s: it
 /// widens the gate of a rated track by this much per second since its last update.
@@ -265,7 +273,13 @@ impl Track {
 
     /// The velocity the planner is given, for a target of radius `radius`.
     fn reported_velocity(&self, cfg: &TrackConfig, radius: f32) -> Vec2 {
-        let confirmed = self.hits >= cfg.min_hits && self.steady >= cfg.min_steady;
+        // A slow velocity must first have predicted a sighting (module notes).
+        let steady = if self.velocity.norm2() < SURE_MPS * SURE_MPS {
+            cfg.min_steady.max(1)
+        } else {
+            cfg.min_steady
+        };
+        let confirmed = self.hits >= cfg.min_hits && self.steady >= steady;
         let travelled = (self.center - self.first).norm() >= crate::math::max(radius, 1.0);
         if confirmed && travelled && self.velocity.norm2() >= cfg.min_speed_mps * cfg.min_speed_mps
         {
@@ -798,5 +812,48 @@ mod tests {
         let got = w.obstacles()[0].velocity;
         // Over 1.5 s the β correction would be 0.42 m/s; over half a sweep (4 s), 0.16.
         assert!((got - v).norm() < 0.2, "{got:?}");
+    }
+    #[test]
+    fn a_slow_velocity_is_used_once_it_has_predicted_a_sighting() {
+        let cfg = TrackConfig::default();
+        let (mut w, mut t) = (World::new(), Tracks::default());
+        let (mut w2, mut t2) = (World::new(), Tracks::default());
+        // A sweep every 9 s. A diver at 0.4 m/s; a rock whose fits wander 3.6 m between two
+        // faces, as if at 0.4 m/s, then back.
+        let v = Vec2::new(0.4, 0.0);
+        let rock = [
+            Vec2::new(20.0, 5.0),
+            Vec2::new(23.6, 5.0),
+            Vec2::new(20.2, 5.0),
+        ];
+        for k in 0..3u64 {
+            let s = 9.0 * k as f32;
+            let d = Vec2::new(10.0, -10.0) + v * s;
+            t.admit(
+                &cfg,
+                2.5,
+                &mut w,
+                &at(feature(d.x, d.y, 1.0, 0.9), 9000 * k),
+                Vec2::ZERO,
+            );
+            let r = rock[k as usize];
+            t2.admit(
+                &cfg,
+                2.5,
+                &mut w2,
+                &at(feature(r.x, r.y, 2.0, 0.9), 9000 * k),
+                Vec2::ZERO,
+            );
+            let (diver, stone) = (w.obstacles()[0].velocity, w2.obstacles()[0].velocity);
+            if k < 2 {
+                assert_eq!(diver, Vec2::ZERO, "two sightings of a slow target: not yet");
+            } else {
+                assert!(
+                    (diver - v).norm() < 1e-3,
+                    "the third confirmed it: {diver:?}"
+                );
+            }
+            assert_eq!(stone, Vec2::ZERO, "the rock never moves");
+        }
     }
 }
