@@ -46,10 +46,10 @@
 //!
 //! The defaults are measured, not derived: α = 1 (the obstacle is where the sonar saw it last),
 //! β = 1/3 (the velocity closes a third of its error per sweep), a 0.3 m/s floor (confirmed
-//! below 0.5 m/s, "Slow movers" below), two hits, a
-//! confidence floor of 0.15 (two strong beams, the extractor's floor: a 1 m target at 20 m is
-//! seen by three or four beams of 1.8°, and with a floor of 0.5 such movers were dropped until
-//! they were 10 m away; another VideoRay is never seen on more than two). As the
+//! below 0.5 m/s: "Slow movers" below), two hits, a confidence floor of 0.15 (two strong
+//! beams, the extractor's floor: a 1 m target at 20 m is seen by three or four beams of 1.8°,
+//! and with a floor of 0.5 such movers were dropped until they were 10 m away; another
+//! VideoRay is never seen on more than two). As the
 //! vehicle passes a still rock the sonar sees other faces of it and the fitted centre wanders,
 //! at up to about 0.3 m/s; reported as motion and extrapolated over the planning horizon, those
 //! speeds, and equally a smoothed (α < 1) centre that lags the improving fits, led the VideoRay
@@ -112,7 +112,7 @@ pub const MAX_TRACKS: usize = MAX_OBSTACLES;
 const STEADY_FRACTION: f32 = 0.25;
 
 /// Below this speed, m/s, a track's velocity is used only once a sighting has landed where it
-/// predicted (`Track::steady` ≥ 1): a still rock's fits wander about this fast (module notes).
+/// predicted (`Track::steady` ≥ 1): a still rock's fits wander at such speeds (module notes).
 const SURE_MPS: f32 = 0.5;
 
 /// Speed change allowed to a track whose motion is known, between two sightings, m/s: it
@@ -813,6 +813,7 @@ mod tests {
         // Over 1.5 s the β correction would be 0.42 m/s; over half a sweep (4 s), 0.16.
         assert!((got - v).norm() < 0.2, "{got:?}");
     }
+
     #[test]
     fn a_slow_velocity_is_used_once_it_has_predicted_a_sighting() {
         let cfg = TrackConfig::default();
