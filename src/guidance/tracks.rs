@@ -273,16 +273,16 @@ impl Track {
 
     /// The velocity the planner is given, for a target of radius `radius`.
     fn reported_velocity(&self, cfg: &TrackConfig, radius: f32) -> Vec2 {
+        let speed2 = self.velocity.norm2();
         // A slow velocity must first have predicted a sighting (module notes).
-        let steady = if self.velocity.norm2() < SURE_MPS * SURE_MPS {
+        let steady = if speed2 < SURE_MPS * SURE_MPS {
             cfg.min_steady.max(1)
         } else {
             cfg.min_steady
         };
         let confirmed = self.hits >= cfg.min_hits && self.steady >= steady;
         let travelled = (self.center - self.first).norm() >= crate::math::max(radius, 1.0);
-        if confirmed && travelled && self.velocity.norm2() >= cfg.min_speed_mps * cfg.min_speed_mps
-        {
+        if confirmed && travelled && speed2 >= cfg.min_speed_mps * cfg.min_speed_mps {
             self.velocity
         } else {
             Vec2::ZERO
