@@ -25,6 +25,16 @@
 //! sighting take over the track of another box 8 m away, in generated box fields: the tight
 //! gate of rated tracks is what keeps such hand-overs to the first sweep.)
 //!
+//! **Hand-overs.** A track seen once gates anything within a sweep's travel, so a mover seen
+//! for the first time a few metres from a rock seen once can take the rock's track, and the
+//! jump becomes a velocity pointing from the rock to the mover: 50–90° off the mover's course
+//! in the generated crossing worlds, where the guard then met it in the wrong place. The sweep
+//! that brought the mover usually shows the rock again where it was: a sighting within a sweep
+//! of such a jump (two `revisit_ms`) that lands on the track's first place, nearer it than the
+//! place it jumped to, hands the track back (`Tracks::hand_back`): the track forgets the
+//! velocity and stays, seen once, at the mover's place, and the sighting opens a track for the
+//! rock. (Crossing and head-on worlds, seeds 0–599 × 3 strategies: contacts 64 → 56.)
+//!
 //! **Velocity.** An alpha–beta filter per track (e.g. Bar-Shalom & Li, *Estimation and
 //! Tracking*, §5.3): with the residual r = z − (x + v·Δt), x ← x + v·Δt + α·r and
 //! v ← v + (β/Δt)·r; the second sighting starts it with the two-point difference (gain 1 in
@@ -338,6 +348,36 @@ impl Tracks {
         self.tracks.iter().any(|t| t.id == id && !t.rated)
     }
 
+    /// A track seen once that took a sighting metres off as its second (a jump, hence a
+    /// velocity), and whose first place `f` now shows occupied in the same sweep, was handed
+    /// over: the jump was another object (a mover passing a rock the sweep had not yet come
+    /// back to). It forgets the jump's velocity and stays, seen once, where it jumped to; `f`
+    /// then finds the object that stayed (module notes, "Hand-overs").
+    fn hand_back(&mut self, cfg: &TrackConfig, world: &mut World, f: &Feature, vehicle: Vec2) {
+        let Some(t) = self.tracks.iter_mut().find(|t| {
+            let reach = crate::math::max(f32::from(t.largest_dm) * 0.1, f.radius) + cfg.gate_m;
+            t.rated
+                && t.hits == 2
+                && f.time_ms < t.time_ms.saturating_add(2 * cfg.revisit_ms)
+                && (t.center - t.first).norm() > reach
+                && (f.center - t.first).norm() <= reach
+                && (f.center - t.first).norm() < (f.center - t.center).norm()
+        }) else {
+            return;
+        };
+        t.velocity = Vec2::ZERO;
+        t.rated = false;
+        t.hits = 1;
+        t.steady = 0;
+        t.first = t.center;
+        let id = t.id;
+        if let Some(o) = world.obstacles().iter().find(|o| o.id == id) {
+            if let Ok(o) = o.moving(Vec2::ZERO) {
+                let _ = world.upsert_obstacle_or_evict(o, vehicle);
+            }
+        }
+    }
+
     /// Puts `f` into `world` with repulsiveness `a_plus` (the planner's A_s⁺), seen from the
     /// vehicle at `vehicle`.
     pub fn admit(
@@ -367,6 +407,7 @@ impl Tracks {
             };
         self.tracks
             .retain(|t| world.obstacles().iter().any(|o| o.id == t.id));
+        self.hand_back(cfg, world, f, vehicle);
 
         // The nearest track whose predicted centre gates the feature.
         let mut best: Option<(usize, f32)> = None;
@@ -856,5 +897,45 @@ mod tests {
             }
             assert_eq!(stone, Vec2::ZERO, "the rock never moves");
         }
+    }
+
+    #[test]
+    fn a_rock_seen_again_in_the_sweep_a_mover_took_its_track_in_takes_it_back() {
+        let cfg = TrackConfig::default();
+        let (mut w, mut t) = (World::new(), Tracks::default());
+        let admit = |t: &mut Tracks, w: &mut World, x: f32, y: f32, ms: u64| {
+            t.admit(&cfg, 2.5, w, &at(feature(x, y, 1.0, 0.9), ms), Vec2::ZERO)
+        };
+        // A rock seen once; a sweep later a mover, seen for the first time 7 m off it, takes
+        // its track (a rock seen once may be a mover) and gets a velocity from the jump...
+        assert_eq!(
+            admit(&mut t, &mut w, 20.0, 0.0, 0),
+            Admission::Added(SONAR_ID_BASE)
+        );
+        admit(&mut t, &mut w, 24.0, 6.0, 9000);
+        assert_ne!(
+            w.obstacles()[0].velocity,
+            Vec2::ZERO,
+            "the jump made a mover"
+        );
+        // ... until, later in the same sweep, the rock is seen where it was.
+        let rock = admit(&mut t, &mut w, 20.2, 0.1, 11000);
+        assert_eq!(
+            rock,
+            Admission::Added(SONAR_ID_BASE + 1),
+            "the rock is a track again"
+        );
+        let mover = w.obstacles().iter().find(|o| o.id == SONAR_ID_BASE);
+        assert!(
+            mover.is_some_and(|o| o.velocity == Vec2::ZERO && o.shape.center().x == 24.0),
+            "the mover is where it was seen, with no velocity yet: {mover:?}"
+        );
+        assert!(t.unrated(SONAR_ID_BASE), "seen once");
+        // A sweep after the jump, the same echo at the first place is not a hand-back.
+        let (mut w2, mut t2) = (World::new(), Tracks::default());
+        admit(&mut t2, &mut w2, 20.0, 0.0, 0);
+        admit(&mut t2, &mut w2, 24.0, 6.0, 9000);
+        admit(&mut t2, &mut w2, 20.2, 0.1, 18000);
+        assert!(!t2.unrated(SONAR_ID_BASE), "a sweep later the jump stands");
     }
 }
