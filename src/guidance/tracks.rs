@@ -356,12 +356,13 @@ impl Tracks {
     fn hand_back(&mut self, cfg: &TrackConfig, world: &mut World, f: &Feature, vehicle: Vec2) {
         let Some(t) = self.tracks.iter_mut().find(|t| {
             let reach = crate::math::max(f32::from(t.largest_dm) * 0.1, f.radius) + cfg.gate_m;
+            let from_first = (f.center - t.first).norm();
             t.rated
                 && t.hits == 2
                 && f.time_ms < t.time_ms.saturating_add(2 * cfg.revisit_ms)
                 && (t.center - t.first).norm() > reach
-                && (f.center - t.first).norm() <= reach
-                && (f.center - t.first).norm() < (f.center - t.center).norm()
+                && from_first <= reach
+                && from_first < (f.center - t.center).norm()
         }) else {
             return;
         };

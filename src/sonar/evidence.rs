@@ -29,20 +29,20 @@
 //! look, and a false one costs only a detour until the next look clears it.
 //!
 //! **Grazing silence.** A surface met at more than about 65° from its normal returns too little
-//! to pass the extractor's peak (its echo falls as ¼ + ¾·cos θ): a beam that runs along a
-//! wall hears nothing, and taken as open water it cleared the wall's own cells. A vehicle in a
-//! channel saw the wall ahead only at such angles, believed a gap, and the route layer led it
-//! through. So a beam that hears nothing stops clearing at a believed cell that is part of a
-//! surface lying within 30° of the beam (`runs_along`: a believed neighbour that
-//! way); a lone echo, or a surface crossed steeply (which would have answered), is cleared as
-//! before. A beam with an echo clears as before: the smear of a wall's echoes a cell or two
-//! into the water (the beam's width and the heading's error at range) lies along the wall
-//! too, and kept, it closed narrow channels. (`hil bench`, all families, seeds 0–199 × 3
-//! strategies: contacts 38 → 30; successes 6 933 → 6 902, navfn's in channels 58 → 46 of 200;
+//! to pass the extractor's peak (in the simulated sonar its echo falls as ¼ + ¾·cos θ): a beam
+//! that runs along a wall hears nothing, and taken as open water it cleared the wall's own
+//! cells. A vehicle in a channel saw the wall ahead only at such angles, believed a gap, and
+//! the route layer led it through. So a beam that hears nothing stops clearing at a believed
+//! cell that is part of a surface lying within 30° of the beam (`runs_along`: a believed
+//! neighbour that way); a lone echo, or a surface crossed steeply (which would have answered),
+//! is cleared as before. A beam with an echo clears as before: the smear of a wall's echoes a
+//! cell or two into the water (the beam's width and the heading's error at range) lies along
+//! the wall too, and kept, it closed narrow channels. (`hil bench`, all families, seeds 0–199 ×
+//! 3 strategies: contacts 38 → 30; successes 6 933 → 6 902, navfn's in channels 58 → 46 of 200;
 //! seeds 200–299 of five families, 20 → 17; the flat-fish lost 10 of 408 successes, see the
 //! README. Protecting from echo beams too gave 33 and 6 889; protecting only a cell with
-//! believed neighbours on both sides along the beam lost the gain, since a silent beam meets
-//! a wall's believed run at its near end.)
+//! believed neighbours on both sides along the beam lost the gain, since a silent beam meets a
+//! wall's believed run at its near end.)
 //!
 //! **Contexts.** One writer, the background (scanlines, [`EvidenceMap::observe`]), and one
 //! reader, the periodic task ([`EvidenceMap::nearest`], [`EvidenceMap::row_bits`]). Cells are
