@@ -281,6 +281,11 @@ impl Track {
         self.hits = self.hits.saturating_add(1);
     }
 
+    /// The largest radius its sightings have had, m ([`Tracks::extent`]).
+    fn extent_m(&self) -> f32 {
+        f32::from(self.largest_dm) * 0.1
+    }
+
     /// The velocity the planner is given, for a target of radius `radius`.
     fn reported_velocity(&self, cfg: &TrackConfig, radius: f32) -> Vec2 {
         let speed2 = self.velocity.norm2();
@@ -336,10 +341,7 @@ impl Tracks {
     /// crossing world, and a guard that took the last fit let it run into the vehicle. Its
     /// largest sighting is the better bound on its extent ([`crate::guidance::guard`]).
     pub fn extent(&self, id: u16) -> Option<f32> {
-        self.tracks
-            .iter()
-            .find(|t| t.id == id)
-            .map(|t| f32::from(t.largest_dm) * 0.1)
+        self.tracks.iter().find(|t| t.id == id).map(Track::extent_m)
     }
 
     /// Whether obstacle `id` is a sonar track seen only once so far (no velocity can have been
@@ -355,7 +357,7 @@ impl Tracks {
     /// then finds the object that stayed (module notes, "Hand-overs").
     fn hand_back(&mut self, cfg: &TrackConfig, world: &mut World, f: &Feature, vehicle: Vec2) {
         let Some(t) = self.tracks.iter_mut().find(|t| {
-            let reach = crate::math::max(f32::from(t.largest_dm) * 0.1, f.radius) + cfg.gate_m;
+            let reach = crate::math::max(t.extent_m(), f.radius) + cfg.gate_m;
             let from_first = (f.center - t.first).norm();
             t.rated
                 && t.hits == 2
