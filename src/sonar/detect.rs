@@ -167,7 +167,7 @@ mod tests {
         let mut bins = [0u8; 300];
         bins[3..8].fill(255); // inside the 1 m blanking
         bins[20] = 255; // one bin: too short
-        bins[30..34].fill(100); // above threshold, peak below peak_min
+        bins[30..34].fill(85); // above threshold, peak below peak_min
         bins[40..43].fill(200); // kept 1st
         bins[80..83].fill(200); // kept 2nd
         bins[120..123].fill(200); // beyond runs_per_beam

@@ -173,11 +173,8 @@ impl Extractor {
             here.echo_count += 1;
         }
         self.last = Some(here);
+        let strong = crate::math::max(self.cfg.peak_min, self.cfg.feature_peak_min);
         if let Some(map) = map {
-            let mut ranges: heapless::Vec<f32, MAX_RUNS_PER_BEAM> = heapless::Vec::new();
-            for e in echoes.iter() {
-                let _ = ranges.push(e.range_m);
-            }
             // An echo the neighbouring beam also returned (within the cluster gap) is the
             // second look a far cell needs: a false target or a fish is one ping, a surface
             // spans beams. Both ends of the pair are believed.
@@ -192,6 +189,23 @@ impl Extractor {
                     }
                 }
             }
+            // A weak echo is a wall at a grazing angle only if the neighbouring beam saw it too;
+            // alone it may be a false target, and it is left out.
+            let mut ranges: heapless::Vec<f32, MAX_RUNS_PER_BEAM> = heapless::Vec::new();
+            let mut kept_seconded = 0u8;
+            for (k, e) in echoes.iter().enumerate() {
+                let twice = k < 8 && seconded & (1 << k) != 0;
+                if e.peak < strong && !twice {
+                    continue;
+                }
+                if ranges.push(e.range_m).is_err() {
+                    break;
+                }
+                if twice {
+                    let i = ranges.len().saturating_sub(1) as u32;
+                    kept_seconded |= 1u8.checked_shl(i).unwrap_or(0);
+                }
+            }
             map.follow(pose.position);
             map.observe(&Beam {
                 origin: sensor,
@@ -199,12 +213,12 @@ impl Extractor {
                 range_m: scan.range_m,
                 blank_m: self.cfg.blanking_m,
                 echoes: &ranges,
-                seconded,
+                seconded: kept_seconded,
             });
         }
         // Pushed, not collected: heapless' `collect` panics on overflow.
         let mut hits: heapless::Vec<Hit, MAX_RUNS_PER_BEAM> = heapless::Vec::new();
-        for e in echoes.iter() {
+        for e in echoes.iter().filter(|e| e.peak >= strong) {
             let _ = hits.push(Hit {
                 point: sensor + look * e.range_m,
                 look,
@@ -512,6 +526,55 @@ mod tests {
         assert!(
             !map.is_occupied(w, cell(p.x), cell(p.y)),
             "a lone echo is not believed"
+        );
+    }
+
+    #[test]
+    fn a_weak_echo_feeds_the_map_when_two_beams_agree_and_never_a_feature() {
+        // At 4 m (within the map's near_m, gain 1.16) a raw 95 is 110 compensated: above
+        // peak_min (100), below feature_peak_min (120) — a wall met at a grazing angle.
+        let mut weak = [0u8; 300];
+        weak[40..43].fill(95);
+        let quiet = [0u8; 300];
+        let step = SCAN.step;
+        let fly = |lines: &[&[u8; 300]]| {
+            let map = EvidenceMap::new(crate::sonar::EvidenceConfig::default()).unwrap();
+            let mut ex = Extractor::new(ExtractorConfig::default()).unwrap();
+            let mut features = 0;
+            for (k, bins) in lines.iter().enumerate() {
+                let sl = Scanline {
+                    time_ms: 60 * k as u64,
+                    bearing_rad: k as f32 * step,
+                    step_rad: step,
+                    range_m: 30.0,
+                    bins: &bins[..],
+                };
+                let mut count = |_| {
+                    features += 1;
+                    true
+                };
+                ex.push_scanline_mapped(&sl, STILL.pose(0.0), Some(&map), &mut count)
+                    .unwrap();
+            }
+            let mut count = |_| {
+                features += 1;
+                true
+            };
+            ex.flush(&mut count);
+            let w = map.window().unwrap();
+            let p = Vec2::from_angle(step) * 4.05;
+            let cell = |x: f32| libm::floorf(x / 0.5) as i32;
+            (map.is_occupied(w, cell(p.x), cell(p.y)), features)
+        };
+        assert_eq!(
+            fly(&[&quiet, &weak, &quiet]),
+            (false, 0),
+            "alone: maybe false"
+        );
+        assert_eq!(
+            fly(&[&weak, &weak, &quiet]),
+            (true, 0),
+            "two beams: a surface"
         );
     }
 
