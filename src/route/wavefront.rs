@@ -78,14 +78,21 @@ impl Wavefront {
     }
 
     /// Spreads from `source` through cells not set in `blocked` (the source itself may be
-    /// blocked) until `target` is reached, at most `max_layers` layers. Returns whether it was.
-    pub fn spread(&mut self, blocked: &Rows, source: Cell, target: Cell, max_layers: u32) -> bool {
+    /// blocked) until `target` is reached, at most `max_layers` layers. Returns the target's
+    /// distance in steps, `None` if it was not reached.
+    pub fn spread(
+        &mut self,
+        blocked: &Rows,
+        source: Cell,
+        target: Cell,
+        max_layers: u32,
+    ) -> Option<u32> {
         self.lo = [u64::MAX; ROUTE_SIDE];
         self.hi = [u64::MAX; ROUTE_SIDE];
         self.set(source.1, bit(source.0), 0);
         for layer in 0..max_layers {
             if self.label(target).is_some() {
-                return true;
+                return Some(layer);
             }
             let (l, next) = ((layer % 3) as u8, ((layer + 1) % 3) as u8);
             let mut grew = false;
@@ -102,10 +109,10 @@ impl Wavefront {
                 }
             }
             if !grew {
-                break;
+                return None;
             }
         }
-        self.label(target).is_some()
+        self.label(target).map(|_| max_layers)
     }
 
     /// The neighbour of a reached `cell` one step nearer the source, preferring the one
@@ -149,7 +156,7 @@ mod tests {
     fn the_way_down_goes_round_the_wall_and_has_no_minimum() {
         let mut w = Wavefront::new();
         let (source, target) = ((20, 5), (2, 5));
-        assert!(w.spread(&wall(), source, target, 400));
+        assert_eq!(w.spread(&wall(), source, target, 400), Some(36 + 18 + 36));
         let mut cell = target;
         let mut steps = 0;
         let mut highest = 0;
@@ -176,7 +183,7 @@ mod tests {
             };
         }
         let mut w = Wavefront::new();
-        assert!(!w.spread(&b, (40, 40), (9, 9), 4000));
+        assert_eq!(w.spread(&b, (40, 40), (9, 9), 4000), None);
         assert_eq!(w.label((9, 9)), None);
         assert!(w.label((0, 0)).is_some(), "everything outside is reached");
     }
