@@ -281,7 +281,7 @@ impl Router {
         };
         let inside = self.grid.cell_of(goal);
         let source = inside.unwrap_or_else(|| self.grid.clamp(goal));
-        if self.choose_pass(start, source).is_none() {
+        if !self.choose_pass(start, source) {
             return (RouteStatus::Blocked, goal);
         }
         let end = if inside.is_some() {
@@ -295,9 +295,9 @@ impl Router {
     /// Spreads the passes, widest first, and leaves `blocked` and the wavefront holding the
     /// widest pass whose way is no longer than [`acceptable`] of the shortest found — a route
     /// that keeps its distance, unless keeping it costs a detour round the whole field (a
-    /// 5 m gap between two rocks is closed by 4 m of keep-off on 2 m cells). `None` when no
+    /// 5 m gap between two rocks is closed by 4 m of keep-off on 2 m cells). `false` when no
     /// pass finds a way.
-    fn choose_pass(&mut self, start: Cell, source: Cell) -> Option<u8> {
+    fn choose_pass(&mut self, start: Cell, source: Cell) -> bool {
         let (wide, narrow) = (self.keep_off, self.narrowest);
         let passes = [wide, wide.midpoint(narrow), narrow];
         // No way is shorter than the 4-neighbour distance: a pass within reach of it is taken.
@@ -314,20 +314,27 @@ impl Router {
             if let (Some(d), Some(slot)) = (d, ways.get_mut(k)) {
                 *slot = Some(d);
                 if d <= acceptable(straight) {
-                    return Some(g);
+                    return true;
                 }
             }
         }
-        let shortest = ways.iter().flatten().min().copied()?;
-        let (chosen, _) = passes
+        let Some(shortest) = ways.iter().flatten().min().copied() else {
+            return false;
+        };
+        let chosen = passes
             .iter()
             .zip(ways)
-            .find(|(_, d)| d.is_some_and(|d| d <= acceptable(shortest)))?;
-        if spread_last != Some(*chosen) {
-            self.fill_blocked(*chosen, start, source);
-            self.wave.spread(&self.blocked, source, start, MAX_LAYERS)?;
+            .find(|(_, d)| d.is_some_and(|d| d <= acceptable(shortest)));
+        match chosen {
+            Some((&g, _)) if spread_last == Some(g) => true,
+            Some((&g, _)) => {
+                self.fill_blocked(g, start, source);
+                self.wave
+                    .spread(&self.blocked, source, start, MAX_LAYERS)
+                    .is_some()
+            }
+            None => false,
         }
-        Some(*chosen)
     }
 
     /// Walks down from `start` (at most [`MAX_WALK`] steps) and returns the farthest cell of
