@@ -2,8 +2,9 @@
 //! project was not tuned on, generated from seeds, flown with default parameters.
 //!
 //! ```text
-//! hil bench [--families a,b,...] [--seeds N] [--strategies vpf,...] [--models videoray,...]
-//!           [--sensing scanlines,contacts] [--params RECIPE.toml] [--jobs N] [--out DIR] [--quiet]
+//! hil bench [--families a,b,...] [--seeds N] [--first-seed F] [--strategies vpf,...]
+//!           [--models videoray,...] [--sensing scanlines,contacts] [--params RECIPE.toml]
+//!           [--jobs N] [--out DIR] [--quiet]
 //! ```
 //!
 //! - [`worlds`]: the twelve families, and the waypoint-mission family `survey` (flown when
@@ -51,8 +52,10 @@ pub const MAX_RUNS: usize = 100_000;
 pub struct Options {
     /// Families.
     pub families: Vec<Family>,
-    /// Seeds 0 .. seeds per family.
+    /// Worlds per family: seeds `first_seed` .. `first_seed + seeds`.
     pub seeds: u64,
+    /// The first seed.
+    pub first_seed: u64,
     /// Strategies.
     pub strategies: Vec<Strategy>,
     /// Models.
@@ -74,6 +77,7 @@ impl Default for Options {
         Options {
             families: FAMILIES.to_vec(),
             seeds: 17,
+            first_seed: 0,
             strategies: vec![Strategy::Vpf],
             models: vec![ModelKind::VideoRay],
             sensing: vec![Sensing::Sonar],
@@ -100,9 +104,13 @@ pub struct Args {
     /// missions: survey
     #[arg(long, value_name = "a,b,...", value_delimiter = ',', value_parser = family)]
     families: Vec<Family>,
-    /// worlds per family, seeds 0 .. N-1 (default 17: 204 worlds)
+    /// worlds per family, seeds F .. F+N-1 (default 17: 204 worlds)
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=10_000))]
     seeds: Option<u64>,
+    /// the first seed F (default 0): judge a change on seeds it was not chosen on, e.g.
+    /// `--first-seed 200 --seeds 100`
+    #[arg(long, value_name = "F", value_parser = clap::value_parser!(u64).range(0..=1_000_000))]
+    first_seed: Option<u64>,
     /// vpf, multipoint, navfn (default vpf)
     #[arg(long, value_name = "a,b,...", value_delimiter = ',', value_parser = strategy)]
     strategies: Vec<Strategy>,
@@ -141,6 +149,7 @@ impl From<Args> for Options {
         Options {
             families: or(a.families, d.families),
             seeds: a.seeds.unwrap_or(d.seeds),
+            first_seed: a.first_seed.unwrap_or(d.first_seed),
             strategies: or(a.strategies, d.strategies),
             models: or(a.models, d.models),
             sensing: or(a.sensing, d.sensing),
@@ -189,7 +198,7 @@ pub fn cases(o: &Options) -> Vec<Case> {
         for &model in &o.models {
             for &sensing in &o.sensing {
                 for &family in &o.families {
-                    for seed in 0..o.seeds {
+                    for seed in o.first_seed..o.first_seed.saturating_add(o.seeds) {
                         v.push(Case {
                             family,
                             seed,
@@ -269,11 +278,12 @@ pub fn bench(o: &Options) -> Result<(PathBuf, report::Report), Error> {
     });
     if !o.quiet {
         eprintln!(
-            "hil bench: {} runs ({} families × {} seeds × {} configurations), {} to fly, {} done \
-             already; {jobs} workers → {}",
+            "hil bench: {} runs ({} families × {} seeds from {} × {} configurations), {} to fly, \
+             {} done already; {jobs} workers → {}",
             all.len(),
             o.families.len(),
             o.seeds,
+            o.first_seed,
             o.strategies.len() * o.models.len() * o.sensing.len(),
             pending.len(),
             all.len() - pending.len(),
@@ -372,6 +382,10 @@ mod tests {
         assert_eq!(help.kind(), clap::error::ErrorKind::DisplayHelp);
         assert!(help.to_string().contains("--families"), "{help}");
         assert_eq!(cases(&parse(&[]).unwrap()).len(), 12 * 17);
+        // Held-out seeds: 200 .. 204 of one family.
+        let o = parse(&["--families", "rocks", "--seeds", "5", "--first-seed", "200"]).unwrap();
+        let seeds: Vec<u64> = cases(&o).iter().map(|c| c.seed).collect();
+        assert_eq!(seeds, [200, 201, 202, 203, 204]);
         assert_eq!(cases(&Options::default()).len(), 12 * 17);
     }
 }

@@ -22,6 +22,8 @@ pub struct Line {
     pub collisions: usize,
     /// Runs not flown (no feasible draw, a refused scenario, a firmware that failed).
     pub errors: usize,
+    /// One-sided 95 % upper bound on the collision rate over the runs flown ([`upper95`]).
+    pub collision_rate_upper95: Option<f64>,
     /// Worst minimum clearance, m.
     pub worst_clearance_m: Option<f64>,
     /// Median minimum clearance, m.
@@ -49,6 +51,42 @@ pub struct Report {
     pub params: String,
 }
 
+/// The one-sided 95 % upper confidence bound on a rate of which `k` runs in `n` showed it
+/// (Clopper–Pearson: the p at which k or fewer in n has probability 5 %). 0 collisions in 204
+/// worlds says the rate is below 1.5 %, not that it is zero; `None` for no runs.
+pub fn upper95(k: usize, n: usize) -> Option<f64> {
+    if n == 0 {
+        return None;
+    }
+    if k >= n {
+        return Some(1.0);
+    }
+    // P(X ≤ k) for X ~ B(n, p), summed in logs (n may be 100 000).
+    let at_most_k = |p: f64| -> f64 {
+        let (lp, lq) = (p.ln(), (1.0 - p).ln());
+        let mut log_pmf = n as f64 * lq;
+        let mut total = log_pmf;
+        for i in 0..k {
+            log_pmf += ((n - i) as f64 / (i + 1) as f64).ln() + lp - lq;
+            // log(e^total + e^log_pmf), the larger first.
+            let (a, b) = (total.max(log_pmf), total.min(log_pmf));
+            total = a + (b - a).exp().ln_1p();
+        }
+        total.exp()
+    };
+    // P(X ≤ k) falls as p grows: bisect for 0.05.
+    let (mut lo, mut hi) = (k as f64 / n as f64, 1.0);
+    for _ in 0..60 {
+        let mid = 0.5 * (lo + hi);
+        if at_most_k(mid) > 0.05 {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    Some(hi)
+}
+
 fn median(mut v: Vec<f64>) -> Option<f64> {
     v.retain(|x| x.is_finite());
     if v.is_empty() {
@@ -66,12 +104,16 @@ fn median(mut v: Vec<f64>) -> Option<f64> {
 fn line(family: &str, rows: &[&Row]) -> Line {
     let f =
         |get: &dyn Fn(&Row) -> Option<f64>| median(rows.iter().filter_map(|r| get(r)).collect());
+    let collisions = rows.iter().filter(|r| r.collided).count();
+    let errors = rows.iter().filter(|r| r.error.is_some()).count();
     Line {
         family: family.to_string(),
         runs: rows.len(),
         successes: rows.iter().filter(|r| r.success).count(),
-        collisions: rows.iter().filter(|r| r.collided).count(),
-        errors: rows.iter().filter(|r| r.error.is_some()).count(),
+        collisions,
+        errors,
+        // Over the runs flown: one not flown says nothing of the rate.
+        collision_rate_upper95: upper95(collisions, rows.len() - errors),
         worst_clearance_m: rows
             .iter()
             .filter_map(|r| r.min_clearance_m)
@@ -132,10 +174,10 @@ impl Report {
         for (config, lines) in &self.tables {
             let _ = writeln!(s, "### {config} ({})\n", self.params);
             s.push_str(
-                "| family | runs | success | collisions | not flown | clearance worst / median (m) \
-                 | time / ref (median) | path / shortest (median) | guard periods (median) \
-                 | perception miss mean / p95 (m) | false cells |\n\
-                 |---|---|---|---|---|---|---|---|---|---|---|\n",
+                "| family | runs | success | collisions | collision rate (95 % bound) | not flown \
+                 | clearance worst / median (m) | time / ref (median) | path / shortest (median) \
+                 | guard periods (median) | perception miss mean / p95 (m) | false cells |\n\
+                 |---|---|---|---|---|---|---|---|---|---|---|---|\n",
             );
             for l in lines {
                 let pct = if l.runs > 0 {
@@ -143,9 +185,13 @@ impl Report {
                 } else {
                     0.0
                 };
+                let bound = l
+                    .collision_rate_upper95
+                    .map_or("–".to_string(), |u| format!("≤ {:.1} %", 100.0 * u));
                 let _ = writeln!(
                     s,
-                    "| {} | {} | {} ({pct:.0} %) | {} | {} | {} / {} | {} | {} | {} | {} / {} | {} |",
+                    "| {} | {} | {} ({pct:.0} %) | {} | {bound} | {} | {} / {} | {} | {} | {} | {} / {} \
+                     | {} |",
                     if l.family == "all" {
                         "**all**".to_string()
                     } else {
@@ -212,11 +258,33 @@ mod tests {
         assert_eq!(lines.len(), 3);
         let all = &lines[2];
         assert_eq!((all.runs, all.successes, all.collisions), (3, 2, 1));
+        assert_eq!(all.collision_rate_upper95, upper95(1, 3));
         assert_eq!(all.worst_clearance_m, Some(-0.3));
         assert_eq!(all.median_clearance_m, Some(1.0));
         assert_eq!(all.median_time_ratio, Some(1.5));
         let md = r.markdown();
         assert!(md.contains("| clutter | 2 | 1 (50 %) | 1 |"), "{md}");
-        assert!(md.contains("| **all** | 3 | 2 (67 %) | 1 |"), "{md}");
+        assert!(md.contains("| **all** | 3 | 2 (67 %) | 1 | ≤ 86.5 % |"), "{md}");
+    }
+
+    #[test]
+    fn the_collision_bound_is_the_exact_binomial_one() {
+        // None in n: 1 − 0.05^(1/n), the "rule of three" (≈ 3/n) for large n.
+        for n in [1, 17, 204, 2400] {
+            let u = upper95(0, n).unwrap();
+            let exact = 1.0 - 0.05f64.powf(1.0 / n as f64);
+            assert!((u - exact).abs() < 1e-9, "n {n}: {u} vs {exact}");
+        }
+        assert!((upper95(0, 204).unwrap() - 0.0146).abs() < 1e-4);
+        // One in 3: P(X ≤ 1) = (1 − p)³ + 3p(1 − p)² = 0.05 at p ≈ 0.8647.
+        assert!((upper95(1, 3).unwrap() - 0.8647).abs() < 1e-3);
+        // 5 in 2 400: tabulated Clopper–Pearson one-sided bound ≈ 0.44 %.
+        let u = upper95(5, 2400).unwrap();
+        assert!(u > 0.0040 && u < 0.0048, "{u}");
+        // Large counts stay finite and above the observed rate.
+        let u = upper95(300, 100_000).unwrap();
+        assert!(u > 0.003 && u < 0.0034, "{u}");
+        assert_eq!(upper95(3, 3), Some(1.0));
+        assert_eq!(upper95(0, 0), None);
     }
 }
