@@ -82,6 +82,17 @@
 //! navfn's head-on contacts 2 → 12 in 400 worlds: each vehicle's planner had already chosen
 //! a side.
 //!
+//! *Measured and left as it is* (crossing and head-on worlds × 3 strategies, seeds 0–599,
+//! 55 contacts in 3 600 runs as it is): the meeting course is looked for within
+//! [`CPA_HORIZON_S`] *of the sighting*, so a contact seen 25 m ahead, which would meet this
+//! vehicle 13 s later, is held on the reciprocal course for good. Counted from now, it is
+//! met on its meeting course once that is 10 s off, and two VideoRays that had seen each
+//! other once would have turned; but contacts rose to 96, most of them crossing movers run
+//! into while the guard turned from a hypothetical one. The hypothesis also for a track seen
+//! twice whose velocity no third sighting has confirmed: 77. Half the cruise speed while a
+//! contact of unknown motion is within 20 m ahead (COLREG rule 6, safe speed): 74 — a slower
+//! vehicle stays longer in the crossing traffic's way.
+//!
 //! Cost: one point-to-segment distance per map cell and still agent per heading tried, samples
 //! every [`SAMPLE_M`] along the segment for the table's still obstacles near enough to matter,
 //! and one closest-approach per mover ([`TRACK_STEPS`] of them for a slow-turning craft).
