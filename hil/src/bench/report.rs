@@ -264,7 +264,10 @@ mod tests {
         assert_eq!(all.median_time_ratio, Some(1.5));
         let md = r.markdown();
         assert!(md.contains("| clutter | 2 | 1 (50 %) | 1 |"), "{md}");
-        assert!(md.contains("| **all** | 3 | 2 (67 %) | 1 | ≤ 86.5 % |"), "{md}");
+        assert!(
+            md.contains("| **all** | 3 | 2 (67 %) | 1 | ≤ 86.5 % |"),
+            "{md}"
+        );
     }
 
     #[test]
