@@ -14,8 +14,8 @@
 //!    the route keeps its distance; if that finds no way, or only one much longer than the
 //!    straight line, again with less growth, down to only as much as keeps every way as wide
 //!    as the hull (none for a small craft; a disc's octagon for a larger one, [`grow`]), and
-//!    takes the widest pass whose way is at most a
-//!    quarter longer than the shortest ([`acceptable`]). Keeping 4 m off on 2 m cells closes
+//!    takes the widest pass whose way is at most a quarter longer than the shortest
+//!    ([`acceptable`]). Keeping 4 m off on 2 m cells closes
 //!    every gap under about 10 m; a waypoint 26 m away behind a 5 m gap between two rocks
 //!    was once reached after a 300 m tour of the field (`waypoints_through_clutter.toml`);
 //! 3. walks down the wavefront from the vehicle and takes the farthest cell of the walk it can
