@@ -323,7 +323,9 @@ fn a_sweep_batch_takes_the_benchmarks_worlds() {
         "clutter = 1\nbench_families = [\"harbour\", \"serpentine\"]\nbench_count = 2",
     );
     let s = spec::parse(&text, "bench.toml").unwrap_or_else(|e| panic!("{e}"));
-    let batch = generate::batch(&s, Path::new(".")).unwrap_or_else(|e| panic!("{e}"));
+    let batch = generate::batch(&s, Path::new("."))
+        .unwrap_or_else(|e| panic!("{e}"))
+        .scenarios;
     let ids: Vec<&str> = batch.iter().map(|b| b.id.as_str()).collect();
     for id in [
         "bench:harbour:0",
@@ -343,7 +345,9 @@ fn a_sweep_batch_takes_the_benchmarks_worlds() {
         "bench.toml",
     )
     .unwrap_or_else(|e| panic!("{e}"));
-    let batch = generate::batch(&later, Path::new(".")).unwrap_or_else(|e| panic!("{e}"));
+    let batch = generate::batch(&later, Path::new("."))
+        .unwrap_or_else(|e| panic!("{e}"))
+        .scenarios;
     assert!(batch.iter().any(|b| b.id == "bench:harbour:101"));
     assert!(!batch.iter().any(|b| b.id == "bench:harbour:1"));
     let bad = refusal(&GOOD.replace(
@@ -353,5 +357,40 @@ fn a_sweep_batch_takes_the_benchmarks_worlds() {
     assert!(
         bad.contains("reef") || bad.contains("bench family"),
         "{bad}"
+    );
+}
+
+/// A bench world with no draw the craft can fly is left out of the batch, as `hil bench`
+/// leaves it unflown, and named; the rest of the batch stands.
+#[test]
+fn a_sweep_leaves_out_a_bench_world_the_craft_cannot_fly() {
+    let text = GOOD.replace("model = \"videoray\"", "model = \"flatfish\"").replace(
+        "clutter = 1",
+        "clutter = 1\nbench_families = [\"serpentine\"]\nbench_count = 2\nbench_first_seed = 102",
+    );
+    let s = spec::parse(&text, "flatfish.toml").unwrap_or_else(|e| panic!("{e}"));
+    let batch = generate::batch(&s, Path::new(".")).unwrap_or_else(|e| panic!("{e}"));
+    let ids: Vec<&str> = batch.scenarios.iter().map(|b| b.id.as_str()).collect();
+    assert_eq!(ids, ["clutter:0", "bench:serpentine:102"]);
+    assert_eq!(batch.left_out.len(), 1);
+    assert_eq!(batch.left_out[0].0, "bench:serpentine:103");
+    assert!(
+        batch.left_out[0].1.contains("no draw fits"),
+        "{:?}",
+        batch.left_out
+    );
+    // Nothing left to fly is refused.
+    let none = text.replace("clutter = 1\n", "clutter = 0\n").replace(
+        "bench_count = 2\nbench_first_seed = 102",
+        "bench_count = 1\nbench_first_seed = 103",
+    );
+    let s = spec::parse(&none, "flatfish.toml").unwrap_or_else(|e| panic!("{e}"));
+    let e = generate::batch(&s, Path::new("."))
+        .map(|_| ())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("no scenario to fly") && e.contains("serpentine:103"),
+        "{e}"
     );
 }

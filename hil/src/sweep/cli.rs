@@ -177,12 +177,19 @@ fn show_scenario(spec_path: &Path, id: &str) -> ExitCode {
     };
     let spec_dir = spec_path.parent().unwrap_or(Path::new("."));
     match generate::batch(&spec, spec_dir) {
-        Ok(batch) => match batch.iter().find(|b| b.id == id) {
+        Ok(generate::Batch {
+            scenarios: batch,
+            left_out,
+        }) => match batch.iter().find(|b| b.id == id) {
             Some(b) => {
                 print!("{}", b.text);
                 ExitCode::SUCCESS
             }
             None => {
+                if let Some((_, why)) = left_out.iter().find(|(l, _)| l == id) {
+                    eprintln!("hil sweep: `{id}` is left out of this batch: {why}");
+                    return ExitCode::from(2);
+                }
                 let ids: Vec<&str> = batch.iter().map(|b| b.id.as_str()).collect();
                 eprintln!(
                     "hil sweep: no scenario `{id}` in this batch: {}",

@@ -429,10 +429,23 @@ pub struct BatchScenario {
     pub text: String,
 }
 
+/// The sweep's scenarios, and the bench worlds left out of it.
+#[derive(Clone, Debug, Default)]
+pub struct Batch {
+    /// The scenarios to fly.
+    pub scenarios: Vec<BatchScenario>,
+    /// Bench worlds with no draw the craft can fly (`bench:FAMILY:SEED`, why), left out as
+    /// `hil bench` leaves them unflown: a flat-fish has none in some serpentines.
+    pub left_out: Vec<(String, String)>,
+}
+
 /// The sweep's scenarios: the listed files (relative to `spec_dir`), then the generated ones,
-/// each family in index order.
-pub fn batch(spec: &Spec, spec_dir: &std::path::Path) -> Result<Vec<BatchScenario>, ScenarioError> {
+/// each family in index order. A file or generated scenario that does not parse is an error; a
+/// bench world with no feasible draw for the craft is left out ([`Batch::left_out`]), and an
+/// error only when nothing is left to fly.
+pub fn batch(spec: &Spec, spec_dir: &std::path::Path) -> Result<Batch, ScenarioError> {
     let mut out = Vec::new();
+    let mut left_out = Vec::new();
     let fix = |mut s: Scenario, id: String, text: String| {
         for v in &mut s.vehicles {
             v.model = spec.craft.model;
@@ -488,19 +501,34 @@ pub fn batch(spec: &Spec, spec_dir: &std::path::Path) -> Result<Vec<BatchScenari
                 sensing: sc.sensing,
             };
             let id = format!("bench:{}:{}", family.name(), sc.bench_first_seed + i as u64);
-            let (w, attempt, shortest) =
-                crate::bench::case::feasible_world(&case).map_err(|e| ScenarioError {
-                    file: id.clone(),
-                    line: 0,
-                    column: None,
-                    key: String::new(),
-                    message: format!("no feasible draw for the craft: {e}"),
-                })?;
+            let (w, attempt, shortest) = match crate::bench::case::feasible_world(&case) {
+                Ok(found) => found,
+                Err(e) => {
+                    left_out.push((id, format!("no draw fits the craft: {e}")));
+                    continue;
+                }
+            };
             let limit = crate::bench::case::duration_s(shortest / crate::bench::case::CRUISE_MPS);
             let text = crate::bench::case::scenario_text(&w, attempt, &case, limit);
             let s = scenario::parse(&text, &id)?;
             out.push(fix(s, id, text));
         }
     }
-    Ok(out)
+    if out.is_empty() {
+        let why: Vec<String> = left_out
+            .iter()
+            .map(|(id, e)| format!("{id}: {e}"))
+            .collect();
+        return Err(ScenarioError {
+            file: spec.file.clone(),
+            line: 0,
+            column: None,
+            key: "scenarios".into(),
+            message: format!("no scenario to fly ({})", why.join("; ")),
+        });
+    }
+    Ok(Batch {
+        scenarios: out,
+        left_out,
+    })
 }

@@ -103,7 +103,13 @@ pub fn fnv1a(parts: &[&[u8]]) -> u64 {
 pub fn sweep(spec_path: &Path, opts: &Options) -> Result<Outcome, Error> {
     let spec = spec::load(spec_path)?;
     let spec_dir = spec_path.parent().unwrap_or(Path::new("."));
-    let batch = generate::batch(&spec, spec_dir)?;
+    let generate::Batch {
+        scenarios: batch,
+        left_out,
+    } = generate::batch(&spec, spec_dir)?;
+    for (id, why) in &left_out {
+        eprintln!("hil sweep: {id} left out: {why}");
+    }
     let n_scen = batch.len();
     let total = spec.sets.len() * n_scen;
     let mut parts: Vec<&[u8]> = vec![FORMAT.as_bytes(), spec.text.as_bytes()];
