@@ -97,6 +97,11 @@ pub struct Row {
     pub reference_s: Option<f64>,
     /// Periods whose command the guard changed (all vehicles).
     pub guard_periods: u32,
+    /// Where the time under way went ([`time_shares`]): the share commanded at cruise (80 % of
+    /// v_max or more) ...
+    pub cruise_frac: Option<f64>,
+    /// ... and the share the guard held the vehicle stopped.
+    pub held_frac: Option<f64>,
     /// For true obstacle surface within sonar range, the distance to the nearest believed
     /// obstacle, m (p95); filled when the firmware reports what it believed.
     pub perception_miss_m: Option<f64>,
@@ -242,6 +247,8 @@ pub fn fly(case: &Case, params: Option<&Params>, run: &QuietRun, failed_dir: &Pa
         path_ratio: None,
         reference_s: None,
         guard_periods: 0,
+        cruise_frac: None,
+        held_frac: None,
         perception_miss_m: None,
         perception_miss_mean_m: None,
         perception_false_frac: None,
@@ -295,6 +302,7 @@ fn measure(row: &mut Row, out: &RunOutput, world: &World, shortest: f64, referen
         .iter()
         .filter_map(|v| v.counters.map(|c| c.guard_interventions))
         .sum();
+    (row.cruise_frac, row.held_frac) = time_shares(out);
     // Perception: the worst vehicle's miss, the fleet's mean share of false cells.
     let seen: Vec<_> = vs.iter().filter_map(|v| v.perception).collect();
     row.perception_miss_m = seen.iter().map(|p| p.miss_p95_m).reduce(f64::max);
@@ -326,6 +334,30 @@ fn measure(row: &mut Row, out: &RunOutput, world: &World, shortest: f64, referen
     };
 }
 
+/// A speed command under this, m/s, is a stop.
+const STOPPED_MPS: f64 = 0.05;
+
+/// Where a run's time under way went, over every vehicle's periods in transit, escaping a
+/// trap or guarded (not holding, arrived or loitering): the share commanded at 80 % of v_max
+/// or more, and the share the guard held the vehicle stopped. A run that times out with little
+/// time at cruise was slowed — by turns, the field, the guard — rather than led astray; `None`
+/// with no such period.
+pub fn time_shares(out: &RunOutput) -> (Option<f64>, Option<f64>) {
+    let cruise_at = 0.8 * f64::from(out.params.v_max);
+    let (mut under_way, mut cruise, mut held) = (0u32, 0u32, 0u32);
+    for s in out.vehicles.iter().flat_map(|v| &v.samples) {
+        let guarded = s.mode == "Guarded";
+        if !(guarded || s.mode == "Transit" || s.mode == "Escape") {
+            continue;
+        }
+        under_way += 1;
+        cruise += u32::from(s.speed_cmd >= cruise_at);
+        held += u32::from(guarded && s.speed_cmd < STOPPED_MPS);
+    }
+    let share = |k: u32| (under_way > 0).then(|| f64::from(k) / f64::from(under_way));
+    (share(cruise), share(held))
+}
+
 /// A failed run's plot and scenario file, under `dir/<id>/`, so `hil run` can fly it again.
 fn keep_failure(dir: &Path, case: &Case, text: &str, out: &RunOutput) {
     let d: PathBuf = dir.join(crate::output::file_stem(&case.id()));
@@ -339,6 +371,47 @@ fn keep_failure(dir: &Path, case: &Case, text: &str, out: &RunOutput) {
 mod tests {
     use super::*;
     use worlds::{FAMILIES, MISSION_FAMILIES};
+
+    #[test]
+    fn time_under_way_is_split_into_cruise_and_held_by_the_guard() {
+        let mut out = crate::output::test_support::run();
+        out.params.v_max = 1.0;
+        // Vehicle alpha: 4 periods at cruise, 2 held by the guard, 1 slow, 3 holding (not
+        // under way); vehicle beta: 2 arrived (not under way) and 1 escaping at cruise.
+        let plan = [
+            ("Transit", 0.9),
+            ("Transit", 0.8),
+            ("Escape", 1.0),
+            ("Guarded", 0.85),
+            ("Guarded", 0.0),
+            ("Guarded", 0.01),
+            ("Transit", 0.3),
+            ("Hold(StaleNav)", 0.0),
+            ("Hold(NoMission)", 0.0),
+            ("Hold(StaleNav)", 0.0),
+        ];
+        let set = |v: &mut crate::types::VehicleRecord, plan: &[(&str, f64)]| {
+            v.samples.truncate(plan.len());
+            for (s, (mode, speed)) in v.samples.iter_mut().zip(plan) {
+                s.mode = (*mode).into();
+                s.speed_cmd = *speed;
+            }
+        };
+        set(&mut out.vehicles[0], &plan);
+        set(
+            &mut out.vehicles[1],
+            &[("Arrived", 0.0), ("Arrived", 0.0), ("Escape", 0.95)],
+        );
+        let (cruise, held) = time_shares(&out);
+        // Under way: 7 + 1 periods; at cruise 4 + 1; held 2.
+        assert_eq!(cruise, Some(5.0 / 8.0));
+        assert_eq!(held, Some(2.0 / 8.0));
+        // Nothing under way: no shares.
+        for v in &mut out.vehicles {
+            set(v, &[("Hold(StaleNav)", 0.0)]);
+        }
+        assert_eq!(time_shares(&out), (None, None));
+    }
 
     #[test]
     fn every_family_gives_a_feasible_scenario_the_parser_accepts() {

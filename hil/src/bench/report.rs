@@ -34,6 +34,10 @@ pub struct Line {
     pub median_path_ratio: Option<f64>,
     /// Median periods the guard intervened in.
     pub median_guard_periods: Option<f64>,
+    /// Mean share of the time under way at cruise ([`Row::cruise_frac`]).
+    pub mean_cruise_frac: Option<f64>,
+    /// Mean share of the time under way held stopped by the guard ([`Row::held_frac`]).
+    pub mean_held_frac: Option<f64>,
     /// Median perception miss (p95 per run), m.
     pub median_perception_miss_m: Option<f64>,
     /// Median perception miss (mean per run), m.
@@ -101,9 +105,15 @@ fn median(mut v: Vec<f64>) -> Option<f64> {
     })
 }
 
+fn mean(v: Vec<f64>) -> Option<f64> {
+    let v: Vec<f64> = v.into_iter().filter(|x| x.is_finite()).collect();
+    (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64)
+}
+
 fn line(family: &str, rows: &[&Row]) -> Line {
     let f =
         |get: &dyn Fn(&Row) -> Option<f64>| median(rows.iter().filter_map(|r| get(r)).collect());
+    let m = |get: &dyn Fn(&Row) -> Option<f64>| mean(rows.iter().filter_map(|r| get(r)).collect());
     let collisions = rows.iter().filter(|r| r.collided).count();
     let errors = rows.iter().filter(|r| r.error.is_some()).count();
     Line {
@@ -122,6 +132,8 @@ fn line(family: &str, rows: &[&Row]) -> Line {
         median_time_ratio: f(&|r| r.time_ratio),
         median_path_ratio: f(&|r| r.path_ratio),
         median_guard_periods: f(&|r| Some(f64::from(r.guard_periods))),
+        mean_cruise_frac: m(&|r| r.cruise_frac),
+        mean_held_frac: m(&|r| r.held_frac),
         median_perception_miss_m: f(&|r| r.perception_miss_m),
         median_perception_miss_mean_m: f(&|r| r.perception_miss_mean_m),
         median_perception_false: f(&|r| r.perception_false_frac),
@@ -170,14 +182,17 @@ impl Report {
     /// The tables as markdown.
     pub fn markdown(&self) -> String {
         let opt = |v: Option<f64>, d: usize| v.map_or("–".to_string(), |x| format!("{x:.d$}"));
+        let pct_of =
+            |v: Option<f64>| v.map_or("–".to_string(), |x| format!("{:.0} %", 100.0 * x));
         let mut s = String::new();
         for (config, lines) in &self.tables {
             let _ = writeln!(s, "### {config} ({})\n", self.params);
             s.push_str(
                 "| family | runs | success | collisions | collision rate (95 % bound) | not flown \
                  | clearance worst / median (m) | time / ref (median) | path / shortest (median) \
-                 | guard periods (median) | perception miss mean / p95 (m) | false cells |\n\
-                 |---|---|---|---|---|---|---|---|---|---|---|---|\n",
+                 | guard periods (median) | under way: at cruise / held (mean) \
+                 | perception miss mean / p95 (m) | false cells |\n\
+                 |---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
             );
             for l in lines {
                 let pct = if l.runs > 0 {
@@ -191,7 +206,7 @@ impl Report {
                 let _ = writeln!(
                     s,
                     "| {} | {} | {} ({pct:.0} %) | {} | {bound} | {} | {} / {} | {} | {} | {} | {} / {} \
-                     | {} |",
+                     | {} / {} | {} |",
                     if l.family == "all" {
                         "**all**".to_string()
                     } else {
@@ -206,6 +221,8 @@ impl Report {
                     opt(l.median_time_ratio, 2),
                     opt(l.median_path_ratio, 2),
                     opt(l.median_guard_periods, 0),
+                    pct_of(l.mean_cruise_frac),
+                    pct_of(l.mean_held_frac),
                     opt(l.median_perception_miss_mean_m, 2),
                     opt(l.median_perception_miss_m, 2),
                     opt(l.median_perception_false, 3),
@@ -239,6 +256,8 @@ mod tests {
             path_ratio: Some(1.2),
             reference_s: Some(100.0),
             guard_periods: 3,
+            cruise_frac: Some(if success { 0.8 } else { 0.4 }),
+            held_frac: Some(0.1),
             perception_miss_m: None,
             perception_miss_mean_m: None,
             perception_false_frac: None,
@@ -262,8 +281,11 @@ mod tests {
         assert_eq!(all.worst_clearance_m, Some(-0.3));
         assert_eq!(all.median_clearance_m, Some(1.0));
         assert_eq!(all.median_time_ratio, Some(1.5));
+        // At cruise 80 % of the time in the successes, 40 % in the failure.
+        assert!((all.mean_cruise_frac.unwrap() - 2.0 / 3.0).abs() < 1e-12);
         let md = r.markdown();
         assert!(md.contains("| clutter | 2 | 1 (50 %) | 1 |"), "{md}");
+        assert!(md.contains("| 60 % / 10 % |"), "{md}");
         assert!(
             md.contains("| **all** | 3 | 2 (67 %) | 1 | ≤ 86.5 % |"),
             "{md}"
