@@ -73,6 +73,9 @@ pub struct Belief {
     pub pose: Option<(Vec2, f32)>,
     /// Its obstacle table.
     pub obstacles: Vec<Obstacle>,
+    /// How many sightings each sonar obstacle's track has had, by obstacle id (1: seen once,
+    /// with no velocity yet: the guard's head-on hypothesis may apply).
+    pub sightings: Vec<(u16, u16)>,
     /// The other vehicles it knew of.
     pub agents: Vec<Agent>,
     /// Centres of the believed map cells within the asked radius of the vehicle, m.
@@ -140,6 +143,7 @@ fn belief(fw: &OneThreadRuntime, at_s: f64, radius_m: f32) -> Belief {
         now_ms: fw.now_ms(),
         pose,
         obstacles: p.world().obstacles().to_vec(),
+        sightings: p.tracks().tracks().iter().map(|t| (t.id, t.hits)).collect(),
         agents: p.world().agents().to_vec(),
         cells: pose.map_or(Vec::new(), |(h, _)| believed_cells(fw, h, radius_m)),
         radius_m,
@@ -206,7 +210,12 @@ impl fmt::Display for Belief {
             } else {
                 write!(f, "moving {}", Xy(o.velocity))?;
             }
-            write!(f, ", seen {:.1} s ago", self.ago(o.seen_ms))?;
+            let ago = self.ago(o.seen_ms);
+            match self.sightings.iter().find(|(id, _)| *id == o.id) {
+                Some((_, 1)) => write!(f, ", seen once, {ago:.1} s ago")?,
+                Some((_, n)) => write!(f, ", seen {n} times, last {ago:.1} s ago")?,
+                None => write!(f, ", seen {ago:.1} s ago")?,
+            }
             if let Some((p, _)) = self.pose {
                 write!(f, ", {:.1} m away", o.shape.signed_distance(p))?;
             }

@@ -210,6 +210,11 @@ impl Periodic {
         &self.world
     }
 
+    /// The sonar tracks behind the table's sonar obstacles.
+    pub fn tracks(&self) -> &Tracks {
+        &self.tracks
+    }
+
     /// The planner period in ms, for the board's timer.
     pub fn period_ms(&self) -> u32 {
         (self.planner.params().period_s * 1000.0) as u32
