@@ -77,7 +77,8 @@
 //! half-sweep correction above, 64 with both. Without the confirmation the slow floor gave 54,
 //! but rocks' wander made phantom movers: the flat-fish, whose guard stops for a mover,
 //! reached 270 of 408 worlds against 285, and the shipped survey took 100 s longer, detouring
-//! round a rock.
+//! round a rock. The guard of a slow-turning craft meets such a velocity before it is borne
+//! out ([`Tracks::tentative`], `crate::guidance::guard`, "Slow tracks"); the planner does not.
 //!
 //! *Measured and left as it is.* A slow mover's sightings wander round its course: one crossing
 //! at 0.41 m/s was seen four times, a sweep apart, and its third sighting fell 3.6 m from where
@@ -134,6 +135,10 @@ const STEADY_FRACTION: f32 = 0.25;
 /// Below this speed, m/s, a track's velocity is used only once a sighting has landed where it
 /// predicted (`Track::steady` ≥ 1): a still rock's fits wander at such speeds (module notes).
 const SURE_MPS: f32 = 0.5;
+
+/// From this speed, m/s, a slow velocity not yet borne out is [`Tracks::tentative`]: the
+/// default `min_speed_mps`, below which a track is taken for still.
+const TENTATIVE_MPS: f32 = 0.3;
 
 /// Speed change allowed to a track whose motion is known, between two sightings, m/s: it
 /// widens the gate of a rated track by this much per second since its last update.
@@ -352,6 +357,26 @@ impl Tracks {
     /// largest sighting is the better bound on its extent ([`crate::guidance::guard`]).
     pub fn extent(&self, id: u16) -> Option<f32> {
         self.tracks.iter().find(|t| t.id == id).map(Track::extent_m)
+    }
+
+    /// The velocity track `id`'s sightings suggest but that it is not yet given, m/s: a slow
+    /// one ([`TENTATIVE_MPS`] up to [`SURE_MPS`]) that no sighting has borne out yet, on a
+    /// track that has moved farther than its size since it was first seen (module notes,
+    /// "Slow movers"): the guard meets it on that velocity too (`crate::guidance::guard`).
+    /// Structure never has one.
+    pub fn tentative(&self, id: u16) -> Option<Vec2> {
+        let t = self.tracks.iter().find(|t| t.id == id)?;
+        let speed2 = t.velocity.norm2();
+        let moved = (t.center - t.first).norm() >= crate::math::max(t.extent_m(), 1.0);
+        let slow = (TENTATIVE_MPS * TENTATIVE_MPS..SURE_MPS * SURE_MPS).contains(&speed2);
+        (t.rated && t.steady == 0 && t.largest_dm > 0 && moved && slow).then_some(t.velocity)
+    }
+
+    /// Whether obstacle `id` is a sonar track a sighting of which was sized as a mover: not
+    /// longer than `TrackConfig::max_mover_half_m`, nor a fragment the map's structure runs
+    /// on through.
+    pub fn mover_sized(&self, id: u16) -> bool {
+        self.tracks.iter().any(|t| t.id == id && t.largest_dm > 0)
     }
 
     /// Whether obstacle `id` is a sonar track seen only once so far (no velocity can have been
