@@ -68,10 +68,10 @@
 //! (nothing else believed within [`HEAD_ON_ALONE_M`] of it: a pier's end or a rock's far
 //! face is structure) and is sized as a mover ([`Tracks::mover_sized`]: below) is also
 //! judged as a mover at `head_on_mps` (default 1 m/s, a VideoRay's cruise; 0: off), carried
-//! from its sighting like any mover: if it stands in open
-//! water (nothing within twice that distance), on the course that meets this vehicle's
-//! present velocity first (the worst of the courses it may be on, [`intercept`]); otherwise,
-//! or if at that speed it cannot meet it, on the reciprocal course. Dead ahead the two are
+//! from its sighting like any mover: if it stands in open water (nothing within twice that
+//! distance), on the course that meets this vehicle's present velocity first (the worst of
+//! the courses it may be on, [`intercept`]); otherwise, or if at that speed it cannot meet
+//! it, on the reciprocal course. Dead ahead the two are
 //! the same; off the bow, the reciprocal course alone let two vehicles that had rounded an
 //! obstacle on opposite sides meet at 65°, each seen once 9 m off, neither guard acting.
 //! Generated worlds, own sonar, seeds 0–599 × 3 strategies, contacts: head-on 41 → 26,
@@ -83,14 +83,12 @@
 //! navfn's head-on contacts 2 → 12 in 400 worlds: each vehicle's planner had already chosen
 //! a side.
 //!
-//! *Sized as a mover* means as the tracker sizes one: a circle, or a run of echoes no longer
-//! than a vehicle, and no fragment of believed structure. It asked for a circle; but another
-//! flat-fish is fitted as a bar 3.6 m long, and two of them closing head-on at 0.75 m/s never
-//! took each other for vehicles, and met. Flat-fish at 0.75 m/s, seeds 68–135: head-on
-//! contacts 6 → 4; with its recipe, seeds 0–135: successes 1 161 → 1 176 of 1 632, contacts
-//! 7 → 8. VideoRay, seeds 0–199 × 3 strategies: contacts 21 → 22; crossing and head-on,
-//! seeds 0–599 × 3: 55 → 57, none of them with a bar (a centimetre's change of course meets a
-//! mover elsewhere).
+//! *Sized as a mover* means fitted as a circle, or as a bar that the tracker would let move
+//! and that is no longer than the vehicles the planner knows (`agent_radius_m`, the r₀ of
+//! 000 §III). Only a circle was asked for; but another flat-fish is fitted as a bar 3.6 m long,
+//! and two of them closing head-on at 0.75 m/s never took each other for vehicles, and met
+//! (head-on seed 83). To a VideoRay the rule takes another VideoRay fitted as a bar under
+//! 0.5 m: 14 of 3 600 crossing and head-on runs (seeds 0–599 × 3) change, contacts 55 → 56.
 //!
 //! *Measured and left as it is* (crossing and head-on worlds × 3 strategies, seeds 0–599,
 //! 55 contacts in 3 600 runs as it was then): the meeting course is looked for within
@@ -110,14 +108,12 @@
 //! stopped a braking distance short of where it believed the other to be, and met (head-on
 //! seed 11). The guard of a slow-turning craft, which cannot turn away once the third
 //! sighting comes, meets such a track on that velocity too ([`Tracks::tentative`]); the
-//! planner's field still takes it for still. Flat-fish, seeds 0–135 (1 632 runs), with
-//! the mover-sized test above already in: with its recipe, contacts 8 → 5 and successes
-//! 1 176 → 1 163; at 0.75 m/s (seeds 68–135) 12 → 9 and 678 → 665. Against neither change, at
-//! 0.75 m/s over seeds 0–135: contacts 21 → 13 (head-on 8 → 3), successes 1 347 → 1 338. A
-//! VideoRay's guard does not: when it did, on seeds 0–199 × 3 strategies its median
-//! interventions per run
-//! rose by a quarter (15.5 → 18, 29 → 37, 22 → 27: rocks' wandering fits), navfn's successes
-//! fell 2 222 → 2 213, and no contact went (22 → 22).
+//! planner's field still takes it for still. Both changes together, flat-fish, seeds 0–135
+//! (1 632 runs): with its recipe contacts 7 → 5 and successes 1 161 → 1 164; at 0.75 m/s
+//! contacts 21 → 13 (head-on 8 → 3) and successes 1 347 → 1 331. A VideoRay's guard does
+//! not: when it did, on seeds 0–199 × 3 strategies its median interventions per run rose by
+//! a quarter (15.5 → 18, 29 → 37, 22 → 27: rocks' wandering fits), navfn's successes fell
+//! 2 222 → 2 213, and no contact went (22 → 22).
 //!
 //! Cost: one point-to-segment distance per map cell and still agent per heading tried, samples
 //! every [`SAMPLE_M`] along the segment for the table's still obstacles near enough to matter,
@@ -625,9 +621,12 @@ pub fn check(
                     d <= 2.0 * r_map || d > room + r_map
                 })
         };
-        // Sized as a mover: a circle, or a short run of echoes (another flat-fish is fitted
-        // as a bar 3.6 m long), not a wall's long run nor a fragment of believed structure.
-        let compact = tracks.mover_sized(o.id);
+        // A vehicle's echo is fitted as a circle, or as a bar no longer than the vehicles the
+        // planner knows (another flat-fish as one 3.6 m long); a wall's run as a longer bar.
+        let compact = match o.shape {
+            crate::field::Shape::Circle { .. } => true,
+            _ => tracks.mover_sized(o.id) && o.shape.bounding_radius() <= prm.agent_radius_m,
+        };
         // Farther than it may have come since it was seen and both can close within the
         // horizon, it cannot meet the hull: left out, to save the checks below.
         let reach = (2.0 * cfg.head_on_mps + prm.v_max) * CPA_HORIZON_S;
@@ -1287,12 +1286,18 @@ mod tests {
 
     #[test]
     fn a_short_bar_seen_once_ahead_may_be_a_vehicle_a_long_one_is_structure() {
-        // Another flat-fish seen end-on is fitted as a bar 3.6 m long: 8 m ahead, seen once,
-        // it is met as a vehicle like a round echo. A bar 8 m long is a wall's run.
+        // Another flat-fish is fitted as a bar 3.6 m long: 8 m ahead of a flat-fish, seen
+        // once, it is met as a vehicle like a round echo. A bar 8 m long is a wall's run; to a
+        // VideoRay, whose fellows are 0.5 m circles, so is the short one.
         use crate::sonar::FeatureKind;
-        let (g, p) = (GuardConfig::default(), Params::default());
-        let moving = nav(Vec2::new(1.0, 0.0));
-        for (half, met) in [(1.8, true), (4.0, false)] {
+        let g = GuardConfig::default();
+        let (flatfish, videoray) = (flatfish(), Params::default());
+        let moving = nav(Vec2::new(0.5, 0.0));
+        for (p, half, met) in [
+            (&flatfish, 1.8, true),
+            (&flatfish, 4.0, false),
+            (&videoray, 1.8, false),
+        ] {
             let mut w = World::new();
             let mut tracks = Tracks::default();
             let bar = FeatureKind::Rectangle {
@@ -1302,8 +1307,13 @@ mod tests {
             let f = sighting(Vec2::new(8.0, 0.0), bar, 9000);
             let cfg = crate::guidance::TrackConfig::default();
             tracks.admit(&cfg, 2.5, &mut w, &f, Vec2::ZERO);
-            let v = check(&g, &p, 10_000, &moving, &w, &tracks, cmd(0.0, 1.0), 1.0).1;
-            assert_eq!(v != Verdict::Clear, met, "half-length {half} m: {v:?}");
+            let v = check(&g, p, 10_000, &moving, &w, &tracks, cmd(0.0, 0.5), 1.0).1;
+            let r = p.agent_radius_m;
+            assert_eq!(
+                v != Verdict::Clear,
+                met,
+                "bar {half} m to a {r} m craft: {v:?}"
+            );
         }
     }
 
