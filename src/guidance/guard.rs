@@ -623,7 +623,7 @@ pub fn check(
         };
         // A vehicle's echo is fitted as a circle, or as a bar no longer than the vehicles the
         // planner knows (another flat-fish as one 3.6 m long); a wall's run as a longer bar.
-        let compact = match o.shape {
+        let compact = || match o.shape {
             crate::field::Shape::Circle { .. } => true,
             _ => tracks.mover_sized(o.id) && o.shape.bounding_radius() <= prm.agent_radius_m,
         };
@@ -631,7 +631,7 @@ pub fn check(
         // horizon, it cannot meet the hull: left out, to save the checks below.
         let reach = (2.0 * cfg.head_on_mps + prm.v_max) * CPA_HORIZON_S;
         let within = (c - p).norm() <= reach + extent + prm.agent_radius_m + cfg.hull_margin_m;
-        if ahead && within && compact && tracks.unrated(o.id) && alone(HEAD_ON_ALONE_M) {
+        if ahead && within && compact() && tracks.unrated(o.id) && alone(HEAD_ON_ALONE_M) {
             let a = age(o.seen_ms);
             // In open water it may be on any course; near structure, it comes along it.
             let velocity = alone(2.0 * HEAD_ON_ALONE_M)
