@@ -115,6 +115,23 @@
 //! a quarter (15.5 → 18, 29 → 37, 22 → 27: rocks' wandering fits), navfn's successes fell
 //! 2 222 → 2 213, and no contact went (22 → 22).
 //!
+//! **Lookout.** What was never believed cannot block a motion, and the sonar believes only
+//! what it has looked at. So the command also goes no faster than the vehicle can stop from,
+//! hull and margin included, within the way the sonar last saw clear in its direction
+//! (`crate::sonar::lookout`: of the head's last pass over that bearing, the beam that saw
+//! farthest, its end's distance along the track less how far beyond the hull to the side it
+//! ran), and never slower than `lookout_mps` (0.25 m/s), at which it goes on until the head
+//! comes round. Its direction is the commanded heading, or for a slow-turning craft the
+//! heading it has. A beam that ended on something believed in the way, or where a mover went,
+//! sets no bound: the checks here judge that thing. In transit the head looks ahead once a
+//! sweep and this does not bind; it binds when the vehicle turns with the head, or into a
+//! bearing last looked along from elsewhere. A VideoRay that had spun round at a channel's
+//! bend ran at 1 m/s into the outer wall, whose stretch ahead no beam had looked at for 16 s
+//! (channel 136); so did three more of 7 200 runs (seeds 0–199 × 3 strategies). The latest
+//! beam rather than the farthest of a pass, and a beam's end on a mover or something believed
+//! bounding the speed too: movers' contacts (crossing and head-on, seeds 0–599 × 3) 56 → 63
+//! (another vehicle beside the track stopped a beam short); as here, 59.
+//!
 //! Cost: one point-to-segment distance per map cell and still agent per heading tried, samples
 //! every [`SAMPLE_M`] along the segment for the table's still obstacles near enough to matter,
 //! and one closest-approach per mover ([`TRACK_STEPS`] of them for a slow-turning craft).
@@ -123,6 +140,7 @@ use super::tracks::Tracks;
 use crate::math::{cos, max, min, sin, wrap_angle, Vec2};
 use crate::params::Params;
 use crate::planner::{Command, Mode, NavState};
+use crate::sonar::{lookout, EvidenceMap};
 use crate::world::{Origin, World, MAX_AGENTS, MAX_MAP_CELLS, MAX_OBSTACLES};
 
 /// Spacing of the clearance samples along the segment for table obstacles, m.
@@ -136,6 +154,8 @@ pub const HEAD_ON_CONE_RAD: f32 = crate::math::PI / 3.0;
 /// Such a contact is taken for a vehicle only if nothing else believed is within this of its
 /// extent, m.
 pub const HEAD_ON_ALONE_M: f32 = 2.0;
+/// A beam's end within this of something believed met it, m (module notes, "Lookout").
+pub const LOOKOUT_MET_M: f32 = 1.0;
 /// Steps of the course a slow-turning craft is predicted on over [`CPA_HORIZON_S`] when it is
 /// judged against movers (one a second).
 pub const TRACK_STEPS: usize = 10;
@@ -164,6 +184,9 @@ pub struct GuardConfig {
     /// [`HEAD_ON_CONE_RAD`] of the bow, is also judged as a mover at this speed on the course
     /// that meets this vehicle, or the reciprocal one (module notes).
     pub head_on_mps: f32,
+    /// Slowest speed the lookout holds a vehicle to, m/s (0: no lookout): the speed at which
+    /// it goes where its sonar has not looked lately (module notes, "Lookout").
+    pub lookout_mps: f32,
 }
 
 impl Default for GuardConfig {
@@ -176,6 +199,7 @@ impl Default for GuardConfig {
             max_turn_rad: crate::math::PI / 2.0,
             min_speed: 0.1,
             head_on_mps: 1.0,
+            lookout_mps: 0.25,
         }
     }
 }
@@ -203,6 +227,21 @@ struct Mover {
     velocity: Vec2,
     /// Radius of a circle that covers it, m.
     radius: f32,
+}
+
+impl Mover {
+    /// Whether a beam that ended at `q` may have met this mover: `q` lies within its radius
+    /// and [`LOOKOUT_MET_M`] of where it went over the last [`CPA_HORIZON_S`] (about a sweep:
+    /// the oldest a beam's end ahead can be).
+    fn passed(&self, q: Vec2) -> bool {
+        let back = self.velocity * -CPA_HORIZON_S;
+        let len = back.norm();
+        let reach = self.radius + LOOKOUT_MET_M;
+        match back.normalized(1e-3) {
+            Some(u) => to_segment(q, self.center, u, len) <= reach,
+            None => (q - self.center).norm() <= reach,
+        }
+    }
 }
 
 /// Everything believed, seen from one position.
@@ -529,10 +568,50 @@ fn with_motion(mut cmd: Command, heading: f32, speed: f32, verdict: Verdict) -> 
     cmd
 }
 
+/// The fastest the vehicle at `p` may go along `going` by what `map`'s lookout vouches for
+/// (module notes, "Lookout"): the speed from which it stops, hull and margin included, within
+/// the clear way the last beam cast that way saw, but not under `cfg.lookout_mps`. No bound
+/// (infinity) for a vehicle whose sonar never spoke (it perceives by contacts), or when the
+/// beam ended on something believed in the way or on a mover: the checks here judge that.
+fn lookout(
+    cfg: &GuardConfig,
+    prm: &Params,
+    b: &Believed,
+    map: &EvidenceMap,
+    p: Vec2,
+    going: f32,
+) -> f32 {
+    if cfg.lookout_mps <= 0.0 || !map.lookout().any() {
+        return f32::INFINITY;
+    }
+    let end = map.lookout().end(p, going, map.cell_m());
+    let u = Vec2::from_angle(going);
+    let met = |q: Vec2| {
+        let d = q - p;
+        let in_way = d.dot(u) > 0.0 && libm::fabsf(d.cross(u)) <= b.hull;
+        (in_way && b.world.clearance(q, prm.agent_radius_m) <= LOOKOUT_MET_M)
+            || b.movers.iter().any(|m| m.passed(q))
+    };
+    if end.is_some_and(met) {
+        return f32::INFINITY;
+    }
+    // v·T + v²/2b + margin + hull = clear, solved for v.
+    let (t, a) = (prm.period_s, prm.brake());
+    let room = end.map_or(0.0, |q| {
+        lookout::clear_ahead(q, p, going, b.hull) - cfg.margin_m - b.hull
+    });
+    let v = if room > 0.0 {
+        a * (crate::math::sqrt(t * t + 2.0 * room / a) - t)
+    } else {
+        0.0
+    };
+    max(v, cfg.lookout_mps)
+}
+
 /// Checks `cmd` for the vehicle at `nav` at time `now_ms` against `world`, sonar movers at
-/// the largest extent their `tracks` have seen (see the module notes), and returns the
-/// command to send with the verdict; an evasion asks for no more than `speed_cap` m/s. Holds
-/// pass through unchanged.
+/// the largest extent their `tracks` have seen, and where the sonar has looked (`map`'s
+/// lookout; see the module notes), and returns the command to send with the verdict; an
+/// evasion asks for no more than `speed_cap` m/s. Holds pass through unchanged.
 #[allow(clippy::too_many_arguments)] // the period's inputs, each borrowed as the caller has it
 pub fn check(
     cfg: &GuardConfig,
@@ -541,6 +620,7 @@ pub fn check(
     nav: &NavState,
     world: &World,
     tracks: &Tracks,
+    map: Option<&EvidenceMap>,
     cmd: Command,
     speed_cap: f32,
 ) -> (Command, Verdict) {
@@ -714,15 +794,29 @@ pub fn check(
             return stopped(cmd);
         }
     }
-    let v = cmd.v_set;
-    if v.is_nan() || v <= 0.0 {
+    let planned = cmd.v_set;
+    if planned.is_nan() || planned <= 0.0 {
         if can_stop {
             return (cmd, Verdict::Clear);
         }
         return evade(cfg, &helm, &b, cmd, evasion);
     }
-    // 2. The command as planned.
+    // 2. The command as planned, no faster than the lookout vouches for where it goes.
+    let going = if helm.turns_slowly() {
+        nav.heading
+    } else {
+        cmd.psi_set
+    };
+    let v = map.map_or(planned, |m| {
+        min(planned, lookout(cfg, prm, &b, m, p, going))
+    });
     if !helm.blocked(&b, cmd.psi_set, v) {
+        if v < planned {
+            return (
+                with_motion(cmd, cmd.psi_set, v, Verdict::Slowed),
+                Verdict::Slowed,
+            );
+        }
         return (cmd, Verdict::Clear);
     }
     // 3. The nearest clear heading at the same speed.
@@ -870,7 +964,18 @@ mod tests {
 
     /// The verdict on `c` for a vehicle at rest at the origin at time 0, without tracks.
     fn at_rest(g: &GuardConfig, p: &Params, w: &World, c: Command) -> Verdict {
-        check(g, p, 0, &nav(Vec2::ZERO), w, &Tracks::default(), c, 1.0).1
+        check(
+            g,
+            p,
+            0,
+            &nav(Vec2::ZERO),
+            w,
+            &Tracks::default(),
+            None,
+            c,
+            1.0,
+        )
+        .1
     }
 
     fn nav(v: Vec2) -> NavState {
@@ -879,6 +984,67 @@ mod tests {
             heading: 0.0,
             velocity: v,
         }
+    }
+
+    #[test]
+    fn where_the_sonar_has_not_looked_it_goes_no_faster_than_it_can_stop() {
+        let (g, p) = (GuardConfig::default(), Params::default());
+        let map = EvidenceMap::empty();
+        map.follow(Vec2::ZERO);
+        let at = |g: &GuardConfig, w: &World, m: Option<&EvidenceMap>| {
+            let t = Tracks::default();
+            check(g, &p, 0, &nav(Vec2::ZERO), w, &t, m, cmd(0.0, 1.0), 1.0)
+        };
+        let open = World::new();
+        let go = |m: Option<&EvidenceMap>| at(&g, &open, m);
+        let beam = |look: f32, echoes: &'static [f32]| crate::sonar::Beam {
+            origin: Vec2::ZERO,
+            look: Vec2::from_angle(look),
+            range_m: 30.0,
+            blank_m: 0.0,
+            echoes,
+            seconded: 0,
+        };
+        // A sonar that never spoke (perception by contacts): as planned.
+        assert_eq!(go(Some(&map)).1, Verdict::Clear);
+        // Looked sideways only: the lookout's speed, and it says so.
+        map.observe(&beam(1.5, &[]));
+        let (out, v) = go(Some(&map));
+        assert_eq!(
+            (v, out.mode, out.v_set),
+            (Verdict::Slowed, Mode::Guarded, g.lookout_mps)
+        );
+        // Ahead, nothing heard to 30 m: as planned.
+        map.observe(&beam(0.0, &[]));
+        assert_eq!(go(Some(&map)), (cmd(0.0, 1.0), Verdict::Clear));
+        // The head's next pass over the sector ahead meets an echo 1.5 m off (not yet in the
+        // world the guard checks): slower than planned, stopping short of it with the hull and
+        // the margin.
+        map.observe(&beam(-1.5, &[]));
+        map.observe(&beam(0.0, &[1.5]));
+        let (out, v) = go(Some(&map));
+        assert_eq!(v, Verdict::Slowed);
+        assert!(
+            out.v_set > g.lookout_mps && out.v_set < 1.0,
+            "{}",
+            out.v_set
+        );
+        let stop = out.v_set * p.period_s + out.v_set * out.v_set / (2.0 * p.brake());
+        assert!(stop + g.margin_m + p.agent_radius_m + g.hull_margin_m <= 1.5 + 0.5);
+        // Once what it met is believed (a rock just beyond the echo), the check against that
+        // judges the way, and the command is clear of it: as planned.
+        let mut rock = World::new();
+        let r = Shape::circle(Vec2::new(2.6, 0.0), 0.4).unwrap();
+        rock.upsert_obstacle(Obstacle::new(1, r, 2.5, Origin::Charted, 0).unwrap())
+            .unwrap();
+        assert_eq!(at(&g, &rock, Some(&map)), (cmd(0.0, 1.0), Verdict::Clear));
+        // No map (perception by contacts), or the lookout off: as planned.
+        assert_eq!(go(None).1, Verdict::Clear);
+        let off = GuardConfig {
+            lookout_mps: 0.0,
+            ..g
+        };
+        assert_eq!(at(&off, &open, Some(&map)).1, Verdict::Clear);
     }
 
     /// A wall across +x at `x` m, as map cells every 0.5 m.
@@ -898,6 +1064,7 @@ mod tests {
             &nav(Vec2::ZERO),
             &w,
             &Tracks::default(),
+            None,
             cmd(0.0, 1.0),
             1.0,
         );
@@ -915,6 +1082,7 @@ mod tests {
             &nav(Vec2::ZERO),
             &w,
             &Tracks::default(),
+            None,
             cmd(0.0, 1.0),
             1.0,
         );
@@ -934,6 +1102,7 @@ mod tests {
             &nav(Vec2::new(1.0, 0.0)),
             &w,
             &Tracks::default(),
+            None,
             cmd(0.0, 1.0),
             1.0,
         );
@@ -956,6 +1125,7 @@ mod tests {
             &nav(Vec2::ZERO),
             &w,
             &Tracks::default(),
+            None,
             cmd(0.0, 1.0),
             1.0,
         );
@@ -976,6 +1146,7 @@ mod tests {
             &nav(Vec2::ZERO),
             &w,
             &Tracks::default(),
+            None,
             cmd(crate::math::PI, 1.0),
             1.0,
         );
@@ -987,6 +1158,7 @@ mod tests {
             &nav(Vec2::ZERO),
             &w,
             &Tracks::default(),
+            None,
             cmd(0.0, 0.5),
             1.0,
         );
@@ -1006,6 +1178,7 @@ mod tests {
             &nav(Vec2::ZERO),
             &w,
             &Tracks::default(),
+            None,
             cmd(0.0, 1.0),
             1.0,
         );
@@ -1020,6 +1193,7 @@ mod tests {
             &nav(Vec2::ZERO),
             &w,
             &Tracks::default(),
+            None,
             cmd(0.0, 1.0),
             1.0,
         );
@@ -1074,7 +1248,8 @@ mod tests {
             brake_mps2: 0.1,
             ..Params::default()
         };
-        let verdict = |p: &Params| check(&g, p, 0, &moving, &w, &Tracks::default(), north, 1.0).1;
+        let verdict =
+            |p: &Params| check(&g, p, 0, &moving, &w, &Tracks::default(), None, north, 1.0).1;
         assert_eq!(verdict(&quick), Verdict::Clear);
         assert_ne!(verdict(&slow), Verdict::Clear);
     }
@@ -1093,6 +1268,7 @@ mod tests {
             &nav(Vec2::new(1.0, 0.0)),
             &w,
             &Tracks::default(),
+            None,
             cmd(0.0, 1.0),
             1.0,
         );
@@ -1107,6 +1283,7 @@ mod tests {
             &nav(Vec2::ZERO),
             &w,
             &Tracks::default(),
+            None,
             cmd(0.0, 0.0),
             1.0,
         );
@@ -1158,11 +1335,22 @@ mod tests {
             &moving,
             &w,
             &Tracks::default(),
+            None,
             cmd(0.0, 1.0),
             1.0,
         );
         assert_eq!(last_fit.1, Verdict::Clear);
-        let largest = check(&g, &p, 27_000, &moving, &w, &tracks, cmd(0.0, 1.0), 1.0);
+        let largest = check(
+            &g,
+            &p,
+            27_000,
+            &moving,
+            &w,
+            &tracks,
+            None,
+            cmd(0.0, 1.0),
+            1.0,
+        );
         assert_ne!(largest.1, Verdict::Clear, "{:?}", largest.0);
     }
 
@@ -1225,13 +1413,24 @@ mod tests {
         let (g, p) = (GuardConfig::default(), Params::default());
         let moving = nav(Vec2::new(1.0, 0.0));
         let (w, once) = sonar_contacts(&[(8.0, 0.0, 0.3)], false);
-        let (out, v) = check(&g, &p, 10_000, &moving, &w, &once, cmd(0.0, 1.0), 1.0);
+        let (out, v) = check(&g, &p, 10_000, &moving, &w, &once, None, cmd(0.0, 1.0), 1.0);
         assert_eq!(v, Verdict::Turned, "{out:?}");
         assert!(out.psi_set.abs() >= g.turn_step_rad, "{}", out.psi_set);
         // Seen twice in one place, it stands still: 8 m ahead is beyond the braking distance.
         let (w, twice) = sonar_contacts(&[(8.0, 0.0, 0.3)], true);
         assert_eq!(
-            check(&g, &p, 10_000, &moving, &w, &twice, cmd(0.0, 1.0), 1.0).1,
+            check(
+                &g,
+                &p,
+                10_000,
+                &moving,
+                &w,
+                &twice,
+                None,
+                cmd(0.0, 1.0),
+                1.0
+            )
+            .1,
             Verdict::Clear
         );
         // Off: as before.
@@ -1241,7 +1440,18 @@ mod tests {
         };
         let (w, once) = sonar_contacts(&[(8.0, 0.0, 0.3)], false);
         assert_eq!(
-            check(&off, &p, 10_000, &moving, &w, &once, cmd(0.0, 1.0), 1.0).1,
+            check(
+                &off,
+                &p,
+                10_000,
+                &moving,
+                &w,
+                &once,
+                None,
+                cmd(0.0, 1.0),
+                1.0
+            )
+            .1,
             Verdict::Clear
         );
     }
@@ -1254,7 +1464,7 @@ mod tests {
         let moving = nav(Vec2::new(1.0, 0.0));
         let at = Vec2::from_angle(crate::math::PI / 6.0) * 9.0;
         let (w, once) = sonar_contacts(&[(at.x, at.y, 0.3)], false);
-        let (out, v) = check(&g, &p, 10_000, &moving, &w, &once, cmd(0.0, 1.0), 1.0);
+        let (out, v) = check(&g, &p, 10_000, &moving, &w, &once, None, cmd(0.0, 1.0), 1.0);
         assert_ne!(v, Verdict::Clear, "{out:?}");
         // The course: from the contact to where we will be, at 1 m/s.
         let u = intercept(-at, Vec2::new(1.0, 0.0), 1.0).unwrap();
@@ -1275,12 +1485,12 @@ mod tests {
         // Astern, or abeam beyond the cone: no vehicle on the reciprocal course can reach us.
         for at in [(-8.0, 0.0), (0.5, 8.0)] {
             let (w, once) = sonar_contacts(&[(at.0, at.1, 0.3)], false);
-            let v = check(&g, &p, 10_000, &moving, &w, &once, cmd(0.0, 1.0), 1.0).1;
+            let v = check(&g, &p, 10_000, &moving, &w, &once, None, cmd(0.0, 1.0), 1.0).1;
             assert_eq!(v, Verdict::Clear, "{at:?}");
         }
         // Against another believed obstacle (a pier's end, a rock's far face) it is structure.
         let (w, once) = sonar_contacts(&[(8.0, 0.0, 0.3), (10.0, 2.2, 1.0)], false);
-        let v = check(&g, &p, 10_000, &moving, &w, &once, cmd(0.0, 1.0), 1.0).1;
+        let v = check(&g, &p, 10_000, &moving, &w, &once, None, cmd(0.0, 1.0), 1.0).1;
         assert_eq!(v, Verdict::Clear);
     }
 
@@ -1307,7 +1517,18 @@ mod tests {
             let f = sighting(Vec2::new(8.0, 0.0), bar, 9000);
             let cfg = crate::guidance::TrackConfig::default();
             tracks.admit(&cfg, 2.5, &mut w, &f, Vec2::ZERO);
-            let v = check(&g, p, 10_000, &moving, &w, &tracks, cmd(0.0, 0.5), 1.0).1;
+            let v = check(
+                &g,
+                p,
+                10_000,
+                &moving,
+                &w,
+                &tracks,
+                None,
+                cmd(0.0, 0.5),
+                1.0,
+            )
+            .1;
             let r = p.agent_radius_m;
             assert_eq!(
                 v != Verdict::Clear,
@@ -1343,10 +1564,10 @@ mod tests {
         let v = tracks.tentative(o.id).unwrap();
         assert!((v - Vec2::new(0.0, -0.4)).norm() < 0.05, "{v:?}");
         let go = cmd(0.0, 0.5);
-        let (out, verdict) = check(&g, &flatfish, 10_000, &moving, &w, &tracks, go, 0.567);
+        let (out, verdict) = check(&g, &flatfish, 10_000, &moving, &w, &tracks, None, go, 0.567);
         assert_ne!(verdict, Verdict::Clear, "{out:?}");
         let videoray = Params::default();
-        let v = check(&g, &videoray, 10_000, &moving, &w, &tracks, go, 1.0).1;
+        let v = check(&g, &videoray, 10_000, &moving, &w, &tracks, None, go, 1.0).1;
         assert_eq!(v, Verdict::Clear);
     }
 
@@ -1364,6 +1585,7 @@ mod tests {
                 &nav(Vec2::ZERO),
                 &w,
                 &Tracks::default(),
+                None,
                 cmd(0.0, 1.0),
                 1.0
             )
@@ -1391,6 +1613,7 @@ mod tests {
             &nav(Vec2::ZERO),
             &w,
             &Tracks::default(),
+            None,
             c,
             1.0,
         );
@@ -1406,7 +1629,7 @@ mod tests {
         };
         let go = cmd(out.psi_set, 0.5);
         assert_eq!(
-            check(&g, &prm, 0, &turned, &w, &Tracks::default(), go, 1.0).1,
+            check(&g, &prm, 0, &turned, &w, &Tracks::default(), None, go, 1.0).1,
             Verdict::Clear
         );
         // Without a target apart from where it is, it keeps the planner's heading.
@@ -1417,6 +1640,7 @@ mod tests {
             &nav(Vec2::ZERO),
             &w,
             &Tracks::default(),
+            None,
             cmd(0.0, 0.5),
             1.0,
         );
@@ -1435,6 +1659,7 @@ mod tests {
                 &nav(Vec2::ZERO),
                 &w,
                 &Tracks::default(),
+                None,
                 hold,
                 1.0
             )
@@ -1453,6 +1678,7 @@ mod tests {
                 &nav(Vec2::ZERO),
                 &w,
                 &Tracks::default(),
+                None,
                 cmd(0.0, 1.0),
                 1.0
             )

@@ -335,6 +335,7 @@ impl Periodic {
             now_ms,
             nav,
             (bg.scanlines, bg.swept_mrad, bg.head_mrad),
+            map,
             cost,
         );
         self.last = Some((now_ms, cmd));
@@ -428,6 +429,7 @@ impl Periodic {
         now_ms: u64,
         nav: Option<NavSample>,
         sonar: (u32, u32, u32),
+        map: Option<&EvidenceMap>,
         cost: &mut impl FnMut() -> u32,
     ) -> Command {
         let params = *self.planner.params();
@@ -486,6 +488,7 @@ impl Periodic {
                     &state,
                     &self.world,
                     &self.tracks,
+                    map,
                     c,
                     bound.unwrap_or(params.v_max),
                 );

@@ -56,6 +56,7 @@
 
 use core::sync::atomic::{AtomicI32, AtomicU32, AtomicU8, Ordering};
 
+use super::lookout::Lookout;
 use crate::math::{min, Vec2};
 
 /// Cells per side of the window.
@@ -227,6 +228,8 @@ pub struct EvidenceMap {
     /// Whether the window has been placed (the first pose places it).
     placed: AtomicU8,
     cfg: EvidenceConfig,
+    /// Where each beam last looked ([`Lookout`]), written with the cells.
+    lookout: Lookout,
 }
 
 /// A believed-occupied cell near the vehicle.
@@ -284,6 +287,7 @@ impl EvidenceMap {
             seq: AtomicU32::new(0),
             placed: AtomicU8::new(0),
             cfg: DEFAULT,
+            lookout: Lookout::new(),
         }
     }
 
@@ -347,6 +351,20 @@ impl EvidenceMap {
         for c in &self.cells {
             c.store(0, Ordering::Relaxed);
         }
+        self.lookout.clear();
+    }
+
+    /// Where the sonar last looked in each direction, and how far it saw clear.
+    pub fn lookout(&self) -> &Lookout {
+        &self.lookout
+    }
+
+    /// How far ahead of `p` on `heading` the last beam cast that way saw clear for a hull
+    /// `beside_m` wide either side, m ([`Lookout::clear_ahead`] on this map's cells); `None` if
+    /// the sonar never looked that way.
+    pub fn clear_ahead(&self, p: Vec2, heading: f32, beside_m: f32) -> Option<f32> {
+        self.lookout
+            .clear_ahead(p, heading, beside_m, self.cfg.cell_m)
     }
 
     // ---- The writer's side (background) ----
@@ -432,6 +450,9 @@ impl EvidenceMap {
             return;
         }
         let silent = beam.echoes.is_empty();
+        let seen_to = beam.echoes.first().copied().unwrap_or(beam.range_m);
+        self.lookout
+            .record(beam.origin, beam.look, seen_to, cfg.cell_m);
         let free_to = match beam.echoes.first() {
             Some(&r) => r - cfg.stop_short_m,
             None => min(beam.range_m, cfg.free_range_m),

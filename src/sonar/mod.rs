@@ -83,6 +83,7 @@ pub mod detect;
 pub mod evidence;
 mod extractor;
 mod fit;
+pub mod lookout;
 pub mod ping360;
 
 use crate::field::{Shape, ShapeError};
@@ -96,6 +97,7 @@ pub use evidence::{
     Beam, EvidenceConfig, EvidenceError, EvidenceMap, Near, Window, MAP_SIDE, MAX_REACH_CELLS,
 };
 pub use extractor::Extractor;
+pub use lookout::{Lookout, LOOK_SECTORS};
 
 /// Largest accepted vehicle coordinate, m (100 km, as the planner's limit: `f32` still resolves
 /// 8 mm there).
