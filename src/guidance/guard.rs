@@ -122,15 +122,16 @@
 //! farthest, its end's distance along the track less how far beyond the hull to the side it
 //! ran), and never slower than `lookout_mps` (0.25 m/s), at which it goes on until the head
 //! comes round. Its direction is the commanded heading, or for a slow-turning craft the
-//! heading it has. A beam that ended on something believed in the way, or where a mover went,
-//! sets no bound: the checks here judge that thing. In transit the head looks ahead once a
-//! sweep and this does not bind; it binds when the vehicle turns with the head, or into a
-//! bearing last looked along from elsewhere. A VideoRay that had spun round at a channel's
-//! bend ran at 1 m/s into the outer wall, whose stretch ahead no beam had looked at for 16 s
-//! (channel 136); so did three more of 7 200 runs (seeds 0–199 × 3 strategies). The latest
-//! beam rather than the farthest of a pass, and a beam's end on a mover or something believed
-//! bounding the speed too: movers' contacts (crossing and head-on, seeds 0–599 × 3) 56 → 63
-//! (another vehicle beside the track stopped a beam short); as here, 59.
+//! heading it has. In transit the head looks ahead once a sweep and this does not bind; it
+//! binds when the vehicle turns with the head, or into a bearing last looked along from
+//! elsewhere. A VideoRay that had spun round at a channel's bend ran at 1 m/s into the outer
+//! wall, whose stretch ahead no beam had looked at for 16 s (channel 136); so did four more of
+//! 10 800 runs (seeds 0–299 × 3 strategies). Taking the latest beam of a bearing rather than the
+//! farthest of the head's last pass: contacts with movers (crossing and head-on, seeds 0–599 ×
+//! 3) 56 → 62 (another vehicle beside the track stops a few beams short). Setting no bound
+//! when the beam ended on something believed in the way, or on a mover's recent track (the
+//! checks here judge those), changed no mover contact, and let a navfn VideoRay run into a
+//! wall whose first echo the head-on hypothesis had made a mover (channel 110).
 //!
 //! Cost: one point-to-segment distance per map cell and still agent per heading tried, samples
 //! every [`SAMPLE_M`] along the segment for the table's still obstacles near enough to matter,
@@ -140,7 +141,7 @@ use super::tracks::Tracks;
 use crate::math::{cos, max, min, sin, wrap_angle, Vec2};
 use crate::params::Params;
 use crate::planner::{Command, Mode, NavState};
-use crate::sonar::{lookout, EvidenceMap};
+use crate::sonar::EvidenceMap;
 use crate::world::{Origin, World, MAX_AGENTS, MAX_MAP_CELLS, MAX_OBSTACLES};
 
 /// Spacing of the clearance samples along the segment for table obstacles, m.
@@ -154,8 +155,6 @@ pub const HEAD_ON_CONE_RAD: f32 = crate::math::PI / 3.0;
 /// Such a contact is taken for a vehicle only if nothing else believed is within this of its
 /// extent, m.
 pub const HEAD_ON_ALONE_M: f32 = 2.0;
-/// A beam's end within this of something believed met it, m (module notes, "Lookout").
-pub const LOOKOUT_MET_M: f32 = 1.0;
 /// Steps of the course a slow-turning craft is predicted on over [`CPA_HORIZON_S`] when it is
 /// judged against movers (one a second).
 pub const TRACK_STEPS: usize = 10;
@@ -227,21 +226,6 @@ struct Mover {
     velocity: Vec2,
     /// Radius of a circle that covers it, m.
     radius: f32,
-}
-
-impl Mover {
-    /// Whether a beam that ended at `q` may have met this mover: `q` lies within its radius
-    /// and [`LOOKOUT_MET_M`] of where it went over the last [`CPA_HORIZON_S`] (about a sweep:
-    /// the oldest a beam's end ahead can be).
-    fn passed(&self, q: Vec2) -> bool {
-        let back = self.velocity * -CPA_HORIZON_S;
-        let len = back.norm();
-        let reach = self.radius + LOOKOUT_MET_M;
-        match back.normalized(1e-3) {
-            Some(u) => to_segment(q, self.center, u, len) <= reach,
-            None => (q - self.center).norm() <= reach,
-        }
-    }
 }
 
 /// Everything believed, seen from one position.
@@ -570,13 +554,12 @@ fn with_motion(mut cmd: Command, heading: f32, speed: f32, verdict: Verdict) -> 
 
 /// The fastest the vehicle at `p` may go along `going` by what `map`'s lookout vouches for
 /// (module notes, "Lookout"): the speed from which it stops, hull and margin included, within
-/// the clear way the last beam cast that way saw, but not under `cfg.lookout_mps`. No bound
-/// (infinity) for a vehicle whose sonar never spoke (it perceives by contacts), or when the
-/// beam ended on something believed in the way or on a mover: the checks here judge that.
+/// the clear way the sonar last saw that way, but not under `cfg.lookout_mps`. No bound
+/// (infinity) for a vehicle whose sonar never spoke: it perceives by contacts.
 fn lookout(
     cfg: &GuardConfig,
     prm: &Params,
-    b: &Believed,
+    hull: f32,
     map: &EvidenceMap,
     p: Vec2,
     going: f32,
@@ -584,22 +567,10 @@ fn lookout(
     if cfg.lookout_mps <= 0.0 || !map.lookout().any() {
         return f32::INFINITY;
     }
-    let end = map.lookout().end(p, going, map.cell_m());
-    let u = Vec2::from_angle(going);
-    let met = |q: Vec2| {
-        let d = q - p;
-        let in_way = d.dot(u) > 0.0 && libm::fabsf(d.cross(u)) <= b.hull;
-        (in_way && b.world.clearance(q, prm.agent_radius_m) <= LOOKOUT_MET_M)
-            || b.movers.iter().any(|m| m.passed(q))
-    };
-    if end.is_some_and(met) {
-        return f32::INFINITY;
-    }
+    let clear = map.clear_ahead(p, going, hull);
     // v·T + v²/2b + margin + hull = clear, solved for v.
     let (t, a) = (prm.period_s, prm.brake());
-    let room = end.map_or(0.0, |q| {
-        lookout::clear_ahead(q, p, going, b.hull) - cfg.margin_m - b.hull
-    });
+    let room = clear.map_or(0.0, |c| c - cfg.margin_m - hull);
     let v = if room > 0.0 {
         a * (crate::math::sqrt(t * t + 2.0 * room / a) - t)
     } else {
@@ -808,7 +779,7 @@ pub fn check(
         cmd.psi_set
     };
     let v = map.map_or(planned, |m| {
-        min(planned, lookout(cfg, prm, &b, m, p, going))
+        min(planned, lookout(cfg, prm, b.hull, m, p, going))
     });
     if !helm.blocked(&b, cmd.psi_set, v) {
         if v < planned {
@@ -1031,13 +1002,6 @@ mod tests {
         );
         let stop = out.v_set * p.period_s + out.v_set * out.v_set / (2.0 * p.brake());
         assert!(stop + g.margin_m + p.agent_radius_m + g.hull_margin_m <= 1.5 + 0.5);
-        // Once what it met is believed (a rock just beyond the echo), the check against that
-        // judges the way, and the command is clear of it: as planned.
-        let mut rock = World::new();
-        let r = Shape::circle(Vec2::new(2.6, 0.0), 0.4).unwrap();
-        rock.upsert_obstacle(Obstacle::new(1, r, 2.5, Origin::Charted, 0).unwrap())
-            .unwrap();
-        assert_eq!(at(&g, &rock, Some(&map)), (cmd(0.0, 1.0), Verdict::Clear));
         // No map (perception by contacts), or the lookout off: as planned.
         assert_eq!(go(None).1, Verdict::Clear);
         let off = GuardConfig {
