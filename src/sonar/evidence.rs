@@ -359,9 +359,9 @@ impl EvidenceMap {
         &self.lookout
     }
 
-    /// How far ahead of `p` on `heading` the last beam cast that way saw clear for a hull
-    /// `beside_m` wide either side, m ([`Lookout::clear_ahead`] on this map's cells); `None` if
-    /// the sonar never looked that way.
+    /// How far ahead of `p` on `heading` the beam the lookout keeps for that bearing saw clear
+    /// for a hull `beside_m` wide either side, m ([`Lookout::clear_ahead`] on this map's cells);
+    /// `None` if the sonar never looked that way.
     pub fn clear_ahead(&self, p: Vec2, heading: f32, beside_m: f32) -> Option<f32> {
         self.lookout
             .clear_ahead(p, heading, beside_m, self.cfg.cell_m)

@@ -39,7 +39,8 @@ pub const LOOK_SECTORS: usize = 32;
 /// Where the sonar last looked in each direction (module notes).
 #[derive(Debug)]
 pub struct Lookout {
-    /// Per sector, the last beam's end as wrapping cell indices: column low, row high.
+    /// Per sector, the kept beam's end (the farthest-seeing of the last pass) as wrapping cell
+    /// indices: column low, row high.
     ends: [AtomicU32; LOOK_SECTORS],
     /// Bit k: sector k has been looked along.
     looked: AtomicU32,
@@ -104,7 +105,7 @@ impl Lookout {
         let k = sector(look.angle());
         let same_pass = self.last.swap(k as u32, Ordering::Relaxed) == k as u32;
         let farther = self
-            .end(origin, look.angle(), cell_m)
+            .end_in(k, origin, cell_m)
             .is_none_or(|old| (old - origin).norm() < clear_m);
         if same_pass && !farther {
             return;
@@ -117,11 +118,15 @@ impl Lookout {
         }
     }
 
-    /// Where the last beam cast along `heading` ended, as seen from `p` (the end nearest `p`
-    /// of those its cell indices stand for); `None` if the sonar never looked that way.
-    /// `cell_m` as in [`Lookout::record`].
+    /// Where the beam kept for `heading`'s bearing (the farthest-seeing of the head's last pass)
+    /// ended, as seen from `p` (the end nearest `p` of those its cell indices stand for);
+    /// `None` if the sonar never looked that way. `cell_m` as in [`Lookout::record`].
     pub fn end(&self, p: Vec2, heading: f32, cell_m: f32) -> Option<Vec2> {
-        let k = sector(heading);
+        self.end_in(sector(heading), p, cell_m)
+    }
+
+    /// [`Lookout::end`] for sector `k`.
+    fn end_in(&self, k: usize, p: Vec2, cell_m: f32) -> Option<Vec2> {
         if self.looked.load(Ordering::Acquire) & bit(k) == 0 || !p.is_finite() {
             return None;
         }
@@ -134,7 +139,7 @@ impl Lookout {
         Some(corner + Vec2::new(f32::from(di) + 0.5, f32::from(dj) + 0.5) * cell_m)
     }
 
-    /// How far ahead of `p`, going along heading `heading`, the last beam cast that way saw
+    /// How far ahead of `p`, going along heading `heading`, the beam kept for that bearing saw
     /// clear, m ([`clear_ahead`] of its [`Lookout::end`]); `None` if the sonar never looked
     /// that way.
     pub fn clear_ahead(&self, p: Vec2, heading: f32, beside_m: f32, cell_m: f32) -> Option<f32> {
