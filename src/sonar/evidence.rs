@@ -228,7 +228,7 @@ pub struct EvidenceMap {
     /// Whether the window has been placed (the first pose places it).
     placed: AtomicU8,
     cfg: EvidenceConfig,
-    /// Where each beam last looked ([`Lookout`]), written with the cells.
+    /// How far the sonar last saw clear along each bearing ([`Lookout`]), written with the cells.
     lookout: Lookout,
 }
 
