@@ -54,11 +54,17 @@
 //! motion above is blocked and stopping is too, the guard **evades**: the clear heading nearest
 //! the commanded one, all round, at the fastest speed it may ask for (the present speed plus
 //! one period at F_max, within `speed_cap`: v_max, or less while navigation is late or the
-//! sonar loses pings), then half of it. A slow-turning craft does not evade; it stops: at
-//! 2.6°/s the flat-fish moves sideways 0.4 m in the 7 s two of them take to close from 8 m,
-//! while stopping halves the closing speed and leaves the other's guard room to stop too
-//! (flat-fish bench with its recipe, seeds 0–67: contacts 8 → 5, successes 552 → 553 of 816;
-//! head-on 6 → 3).
+//! sonar loses pings), then half of it. A slow-turning craft stops unless stopping is run
+//! into *and* a motion it can make is clear: at 2.6°/s the flat-fish moves sideways 0.4 m in
+//! the 7 s two of them take to close from 8 m, while stopping halves the closing speed and
+//! leaves the other's guard room to stop too (flat-fish bench with its recipe, seeds 0–67:
+//! contacts 8 → 5, successes 552 → 553 of 816; head-on 6 → 3). But a craft that always
+//! stopped sat in the way of crossing traffic that does not stop: a mover overtaking it at
+//! 0.36 m/s from astern, which at 0.75 m/s it would have outrun, ran into it while it turned
+//! on the spot (crossing seed 37). Going on when going on is clear (crossing and head-on,
+//! own sonar, recipe, seeds 0–99: contacts 5 → 3, successes 179 → 182 of 200; at 0.75 m/s,
+//! seeds 34–133: 15 → 11, 174 → 175; all families, seeds 0–33: 296 → 302 of 408, 0
+//! contacts).
 //!
 //! **Head-on.** A sonar contact seen once has no velocity yet, and the next look is a sweep
 //! (9 s) away. Another vehicle meeting this one head-on closes at twice the cruise speed: seen
@@ -739,9 +745,19 @@ pub fn check(
         heading: nav.heading,
         speed,
     };
-    // A mover may run into a vehicle that stops: then stopping is no way out.
-    let can_stop = helm.turns_slowly() || helm.mover_margin(&b, cmd.psi_set, 0.0) >= 0.0;
     let evasion = min(speed_cap, min(prm.v_max, speed + prm.f_max * prm.period_s));
+    // A mover may run into a vehicle that stops: then stopping is no way out — unless, for a
+    // craft that turns slowly, no motion it can make is clear either (module notes, movers).
+    // The slow craft's way out is looked for once, here, and only when it is needed.
+    let run_into = helm.mover_margin(&b, cmd.psi_set, 0.0) < 0.0;
+    let slow_escape = (run_into && helm.turns_slowly())
+        .then(|| escape(cfg, &helm, &b, cmd.psi_set, evasion))
+        .flatten();
+    let can_stop = !run_into || (helm.turns_slowly() && slow_escape.is_none());
+    let evade = |cmd: Command| match slow_escape {
+        Some((a, v)) => (with_motion(cmd, a, v, Verdict::Turned), Verdict::Turned),
+        None => evade(cfg, &helm, &b, cmd, evasion),
+    };
     // 1. Where the vehicle is going now, within its braking distance (a slow-turning craft
     //    turning towards the commanded heading as it brakes).
     if let Some(u) = nav.velocity.normalized(1e-3) {
@@ -770,7 +786,7 @@ pub fn check(
         if can_stop {
             return (cmd, Verdict::Clear);
         }
-        return evade(cfg, &helm, &b, cmd, evasion);
+        return evade(cmd);
     }
     // 2. The command as planned, no faster than the lookout vouches for where it goes.
     let going = if helm.turns_slowly() {
@@ -818,7 +834,7 @@ pub fn check(
             Verdict::Stopped,
         );
     }
-    evade(cfg, &helm, &b, cmd, evasion)
+    evade(cmd)
 }
 
 /// The heading within ±`max_turn` of `psi`, nearest first, that is clear at `v`.
@@ -841,6 +857,26 @@ fn turns_from(cfg: &GuardConfig, psi: f32, max_turn: f32) -> impl Iterator<Item 
     (1..=turns).flat_map(move |k| [1.0, -1.0].map(|side| psi + side * k as f32 * step))
 }
 
+/// The clear motion nearest `psi`, all round, at `speed` and then half of it, as (heading,
+/// speed); `None` if none is clear (or `speed` is not a speed).
+fn escape(
+    cfg: &GuardConfig,
+    helm: &Helm,
+    b: &Believed,
+    psi: f32,
+    speed: f32,
+) -> Option<(f32, f32)> {
+    if speed.is_nan() || speed <= 0.0 {
+        return None;
+    }
+    [speed, 0.5 * speed].into_iter().find_map(|v| {
+        if !helm.blocked(b, psi, v) {
+            return Some((psi, v));
+        }
+        nearest_clear(cfg, helm, b, psi, v, crate::math::PI).map(|a| (a, v))
+    })
+}
+
 /// A mover closes in and stopping will not do: the clear heading nearest the command, all
 /// round, at `speed` and then half of it; if none is clear, the heading at `speed` that
 /// keeps farthest from the movers without running into anything still (next period, a little
@@ -856,16 +892,8 @@ fn evade(
     if speed.is_nan() || speed <= 0.0 {
         return stopped(cmd);
     }
-    for v in [speed, 0.5 * speed] {
-        if !helm.blocked(b, cmd.psi_set, v) {
-            return (
-                with_motion(cmd, cmd.psi_set, v, Verdict::Turned),
-                Verdict::Turned,
-            );
-        }
-        if let Some(a) = nearest_clear(cfg, helm, b, cmd.psi_set, v, crate::math::PI) {
-            return (with_motion(cmd, a, v, Verdict::Turned), Verdict::Turned);
-        }
+    if let Some((a, v)) = escape(cfg, helm, b, cmd.psi_set, speed) {
+        return (with_motion(cmd, a, v, Verdict::Turned), Verdict::Turned);
     }
     let step = max(cfg.turn_step_rad, 1e-3);
     let best = (0..min(2.0 * crate::math::PI / step, 128.0) as u32)
@@ -1258,14 +1286,27 @@ mod tests {
         assert_eq!(at_rest(&g, &p, &w, cmd(0.0, 1.0)), Verdict::Clear);
         let w = mover(Vec2::new(-8.0, -6.0), Vec2::new(0.0, 1.0), 0);
         assert_eq!(at_rest(&g, &p, &w, cmd(0.0, 1.0)), Verdict::Clear);
-        // A craft that turns at 2.6°/s (the flat-fish) cannot evade by turning: it stops.
-        let slow = Params {
-            turn_rate_rps: 0.046,
-            ..p
-        };
-        // (Clear passes the command, a stop, through unchanged.)
-        let w = mover(Vec2::new(0.0, -6.0), Vec2::new(0.0, 1.0), 0);
+        // A craft that turns at 2.6°/s (the flat-fish) cannot get out of the way of one
+        // meeting it head-on: it stops. (Clear passes the command, a stop, through unchanged.)
+        let slow = flatfish();
+        let w = mover(Vec2::new(10.0, 0.0), Vec2::new(-1.0, 0.0), 0);
         assert_eq!(at_rest(&g, &slow, &w, cmd(0.0, 0.0)), Verdict::Clear);
+        // One overtaking it from astern at 0.45 m/s would run into it stopped: it goes on.
+        let w = mover(Vec2::new(-6.0, 0.0), Vec2::new(0.45, 0.0), 0);
+        let under_way = nav(Vec2::new(0.567, 0.0));
+        let (out, v) = check(
+            &g,
+            &slow,
+            0,
+            &under_way,
+            &w,
+            &Tracks::default(),
+            None,
+            cmd(0.0, 0.0),
+            1.0,
+        );
+        assert_eq!(v, Verdict::Turned, "{out:?}");
+        assert!(out.v_set > 0.0, "{out:?}");
     }
 
     #[test]
