@@ -754,7 +754,7 @@ pub fn check(
         .then(|| escape(cfg, &helm, &b, cmd.psi_set, evasion))
         .flatten();
     let can_stop = !run_into || (helm.turns_slowly() && slow_escape.is_none());
-    let evade = |cmd: Command| match slow_escape {
+    let get_away = |cmd: Command| match slow_escape {
         Some((a, v)) => (with_motion(cmd, a, v, Verdict::Turned), Verdict::Turned),
         None => evade(cfg, &helm, &b, cmd, evasion),
     };
@@ -786,7 +786,7 @@ pub fn check(
         if can_stop {
             return (cmd, Verdict::Clear);
         }
-        return evade(cmd);
+        return get_away(cmd);
     }
     // 2. The command as planned, no faster than the lookout vouches for where it goes.
     let going = if helm.turns_slowly() {
@@ -834,7 +834,7 @@ pub fn check(
             Verdict::Stopped,
         );
     }
-    evade(cmd)
+    get_away(cmd)
 }
 
 /// The heading within ±`max_turn` of `psi`, nearest first, that is clear at `v`.
