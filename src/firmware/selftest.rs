@@ -8,7 +8,10 @@
 //!    so the periodic task always preempts a busy extractor.
 //! 3. Runs [`PERIODS`] periods with each strategy in turn (VPF, multipoint, navigation
 //!    function) in two worlds — spread out ahead as far as a sonar sees, and in clutter with
-//!    every obstacle within 9 m (the VPF's worst case: it samples every one) —, switched by a
+//!    every obstacle within 9 m (the VPF's worst case: it samples every one) —, and the VPF
+//!    flying a flat-fish (a slow-turning craft) in traffic closing from all round (the guard's
+//!    worst case: stopping is run into and no motion is clear, so it searches all round for
+//!    the least bad, `guidance::guard`), switched by a
 //!    `Params` message as a host would, after [`WARMUP_PERIODS`] unmeasured ones, and reports per strategy the planner step cost (max and mean), the
 //!    whole period's worst cost (map snapshot and guard included), deadline overruns,
 //!    scanlines processed and the background's cost per scanline and per navigation frame (the
@@ -50,18 +53,41 @@ pub const WARMUP_PERIODS: u32 = 20;
 /// The planner step budget, instructions (shared/DESIGN.md).
 pub const STEP_BUDGET: u32 = 100_000;
 
+/// The worlds the strategies are measured in ([`obstacle`] says where).
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Phase {
+    Spread,
+    Clutter,
+    Traffic,
+}
+
+/// `p` for a flat-fish (seed 003's AUV, `hil/recipes/flatfish.toml`'s craft): a hull of
+/// 2.6 m, turning at 0.046 rad/s and braking at 0.1 m/s², so that the guard judges its arcs
+/// and courses.
+fn flatfish(p: Params) -> Params {
+    Params {
+        agent_radius_m: 2.6,
+        turn_rate_rps: 0.046,
+        brake_mps2: 0.1,
+        f_max: 0.15,
+        ..p
+    }
+}
+
 /// Runs the self-test; never returns.
 pub fn run(idle: &mut BackgroundTask, x: &mut impl Exchange, params: Params) -> ! {
     board::log(b"selftest: full tables, sonar flood, 50 periods per strategy and world\n");
     link_costs(idle, x);
     let mut ok = true;
     let strategies = [Strategy::Vpf, Strategy::Multipoint, Strategy::Navfn];
-    for (strategy, clutter) in strategies
+    for (strategy, w) in strategies
         .iter()
-        .map(|&s| (s, false))
-        .chain(strategies.iter().map(|&s| (s, true)))
+        .map(|&s| (s, Phase::Spread))
+        .chain(strategies.iter().map(|&s| (s, Phase::Clutter)))
+        .chain([(Strategy::Vpf, Phase::Traffic)])
     {
         let p = Params { strategy, ..params };
+        let p = if w == Phase::Traffic { flatfish(p) } else { p };
         // VPF: a vehicle held so hard by friction (μ at its largest) that its planned speed
         // stays below the stall speed (at its largest, v_max) is stalled every `stall_time_s`
         // (at its least), by the static field (whose force is far below μ·v_max here), so
@@ -85,7 +111,7 @@ pub fn run(idle: &mut BackgroundTask, x: &mut impl Exchange, params: Params) -> 
         set_strategy(idle, x, p);
         // Loaded again per phase: the upserts (same ids) replace the obstacles and refresh the
         // agents, which age out.
-        load_world(idle, x, clutter);
+        load_world(idle, x, w);
         let _ = x.take_stats();
         let _ = flood(idle, x, WARMUP_PERIODS, None);
         let _ = x.take_stats();
@@ -95,11 +121,11 @@ pub fn run(idle: &mut BackgroundTask, x: &mut impl Exchange, params: Params) -> 
         } else {
             0
         };
-        ok &= report(strategy, clutter, &flood, x, ghosts);
+        ok &= report(strategy, w, &flood, x, ghosts);
     }
     // The Ping360's path: the spread world's flood, its pings as `device_data` through the driver.
     set_strategy(idle, x, params);
-    load_world(idle, x, false);
+    load_world(idle, x, Phase::Spread);
     let _ = x.take_stats();
     let mut sonar = PingStats::default();
     flood(idle, x, PERIODS, Some(&mut sonar));
@@ -443,7 +469,7 @@ fn send_nav_mavlink(idle: &mut BackgroundTask, x: &mut impl Exchange) {
 /// The obstacles are charted: a sensed one would be evicted by the nearer features the sonar
 /// flood extracts (the table's overflow policy, `World::upsert_obstacle_or_evict`), and a
 /// still feature is left to the evidence map, which would empty the field being measured.
-fn load_world(idle: &mut BackgroundTask, x: &mut impl Exchange, clutter: bool) {
+fn load_world(idle: &mut BackgroundTask, x: &mut impl Exchange, w: Phase) {
     let mission = Mission {
         goal: Vec2::new(80.0, 0.0),
         formation: Some(vpf::planner::Formation {
@@ -460,8 +486,7 @@ fn load_world(idle: &mut BackgroundTask, x: &mut impl Exchange, clutter: bool) {
         }
     }
     let now = x.now_ms();
-    let obstacles =
-        (0..MAX_OBSTACLES).filter_map(|i| obstacle(i, now, clutter).map(Sighting::Obstacle));
+    let obstacles = (0..MAX_OBSTACLES).filter_map(|i| obstacle(i, now, w).map(Sighting::Obstacle));
     let agents = (0..MAX_AGENTS).filter_map(|i| {
         let p = Vec2::new(-5.0 - 3.0 * i as f32, 4.0);
         Agent::new(i as u16, p, Vec2::ZERO, now)
@@ -478,19 +503,29 @@ fn load_world(idle: &mut BackgroundTask, x: &mut impl Exchange, clutter: bool) {
 
 /// Obstacle `i` of the self-test's world: a circle, a rectangle, an ellipse or a hexagon.
 ///
-/// - Spread (`clutter` false): a grid 10–59 m ahead, 20 m either side, as a sonar's table
+/// - Spread: a grid 10–59 m ahead, 20 m either side, as a sonar's table
 ///   holds obstacles out to its range; every other one crosses at 0.5 m/s.
 /// - Clutter: all 32 within 2–9 m of the vehicle (rings of 8 at 3, 5, 7 and 9 m), still, so
 ///   that the VPF samples every one on its circle (none is far enough to be linearised,
 ///   `planner::gradient::far_gradient`): the step's worst case.
-fn obstacle(i: usize, now_ms: u64, clutter: bool) -> Option<Obstacle> {
-    let (c, scale, v) = if clutter {
-        let ring = (i / 8) as f32;
-        let a = (i % 8) as f32 * 0.785 + ring * 0.2;
-        (Vec2::from_angle(a) * (3.0 + 2.0 * ring), 0.5, 0.0)
-    } else {
-        let c = Vec2::new(10.0 + 7.0 * (i % 8) as f32, -20.0 + 9.0 * (i / 8) as f32);
-        (c, 1.0, if i.is_multiple_of(2) { 0.5 } else { 0.0 })
+/// - Traffic: all 32 on a ring 16 m round the vehicle, each closing on it at 1 m/s (7–12 m
+///   off over the measured periods): every motion meets one.
+fn obstacle(i: usize, now_ms: u64, w: Phase) -> Option<Obstacle> {
+    let (c, scale, v) = match w {
+        Phase::Clutter => {
+            let ring = (i / 8) as f32;
+            let a = (i % 8) as f32 * 0.785 + ring * 0.2;
+            (Vec2::from_angle(a) * (3.0 + 2.0 * ring), 0.5, Vec2::ZERO)
+        }
+        Phase::Spread => {
+            let c = Vec2::new(10.0 + 7.0 * (i % 8) as f32, -20.0 + 9.0 * (i / 8) as f32);
+            let v = if i.is_multiple_of(2) { 0.5 } else { 0.0 };
+            (c, 1.0, Vec2::new(0.0, v))
+        }
+        Phase::Traffic => {
+            let u = Vec2::from_angle(i as f32 * (2.0 * core::f32::consts::PI / 32.0));
+            (u * 16.0, 0.5, u * -1.0)
+        }
     };
     let shape = match i % 4 {
         0 => Shape::circle(c, 1.5 * scale),
@@ -506,7 +541,7 @@ fn obstacle(i: usize, now_ms: u64, clutter: bool) -> Option<Obstacle> {
     }
     .ok()?;
     Obstacle::new(i as u16, shape, 2.5, Origin::Charted, now_ms)
-        .and_then(|o| o.moving(Vec2::new(0.0, v)))
+        .and_then(|o| o.moving(v))
         .ok()
 }
 
@@ -520,19 +555,15 @@ fn next_period(idle: &mut BackgroundTask, x: &mut impl Exchange) {
 
 /// Prints one strategy's lines; true if it met the budget at full tables (`ghosts`: the
 /// depth the ghost goal-point stack was loaded to, 0 for a strategy without them).
-fn report(
-    strategy: Strategy,
-    clutter: bool,
-    flood: &Flood,
-    x: &mut impl Exchange,
-    ghosts: u8,
-) -> bool {
+fn report(strategy: Strategy, w: Phase, flood: &Flood, x: &mut impl Exchange, ghosts: u8) -> bool {
     let name = |line: &mut Line| {
         line.push(b"selftest: ");
         line.push(strategy.name().as_bytes());
-        if clutter {
-            line.push(b" in clutter");
-        }
+        line.push(match w {
+            Phase::Spread => b"",
+            Phase::Clutter => b" in clutter",
+            Phase::Traffic => b", a flat-fish in traffic",
+        });
     };
     let s = x.take_stats();
     let mean = s.sum_cost / u64::from(s.periods.max(1));
