@@ -1337,37 +1337,31 @@ mod tests {
         let slow = flatfish();
         let w = mover(Vec2::new(10.0, 0.0), Vec2::new(-1.0, 0.0), 0);
         assert_eq!(at_rest(&g, &slow, &w, cmd(0.0, 0.0)), Verdict::Clear);
-        // One overtaking it from astern at 0.45 m/s would run into it stopped: it goes on.
-        let w = mover(Vec2::new(-6.0, 0.0), Vec2::new(0.45, 0.0), 0);
-        let under_way = nav(Vec2::new(0.567, 0.0));
-        let (out, v) = check(
-            &g,
-            &slow,
-            0,
-            &under_way,
-            &w,
-            &Tracks::default(),
-            None,
-            cmd(0.0, 0.0),
-            1.0,
-        );
+        // Overtaken from 6 m astern by a mover at `theirs` m/s while going at `ours`, asked
+        // to stop.
+        let overtaken = |theirs: f32, ours: f32| {
+            let w = mover(Vec2::new(-6.0, 0.0), Vec2::new(theirs, 0.0), 0);
+            let under_way = nav(Vec2::new(ours, 0.0));
+            let none = Tracks::default();
+            check(
+                &g,
+                &slow,
+                0,
+                &under_way,
+                &w,
+                &none,
+                None,
+                cmd(0.0, 0.0),
+                1.0,
+            )
+        };
+        // One overtaking it at 0.45 m/s would run into it stopped: it goes on.
+        let (out, v) = overtaken(0.45, 0.567);
         assert_eq!(v, Verdict::Turned, "{out:?}");
         assert!(out.v_set > 0.0, "{out:?}");
         // One overtaking it at 0.9 m/s: no motion it can make keeps clear, but going on
         // keeps it farther off than stopping would, so it goes on (the least bad).
-        let w = mover(Vec2::new(-6.0, 0.0), Vec2::new(0.9, 0.0), 0);
-        let under_way = nav(Vec2::new(0.5, 0.0));
-        let (out, v) = check(
-            &g,
-            &slow,
-            0,
-            &under_way,
-            &w,
-            &Tracks::default(),
-            None,
-            cmd(0.0, 0.0),
-            1.0,
-        );
+        let (out, v) = overtaken(0.9, 0.5);
         assert_eq!(v, Verdict::Turned, "{out:?}");
         assert!(out.v_set > 0.0, "{out:?}");
     }
