@@ -779,13 +779,7 @@ pub fn check(
     let stop_margin = helm.mover_margin(&b, cmd.psi_set, 0.0);
     let run_into = stop_margin < 0.0;
     let slow_escape = (run_into && helm.turns_slowly())
-        .then(|| {
-            escape(cfg, &helm, &b, cmd.psi_set, evasion).or_else(|| {
-                least_bad(cfg, &helm, &b, cmd.psi_set, evasion)
-                    .filter(|&(_, m)| m > stop_margin + GAIN_M)
-                    .map(|(a, _)| (a, evasion))
-            })
-        })
+        .then(|| way_out(cfg, &helm, &b, cmd.psi_set, evasion, stop_margin + GAIN_M))
         .flatten();
     let can_stop = !run_into || (helm.turns_slowly() && slow_escape.is_none());
     let get_away = |cmd: Command| match slow_escape {
@@ -892,7 +886,7 @@ fn turns_from(cfg: &GuardConfig, psi: f32, max_turn: f32) -> impl Iterator<Item 
 }
 
 /// The clear motion nearest `psi`, all round, at `speed` and then half of it, as (heading,
-/// speed); `None` if none is clear (or `speed` is not a speed).
+/// speed); `None` if none is clear.
 fn escape(
     cfg: &GuardConfig,
     helm: &Helm,
@@ -900,9 +894,6 @@ fn escape(
     psi: f32,
     speed: f32,
 ) -> Option<(f32, f32)> {
-    if speed.is_nan() || speed <= 0.0 {
-        return None;
-    }
     [speed, 0.5 * speed].into_iter().find_map(|v| {
         if !helm.blocked(b, psi, v) {
             return Some((psi, v));
@@ -923,16 +914,31 @@ fn evade(
     cmd: Command,
     speed: f32,
 ) -> (Command, Verdict) {
-    if speed.is_nan() || speed <= 0.0 {
-        return stopped(cmd);
-    }
-    if let Some((a, v)) = escape(cfg, helm, b, cmd.psi_set, speed) {
-        return (with_motion(cmd, a, v, Verdict::Turned), Verdict::Turned);
-    }
-    match least_bad(cfg, helm, b, cmd.psi_set, speed) {
-        Some((a, _)) => (with_motion(cmd, a, speed, Verdict::Turned), Verdict::Turned),
+    match way_out(cfg, helm, b, cmd.psi_set, speed, f32::NEG_INFINITY) {
+        Some((a, v)) => (with_motion(cmd, a, v, Verdict::Turned), Verdict::Turned),
         None => stopped(cmd),
     }
+}
+
+/// The way out of the movers at `speed`, as (heading, speed): the clear motion nearest `psi`
+/// ([`escape`]), or else the [`least_bad`] heading at `speed` if it keeps farther from them
+/// than `better_than` m; `None` if neither (or `speed` is not a speed).
+fn way_out(
+    cfg: &GuardConfig,
+    helm: &Helm,
+    b: &Believed,
+    psi: f32,
+    speed: f32,
+    better_than: f32,
+) -> Option<(f32, f32)> {
+    if speed.is_nan() || speed <= 0.0 {
+        return None;
+    }
+    escape(cfg, helm, b, psi, speed).or_else(|| {
+        least_bad(cfg, helm, b, psi, speed)
+            .filter(|&(_, m)| m > better_than)
+            .map(|(a, _)| (a, speed))
+    })
 }
 
 /// The heading, all round from `psi`, that at `speed` keeps farthest from the movers without
