@@ -204,4 +204,6 @@ pub struct VehicleRecord {
     /// counters a board image reports are those of its unconnected sonar port (commands that
     /// time out), not shown.
     pub ping360: bool,
+    /// Its hull radius, m (`crate::runner::hull_radius`): what the others' sonars see.
+    pub hull_m: f64,
 }

@@ -366,7 +366,20 @@ fn dispatch(
             scanline(extractor, last_bearing, counters, &scan, *pose, sink, map);
         }
         Message::Contacts(c) => {
+            let time_ms = if lockstep { c.time_ms } else { now_ms };
             for contact in c.contacts.iter() {
+                // A vehicle the host reports is not structure: the sonar path leaves out its
+                // echoes (`crate::sonar::KnownVehicles`).
+                if contact.kind == crate::link::ContactKind::Vehicle {
+                    let shape = &contact.shape;
+                    extractor.report_vehicle(
+                        contact.id,
+                        shape.center(),
+                        shape.bounding_radius(),
+                        contact.velocity,
+                        time_ms,
+                    );
+                }
                 let s = match contact.kind {
                     crate::link::ContactKind::Obstacle => contact
                         .to_obstacle(contact_a_plus, now_ms)

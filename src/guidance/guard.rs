@@ -71,7 +71,10 @@
 //! perception, crossing seed 22; crossing seeds 0–49 at 1 m/s, contacts 6 → 4, successes
 //! 44 → 46; with its sonar and recipe, crossing and head-on seeds 0–99: 182 → 181 of 200,
 //! contacts 3 → 2; at 0.75 m/s, seeds 34–133: 175 → 177, 11 → 10). Head-on, stopping and
-//! going on keep the same distance, and it stops.
+//! going on keep the same distance, and it stops. Anything slower than [`STILL_MPS`] is judged
+//! still, not a mover: a stopped vehicle the host reports drifts at a centimetre a second, and
+//! weighed as a mover among the others, the least bad way out of a mate closing from astern
+//! ran a flat-fish into another mate stopped ahead (formation worlds).
 //!
 //! **Head-on.** A sonar contact seen once has no velocity yet, and the next look is a sweep
 //! (9 s) away. Another vehicle meeting this one head-on closes at twice the cruise speed: seen
@@ -189,6 +192,17 @@ pub const TRACK_STEPS: usize = 10;
 /// How much farther from a mover than stopping keeps a motion must keep a slow-turning craft
 /// before it takes that motion when nothing is clear, m (module notes, "Movers").
 pub const GAIN_M: f32 = 0.5;
+/// Slower than this, m/s, an obstacle or vehicle is judged still: it moves less than 0.5 m
+/// over [`CPA_HORIZON_S`], and a way out of the movers must not run into it (module notes,
+/// "Movers"). The sonar tracker gives no velocity below 0.3 m/s; contacts from the host carry
+/// a stopped vehicle's drift.
+pub const STILL_MPS: f32 = 0.05;
+
+/// Whether velocity `v` is too slow to judge as a mover ([`STILL_MPS`]).
+fn still(v: Vec2) -> bool {
+    v.norm2() < STILL_MPS * STILL_MPS
+}
+
 /// Chords of the arc a slow-turning craft sweeps (module notes): enough to follow a turn of up
 /// to a few tenths of a radian within a braking distance.
 pub const ARC_SEGMENTS: usize = 4;
@@ -334,18 +348,14 @@ impl Believed<'_> {
         {
             return true;
         }
-        if w.agents()
-            .iter()
-            .filter(|a| a.velocity == Vec2::ZERO)
-            .any(|a| {
-                to_segment(a.position, p, u, len) - self.agent_r < floor && ahead(a.position, p, u)
-            })
-        {
+        if w.agents().iter().filter(|a| still(a.velocity)).any(|a| {
+            to_segment(a.position, p, u, len) - self.agent_r < floor && ahead(a.position, p, u)
+        }) {
             return true;
         }
         // Shapes: sampled along the segment, only those that can reach it.
         let samples = (len / SAMPLE_M) as u32 + 1;
-        let still = |o: &&crate::world::Obstacle| o.velocity == Vec2::ZERO && !w.left_to_map(o);
+        let still = |o: &&crate::world::Obstacle| still(o.velocity) && !w.left_to_map(o);
         for o in w.obstacles().iter().filter(still) {
             let reach = (o.shape.center() - p).norm() - o.shape.bounding_radius();
             if reach > len + self.hull {
@@ -658,11 +668,7 @@ pub fn check(
         }
     };
     let mut movers = heapless::Vec::new();
-    for o in world
-        .obstacles()
-        .iter()
-        .filter(|o| o.velocity != Vec2::ZERO)
-    {
+    for o in world.obstacles().iter().filter(|o| !still(o.velocity)) {
         // Room for every obstacle and agent: never full.
         let _ = movers.push(Mover {
             center: o.shape.center() + o.velocity * age(o.seen_ms),
@@ -745,7 +751,7 @@ pub fn check(
             });
         }
     }
-    for a in world.agents().iter().filter(|a| a.velocity != Vec2::ZERO) {
+    for a in world.agents().iter().filter(|a| !still(a.velocity)) {
         let _ = movers.push(Mover {
             center: a.position + a.velocity * age(a.seen_ms),
             velocity: a.velocity,
@@ -1055,6 +1061,7 @@ mod tests {
             blank_m: 0.0,
             echoes,
             seconded: 0,
+            vehicles: 0,
         };
         // A sonar that never spoke (perception by contacts): as planned.
         assert_eq!(go(Some(&map)).1, Verdict::Clear);
@@ -1370,6 +1377,31 @@ mod tests {
         let (out, v) = overtaken(0.9, 0.5);
         assert_eq!(v, Verdict::Turned, "{out:?}");
         assert!(out.v_set > 0.0, "{out:?}");
+        // Overtaken (0.4 m/s, from astern) with another vehicle stopped 7.3 m off the bow,
+        // drifting at 1 cm/s as a stopped craft does: it is judged as if it were still. As a
+        // mover, the way out of the one astern was weighed against it like any other mover,
+        // and formations of flat-fish ran into their stopped mates (generated formation worlds
+        // 12, 43, 57 with the mates' echoes left out of the map: 2 contacts in 68 → 0).
+        let beside = |drift: f32| {
+            let mut w = mover(Vec2::new(-6.0, 1.0), Vec2::new(0.35, -0.17), 0);
+            let mate = crate::world::Agent::new(9, Vec2::new(6.5, 3.3), Vec2::new(drift, 0.0), 0);
+            w.upsert_agent(mate.unwrap()).unwrap();
+            let under_way = nav(Vec2::new(0.37, 0.0));
+            let none = Tracks::default();
+            check(
+                &g,
+                &slow,
+                0,
+                &under_way,
+                &w,
+                &none,
+                None,
+                cmd(0.0, 0.4),
+                1.0,
+            )
+        };
+        assert_eq!(beside(-0.01), beside(0.0));
+        assert_eq!(beside(0.01), beside(0.0));
     }
 
     #[test]

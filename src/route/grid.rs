@@ -290,6 +290,7 @@ mod tests {
             blank_m: 0.5,
             echoes: &echoes,
             seconded: 0,
+            vehicles: 0,
         };
         map.observe(&beam);
         map.observe(&beam);

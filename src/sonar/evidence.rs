@@ -197,6 +197,9 @@ pub struct Beam<'a> {
     /// Bit k set: echo k continues an echo of the previous beam of the sweep (the same surface
     /// seen twice), so its cell is believed at once.
     pub seconded: u8,
+    /// Bit k set: echo k is a vehicle the host reports (`crate::sonar::known`): the free
+    /// water ends there, but its cell gets no hit.
+    pub vehicles: u8,
 }
 
 /// The window's lower-left world cell.
@@ -482,6 +485,9 @@ impl EvidenceMap {
             if !(r.is_finite() && r >= 0.0 && r <= beam.range_m) {
                 continue;
             }
+            if k < 8 && beam.vehicles & (1 << k) != 0 {
+                continue;
+            }
             let (i, j) = self.cell_of(beam.origin + beam.look * r);
             if w.contains(i, j) {
                 let seconded = k < 8 && beam.seconded & (1 << k) != 0;
@@ -701,6 +707,7 @@ mod tests {
             blank_m: 0.0,
             echoes: &echoes,
             seconded: 0,
+            vehicles: 0,
         });
     }
 
@@ -827,6 +834,7 @@ mod tests {
                 blank_m: 2.0,
                 echoes: &[],
                 seconded: 0,
+                vehicles: 0,
             });
         }
         assert!(
@@ -897,6 +905,7 @@ mod tests {
                     blank_m: 0.0,
                     echoes: &[1.0],
                     seconded: 0,
+                    vehicles: 0,
                 });
                 m.observe(&Beam {
                     origin: Vec2::new(x, 0.0),
@@ -905,6 +914,7 @@ mod tests {
                     blank_m: 0.0,
                     echoes: &[3.0],
                     seconded: 0,
+                    vehicles: 0,
                 });
             }
         }
@@ -980,6 +990,7 @@ mod tests {
             blank_m: 0.0,
             echoes: &[f32::INFINITY, -1.0, 40.0],
             seconded: 0,
+            vehicles: 0,
         });
         let mut near: heapless::Vec<Near, 4> = heapless::Vec::new();
         m.nearest(Vec2::ZERO, 30.0, 0.0, &mut near);

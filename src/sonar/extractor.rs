@@ -21,6 +21,7 @@ use super::cluster::{Assign, Cluster, Table};
 use super::detect::detect;
 use super::evidence::{Beam, EvidenceMap};
 use super::fit::Hit;
+use super::known::KnownVehicles;
 use super::{
     ConfigError, Counters, ExtractorConfig, Feature, Pose, ScanError, Scanline, MAX_RUNS_PER_BEAM,
 };
@@ -50,6 +51,8 @@ pub struct Extractor {
     /// Beam number of the last accepted ping (wraps after 2³² pings, years of pinging).
     beam: u32,
     counters: Counters,
+    /// The vehicles the host reports: their echoes are neither features nor map hits.
+    known: KnownVehicles,
 }
 
 impl Extractor {
@@ -62,7 +65,21 @@ impl Extractor {
             last: None,
             beam: 0,
             counters: Counters::default(),
+            known: KnownVehicles::default(),
         })
+    }
+
+    /// Vehicle `id` (hull radius `radius`, m) was reported at `center`, moving at `velocity`,
+    /// at `time_ms`: its echoes are left out from now on ([`KnownVehicles`]).
+    pub fn report_vehicle(
+        &mut self,
+        id: u16,
+        center: Vec2,
+        radius: f32,
+        velocity: Vec2,
+        time_ms: u64,
+    ) {
+        self.known.report(id, center, radius, velocity, time_ms);
     }
 
     /// Its configuration.
@@ -173,6 +190,18 @@ impl Extractor {
             here.echo_count += 1;
         }
         self.last = Some(here);
+        // Bit k: echo k is a vehicle the host reports, not structure.
+        let vehicle = here
+            .echoes
+            .iter()
+            .take(here.echo_count)
+            .enumerate()
+            .filter(|&(_, p)| self.known.covers(*p, scan.time_ms))
+            .fold(0u8, |m, (k, _)| m | 1u8.checked_shl(k as u32).unwrap_or(0));
+        self.counters.vehicle_echoes = self
+            .counters
+            .vehicle_echoes
+            .saturating_add(vehicle.count_ones());
         let strong = crate::math::max(self.cfg.peak_min, self.cfg.feature_peak_min);
         if let Some(map) = map {
             // An echo the neighbouring beam also returned (within the cluster gap) is the
@@ -183,6 +212,9 @@ impl Extractor {
             if let Some(prev) = neighbour {
                 let before = prev.echoes.get(..prev.echo_count).unwrap_or(&[]);
                 for (k, p) in here.echoes.iter().take(here.echo_count).enumerate() {
+                    if vehicle & (1 << k) != 0 {
+                        continue;
+                    }
                     if let Some(q) = before.iter().find(|q| (**q - *p).norm2() <= gap2) {
                         seconded |= 1 << k;
                         map.believe(*q);
@@ -193,17 +225,24 @@ impl Extractor {
             // alone it may be a false target, and it is left out.
             let mut ranges: heapless::Vec<f32, MAX_RUNS_PER_BEAM> = heapless::Vec::new();
             let mut kept_seconded = 0u8;
+            let mut kept_vehicle = 0u8;
             for (k, e) in echoes.iter().enumerate() {
                 let twice = k < 8 && seconded & (1 << k) != 0;
-                if e.peak < strong && !twice {
+                let known = k < 8 && vehicle & (1 << k) != 0;
+                if e.peak < strong && !twice && !known {
                     continue;
                 }
                 if ranges.push(e.range_m).is_err() {
                     break;
                 }
+                let bit = 1u8
+                    .checked_shl(ranges.len().saturating_sub(1) as u32)
+                    .unwrap_or(0);
                 if twice {
-                    let i = ranges.len().saturating_sub(1) as u32;
-                    kept_seconded |= 1u8.checked_shl(i).unwrap_or(0);
+                    kept_seconded |= bit;
+                }
+                if known {
+                    kept_vehicle |= bit;
                 }
             }
             map.follow(pose.position);
@@ -214,11 +253,16 @@ impl Extractor {
                 blank_m: self.cfg.blanking_m,
                 echoes: &ranges,
                 seconded: kept_seconded,
+                vehicles: kept_vehicle,
             });
         }
         // Pushed, not collected: heapless' `collect` panics on overflow.
         let mut hits: heapless::Vec<Hit, MAX_RUNS_PER_BEAM> = heapless::Vec::new();
-        for e in echoes.iter().filter(|e| e.peak >= strong) {
+        for (_, e) in echoes
+            .iter()
+            .enumerate()
+            .filter(|&(k, e)| e.peak >= strong && !(k < 8 && vehicle & (1 << k) != 0))
+        {
             let _ = hits.push(Hit {
                 point: sensor + look * e.range_m,
                 look,
@@ -960,10 +1004,76 @@ mod tests {
     }
 
     #[test]
+    fn a_reported_vehicle_is_neither_a_feature_nor_a_believed_cell() {
+        // A 1 m hull 8 m off and a rock 12 m off on the other side, swept once from rest with
+        // the map. Unreported, both are features and believed; reported, the vehicle is neither,
+        // and the rock is seen as before.
+        let (mate, rock) = (Vec2::new(8.0, 0.0), Vec2::new(-12.0, 0.0));
+        let scene = [Obj::Circle(mate, 1.0), Obj::Circle(rock, 1.5)];
+        let fly = |reported: bool| {
+            let map = EvidenceMap::new(crate::sonar::EvidenceConfig::default()).unwrap();
+            let mut ex = Extractor::new(ExtractorConfig::default()).unwrap();
+            if reported {
+                ex.report_vehicle(3, mate, 1.0, Vec2::ZERO, 0);
+            }
+            let mut sonar = Sonar::new(5, 30, 2);
+            let mut bins = [0u8; MAX_BINS];
+            let mut found = Found::new();
+            for k in 0..SCAN.pings {
+                let bearing = wrap_angle(SCAN.bearing0 + k as f32 * SCAN.step);
+                sonar.ping(
+                    &scene,
+                    Vec2::ZERO,
+                    Vec2::from_angle(bearing),
+                    30.0,
+                    &mut bins[..300],
+                );
+                let scan = Scanline {
+                    time_ms: k as u64 * SCAN.dt_ms,
+                    bearing_rad: bearing,
+                    step_rad: SCAN.step,
+                    range_m: 30.0,
+                    bins: &bins[..300],
+                };
+                ex.push_scanline_mapped(&scan, STILL.pose(0.0), Some(&map), &mut |f| {
+                    found.push(f).is_ok()
+                })
+                .unwrap();
+            }
+            ex.flush(&mut |f| found.push(f).is_ok());
+            let w = map.window().unwrap();
+            let believed_near = |c: Vec2, r: f32| {
+                let cell = |x: f32| libm::floorf(x / 0.5) as i32;
+                let (i0, j0) = (cell(c.x - r), cell(c.y - r));
+                (i0..=cell(c.x + r)).any(|i| (j0..=cell(c.y + r)).any(|j| map.is_occupied(w, i, j)))
+            };
+            let features_near =
+                |c: Vec2| found.iter().filter(|f| (f.center - c).norm() < 2.0).count();
+            (
+                features_near(mate),
+                believed_near(mate, 2.0),
+                features_near(rock),
+                believed_near(rock, 2.0),
+                ex.counters().vehicle_echoes,
+            )
+        };
+        let (f, b, fr, br, masked) = fly(false);
+        assert!(
+            f >= 1 && b && fr >= 1 && br && masked == 0,
+            "unreported: {f} {b} {fr} {br}"
+        );
+        let (f, b, fr, br, masked) = fly(true);
+        assert_eq!((f, b), (0, false), "reported: the vehicle is neither");
+        assert!(fr >= 1 && br, "the rock is still seen");
+        assert!(masked > 0);
+    }
+
+    #[test]
     fn state_is_small() {
-        // The extractor lives in a static or on a task stack of a few kB.
+        // The extractor lives in a static or on a task stack of a few kB: about 1 kB, and the
+        // vehicles it is told about (`KnownVehicles`, 200 bytes on a 64-bit host).
         let size = core::mem::size_of::<Extractor>();
-        assert!(size <= 1024, "Extractor is {size} bytes");
+        assert!(size <= 1024 + 200, "Extractor is {size} bytes");
         assert!(core::mem::size_of::<Feature>() <= 48);
     }
 

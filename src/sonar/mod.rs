@@ -55,6 +55,11 @@
 //!    18: the movers' one-beam fragments opened tracks, and sightings seconds apart gave
 //!    velocities far off; opening new tracks only, never updating one, 31.
 //!
+//! **Vehicles it is told about.** An echo on a vehicle the host reports (`Contacts` of kind
+//! vehicle: a formation's mates) is that vehicle, not structure: it leaves no feature and no
+//! believed cell, though the beam's free water ends there ([`KnownVehicles`], at most
+//! [`MAX_KNOWN`], the stalest replaced when full; counted in [`Counters::vehicle_echoes`]).
+//!
 //! **Frames.** [`Pose::heading`] is the bow's direction, radians counter-clockwise from the world
 //! +x axis (as [`Vec2::from_angle`]); [`Scanline::bearing_rad`] is the head angle relative to the
 //! bow, counter-clockwise positive. A ping's world direction is `heading + bearing`; its origin is
@@ -75,6 +80,8 @@
 //! - Points per cluster: unbounded count, constant memory (running sums about the cluster's
 //!   first point, so `f32` keeps centimetres far from the origin). A cluster is cut, emitted and
 //!   restarted after `max_span_rad` of head travel, which also bounds the hits it sums.
+//! - Known vehicles: [`MAX_KNOWN`]; a new one replaces the stalest, and a report older than
+//!   [`MAX_AGE_MS`] hides nothing.
 //! - Output: the sink returns `false` when it is full; the feature is then lost and counted in
 //!   [`Counters::sink_full`]. The extractor never waits.
 
@@ -83,6 +90,7 @@ pub mod detect;
 pub mod evidence;
 mod extractor;
 mod fit;
+mod known;
 pub mod lookout;
 pub mod ping360;
 
@@ -97,6 +105,7 @@ pub use evidence::{
     Beam, EvidenceConfig, EvidenceError, EvidenceMap, Near, Window, MAP_SIDE, MAX_REACH_CELLS,
 };
 pub use extractor::Extractor;
+pub use known::{KnownVehicles, ECHO_MARGIN_M, MAX_AGE_MS, MAX_KNOWN};
 pub use lookout::{Lookout, LOOK_SECTORS};
 
 /// Largest accepted vehicle coordinate, m (100 km, as the planner's limit: `f32` still resolves
@@ -390,6 +399,8 @@ pub struct Counters {
     /// Sweep breaks (direction reversal, bearing jump, time gap, pose jump) that closed every
     /// open cluster.
     pub sweep_breaks: u32,
+    /// Echoes left out as a vehicle the host reports ([`known`]).
+    pub vehicle_echoes: u32,
 }
 
 #[cfg(test)]

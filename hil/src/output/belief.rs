@@ -9,7 +9,8 @@
 //!
 //! **Perception metrics**, over the snapshots of one vehicle:
 //! - *miss*: true surface points (every [`SURFACE_STEP_M`] along every obstacle's boundary at
-//!   the snapshot's time, and round the other vehicles' hulls) within [`SEEN_RANGE_M`] of the
+//!   the snapshot's time, and round the other vehicles' hulls unless the firmware is told where
+//!   they are, which it then need not believe) within [`SEEN_RANGE_M`] of the
 //!   vehicle and in its line of sight, against the distance to the nearest believed cell's
 //!   centre; the metric is the 95th percentile over all such points and snapshots. A perfect
 //!   map gives about half a cell; a wall never believed gives its distance to anything else.
@@ -169,11 +170,13 @@ pub struct Perception {
 }
 
 /// The perception metrics of `belief` against `obstacles` and the other vehicles
-/// (`others(t)` gives them at time `t`); `None` when no snapshot was taken.
+/// (`others(t)` gives them at time `t`; their hulls count as surface to believe if
+/// `others_to_find`); `None` when no snapshot was taken.
 pub fn measure(
     belief: &Belief,
     obstacles: &[SimObstacle],
     others: &dyn Fn(f64) -> Vec<OtherVehicle>,
+    others_to_find: bool,
 ) -> Option<Perception> {
     if belief.snapshots.is_empty() || belief.cell_m <= 0.0 {
         return None;
@@ -191,7 +194,12 @@ pub fn measure(
             }))
             .collect();
         let centres: Vec<P2> = s.cells.iter().map(|&c| belief.center(c)).collect();
-        for sh in &shapes {
+        let to_find = if others_to_find {
+            shapes.len()
+        } else {
+            obstacles.len()
+        };
+        for sh in shapes.iter().take(to_find) {
             for p in boundary(sh, SURFACE_STEP_M) {
                 let to = p.sub(s.position);
                 let d = to.norm();
@@ -306,13 +314,26 @@ mod tests {
         // The wall's near face at x = 4.75, cells of 0.5 m along it (x index 9: 4.5–5.0).
         let face: Vec<(i32, i32)> = (-6..6).map(|j| (9, j)).collect();
         let none = |_: f64| Vec::new();
-        let good = measure(&belief(&face), &[wall()], &none).unwrap();
+        let good = measure(&belief(&face), &[wall()], &none, true).unwrap();
         assert!(good.miss_p95_m < 1.0, "{good:?}");
         assert_eq!(good.false_frac, 0.0);
         // Nothing believed but a cell far away: every surface point is missed, the cell false.
-        let blind = measure(&belief(&[(-20, 0)]), &[wall()], &none).unwrap();
+        let blind = measure(&belief(&[(-20, 0)]), &[wall()], &none, true).unwrap();
         assert!(blind.miss_p95_m > 10.0, "{blind:?}");
         assert_eq!(blind.false_frac, 1.0);
-        assert!(measure(&Belief::default(), &[wall()], &none).is_none());
+        assert!(measure(&Belief::default(), &[wall()], &none, true).is_none());
+        // Another vehicle 3 m off, not in the map: a miss unless the firmware is told where it is.
+        let other = |_: f64| {
+            vec![OtherVehicle {
+                id: 1,
+                position: P2::new(0.0, 3.0),
+                velocity: P2::default(),
+                hull_radius: 0.5,
+            }]
+        };
+        let unseen = measure(&belief(&face), &[wall()], &other, true).unwrap();
+        assert!(unseen.miss_p95_m > 2.0, "{unseen:?}");
+        let told = measure(&belief(&face), &[wall()], &other, false).unwrap();
+        assert_eq!(told.miss_p95_m, good.miss_p95_m);
     }
 }

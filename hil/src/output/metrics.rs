@@ -256,12 +256,12 @@ fn perception(run: &RunOutput, i: usize) -> Option<Perception> {
                     id: 0,
                     position: s.state.position,
                     velocity: P2::default(),
-                    hull_radius: 0.2,
+                    hull_radius: o.hull_m,
                 })
             })
             .collect()
     };
-    super::belief::measure(&v.belief, &run.obstacles, &others)
+    super::belief::measure(&v.belief, &run.obstacles, &others, !run.vehicles_known)
 }
 
 fn finite(p: P2) -> bool {

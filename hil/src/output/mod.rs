@@ -43,6 +43,9 @@ pub struct RunOutput {
     pub arrival_radius_m: f64,
     /// The planner parameters the run used.
     pub params: vpf::Params,
+    /// The firmware was told where the other vehicles are (`[sonar] vehicle_contacts`): they
+    /// are not its sonar's to find (the perception metrics leave them out of the misses).
+    pub vehicles_known: bool,
 }
 
 /// Makes sure the outputs can be written to `dir` before a run starts: creates it, then
@@ -203,6 +206,7 @@ pub(crate) mod test_support {
             firmware: "host".into(),
             arrival_radius_m: 1.0,
             params: vpf::Params::default(),
+            vehicles_known: false,
         }
     }
 }
@@ -258,6 +262,7 @@ mod tests {
             firmware: String::new(),
             arrival_radius_m: f64::NAN,
             params: vpf::Params::default(),
+            vehicles_known: false,
         };
         let s = write_all(&dir, &run).unwrap();
         assert!(!s.to_string().is_empty());

@@ -166,6 +166,7 @@ pub(super) fn simulate(
                 goal: v.goal,
                 waypoints: marks(v),
                 ping360: ping360.is_some(),
+                hull_m: hull_radius(v.model),
                 ..VehicleRecord::default()
             },
             setpoints: SetPoints {
@@ -319,6 +320,7 @@ pub(super) fn simulate(
         firmware: target.to_string(),
         arrival_radius_m: f64::from(params.arrival_radius_m),
         params,
+        vehicles_known: sc.sonar.vehicle_contacts,
     };
     Ok(Simulated {
         output,
