@@ -2,7 +2,8 @@
 //! mission families too, which pass on their seed 1 as they are), flown by the
 //! VideoRay with its own sonar (scanlines), default parameters, VPF, on the host-process
 //! firmware. Nothing may be touched; the perception columns must be filled (the firmware
-//! reported its map) and honest (a perfect-perception run reports none).
+//! reported its map) and honest (a perfect-perception run reports none); the formation must
+//! keep its lattice.
 //!
 //! The slice is not where the numbers come from — `cargo hil bench` flies 204 worlds — but a
 //! change that makes the vehicle drive into what it saw fails here.
@@ -66,6 +67,15 @@ fn one_world_of_every_family_is_flown_without_contact() {
             r.id
         );
     }
+    // The formation keeps its lattice in transit: its mates are not rocks. With their echoes
+    // in the map (each mate's wake believed), this world's spacing error was 122 % of λ; 22 %
+    // with them left out.
+    let formation = rows.iter().find(|r| r.family == "formation");
+    let spacing = formation.and_then(|r| r.formation_spacing);
+    assert!(
+        spacing.is_some_and(|e| e < 0.5),
+        "formation spacing error {spacing:?}"
+    );
 }
 
 #[test]

@@ -15,6 +15,7 @@ use crate::runner::{hull_radius, run_quiet, turning_radius, QuietRun};
 use crate::scenario::{self, Sensing};
 use crate::sim::ModelKind;
 use crate::sweep::generate::{obstacle_table, wrap_deg};
+use crate::types::P2;
 
 /// Redraws of an infeasible world before it is given up.
 pub const MAX_ATTEMPTS: u64 = 20;
@@ -109,6 +110,9 @@ pub struct Row {
     pub perception_miss_mean_m: Option<f64>,
     /// Share of believed obstacle cells with no true surface near them.
     pub perception_false_frac: Option<f64>,
+    /// A formation world's spacing error in transit ([`formation_spacing`]), a share of λ.
+    #[serde(default)]
+    pub formation_spacing: Option<f64>,
     /// Why the run was not flown or failed to run (then `success` is false).
     pub error: Option<String>,
 }
@@ -252,6 +256,7 @@ pub fn fly(case: &Case, params: Option<&Params>, run: &QuietRun, failed_dir: &Pa
         perception_miss_m: None,
         perception_miss_mean_m: None,
         perception_false_frac: None,
+        formation_spacing: None,
         error: None,
     };
     let (world, attempt, shortest) = match feasible_world(case) {
@@ -303,6 +308,7 @@ fn measure(row: &mut Row, out: &RunOutput, world: &World, shortest: f64, referen
         .filter_map(|v| v.counters.map(|c| c.guard_interventions))
         .sum();
     (row.cruise_frac, row.held_frac) = time_shares(out);
+    row.formation_spacing = world.formation_m.and_then(|l| formation_spacing(out, l));
     // Perception: the worst vehicle's miss, the fleet's mean share of false cells.
     let seen: Vec<_> = vs.iter().filter_map(|v| v.perception).collect();
     row.perception_miss_m = seen.iter().map(|p| p.miss_p95_m).reduce(f64::max);
@@ -358,6 +364,43 @@ pub fn time_shares(out: &RunOutput) -> (Option<f64>, Option<f64>) {
     (share(cruise), share(held))
 }
 
+/// How well a formation kept its lattice `lattice` m in transit: over the periods in which
+/// every vehicle is under way (transit, escaping or guarded: before the first arrives), each
+/// vehicle's |distance to its nearest mate − λ| over λ, the mean. 0 is a formation kept on its
+/// lattice; 1 is a vehicle a whole λ off (alone, or on top of a mate). Success alone cannot tell
+/// a formation that held together from vehicles that each went their own way. `None` with
+/// fewer than two vehicles or no such period.
+pub fn formation_spacing(out: &RunOutput, lattice: f64) -> Option<f64> {
+    let vs = &out.vehicles;
+    let periods = vs.iter().map(|v| v.samples.len()).min()?;
+    if vs.len() < 2 || lattice.is_nan() || lattice <= 0.0 {
+        return None;
+    }
+    let under_way = |m: &str| matches!(m, "Transit" | "Escape" | "Guarded");
+    let (mut sum, mut n) = (0.0, 0u32);
+    for k in 0..periods {
+        let at: Vec<(&str, P2)> = vs
+            .iter()
+            .filter_map(|v| v.samples.get(k))
+            .map(|s| (s.mode.as_str(), s.state.position))
+            .collect();
+        if !at.iter().all(|(m, _)| under_way(m)) {
+            continue;
+        }
+        for (i, (_, p)) in at.iter().enumerate() {
+            let nearest = at
+                .iter()
+                .enumerate()
+                .filter(|(j, _)| *j != i)
+                .map(|(_, (_, q))| q.sub(*p).norm())
+                .fold(f64::INFINITY, f64::min);
+            sum += (nearest - lattice).abs() / lattice;
+            n += 1;
+        }
+    }
+    (n > 0).then(|| sum / f64::from(n))
+}
+
 /// A failed run's plot and scenario file, under `dir/<id>/`, so `hil run` can fly it again.
 fn keep_failure(dir: &Path, case: &Case, text: &str, out: &RunOutput) {
     let d: PathBuf = dir.join(crate::output::file_stem(&case.id()));
@@ -411,6 +454,32 @@ mod tests {
             set(v, &[("Hold(StaleNav)", 0.0)]);
         }
         assert_eq!(time_shares(&out), (None, None));
+    }
+
+    #[test]
+    fn a_formation_on_its_lattice_has_no_spacing_error_and_one_apart_has() {
+        let mut out = crate::output::test_support::run();
+        // Two vehicles 4 m apart for 3 periods, then 6 m for 1, then one arrived (not counted).
+        let plan = [
+            (4.0, "Transit"),
+            (4.0, "Guarded"),
+            (4.0, "Escape"),
+            (6.0, "Transit"),
+        ];
+        for (i, v) in out.vehicles.iter_mut().enumerate() {
+            v.samples.truncate(plan.len() + 1);
+            for (k, s) in v.samples.iter_mut().enumerate() {
+                let (gap, mode) = plan.get(k).copied().unwrap_or((40.0, "Arrived"));
+                s.state.position = P2::new(i as f64 * gap, 0.0);
+                s.mode = mode.into();
+            }
+        }
+        // On a 4 m lattice: three periods on it, one half a λ off.
+        let e = formation_spacing(&out, 4.0).unwrap();
+        assert!((e - 0.5 / 4.0).abs() < 1e-12, "{e}");
+        assert_eq!(formation_spacing(&out, 0.0), None);
+        out.vehicles.truncate(1);
+        assert_eq!(formation_spacing(&out, 4.0), None, "no mate");
     }
 
     #[test]

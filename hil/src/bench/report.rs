@@ -44,6 +44,8 @@ pub struct Line {
     pub median_perception_miss_mean_m: Option<f64>,
     /// Median share of believed cells with no true surface near.
     pub median_perception_false: Option<f64>,
+    /// Median formation spacing error, a share of λ ([`super::case::formation_spacing`]).
+    pub median_formation_spacing: Option<f64>,
 }
 
 /// The tables of every configuration.
@@ -137,6 +139,7 @@ fn line(family: &str, rows: &[&Row]) -> Line {
         median_perception_miss_m: f(&|r| r.perception_miss_m),
         median_perception_miss_mean_m: f(&|r| r.perception_miss_mean_m),
         median_perception_false: f(&|r| r.perception_false_frac),
+        median_formation_spacing: f(&|r| r.formation_spacing),
     }
 }
 
@@ -191,8 +194,8 @@ impl Report {
                 "| family | runs | success | collisions | collision rate (95 % bound) | not flown \
                  | clearance worst / median (m) | time / ref (median) | path / shortest (median) \
                  | guard periods (median) | under way: at cruise / held (mean) \
-                 | perception miss mean / p95 (m) | false cells |\n\
-                 |---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
+                 | perception miss mean / p95 (m) | false cells | formation spacing error |\n\
+                 |---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
             );
             for l in lines {
                 let pct = if l.runs > 0 {
@@ -206,7 +209,7 @@ impl Report {
                 let _ = writeln!(
                     s,
                     "| {} | {} | {} ({pct:.0} %) | {} | {bound} | {} | {} / {} | {} | {} | {} | {} / {} \
-                     | {} / {} | {} |",
+                     | {} / {} | {} | {} |",
                     if l.family == "all" {
                         "**all**".to_string()
                     } else {
@@ -226,6 +229,7 @@ impl Report {
                     opt(l.median_perception_miss_mean_m, 2),
                     opt(l.median_perception_miss_m, 2),
                     opt(l.median_perception_false, 3),
+                    pct_of(l.median_formation_spacing),
                 );
             }
             s.push('\n');
@@ -261,6 +265,7 @@ mod tests {
             perception_miss_m: None,
             perception_miss_mean_m: None,
             perception_false_frac: None,
+            formation_spacing: None,
             error: None,
         }
     }
