@@ -8,7 +8,8 @@
 //! vehicle's hull and [`ECHO_MARGIN_M`] of where it is now (its last report carried on its
 //! reported velocity) is that vehicle: the extractor leaves it out of the features and the map
 //! adds no hit for it, though the beam's free water still ends there (behind it is its
-//! acoustic shadow, not open water).
+//! acoustic shadow, not open water). The price: structure within that metre of a mate's hull
+//! goes unseen while the mate is there (the mate itself is about to touch it).
 //!
 //! **Capacity.** [`MAX_KNOWN`] vehicles (the world's agent table, `crate::world::MAX_AGENTS`):
 //! a report updates the entry with its id; a new id takes a free entry or, when full, the
