@@ -26,6 +26,11 @@ use super::{
     ConfigError, Counters, ExtractorConfig, Feature, Pose, ScanError, Scanline, MAX_RUNS_PER_BEAM,
 };
 
+/// Whether bit `k` of a per-echo mask is set (none beyond the eighth).
+fn flagged(mask: u8, k: usize) -> bool {
+    k < 8 && mask & (1 << k) != 0
+}
+
 /// What the extractor remembers of the previous ping.
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct LastPing {
@@ -212,7 +217,7 @@ impl Extractor {
             if let Some(prev) = neighbour {
                 let before = prev.echoes.get(..prev.echo_count).unwrap_or(&[]);
                 for (k, p) in here.echoes.iter().take(here.echo_count).enumerate() {
-                    if vehicle & (1 << k) != 0 {
+                    if flagged(vehicle, k) {
                         continue;
                     }
                     if let Some(q) = before.iter().find(|q| (**q - *p).norm2() <= gap2) {
@@ -227,8 +232,8 @@ impl Extractor {
             let mut kept_seconded = 0u8;
             let mut kept_vehicle = 0u8;
             for (k, e) in echoes.iter().enumerate() {
-                let twice = k < 8 && seconded & (1 << k) != 0;
-                let known = k < 8 && vehicle & (1 << k) != 0;
+                let twice = flagged(seconded, k);
+                let known = flagged(vehicle, k);
                 if e.peak < strong && !twice && !known {
                     continue;
                 }
@@ -261,7 +266,7 @@ impl Extractor {
         for (_, e) in echoes
             .iter()
             .enumerate()
-            .filter(|&(k, e)| e.peak >= strong && !(k < 8 && vehicle & (1 << k) != 0))
+            .filter(|&(k, e)| e.peak >= strong && !flagged(vehicle, k))
         {
             let _ = hits.push(Hit {
                 point: sensor + look * e.range_m,
