@@ -34,6 +34,21 @@
 //!    *neighbours* propose — agents inside the first shell, halfway between the first ring (λ)
 //!    and the second (√2·λ for q = 4, √3·λ for q = 3 and 6). A vehicle with no neighbour yet
 //!    joins its nearest agent's first ring, which is Table 1 applied to that agent alone.
+//!
+//! **A craft that turns slowly waits rather than turns back** ([`hold_back`]; our addition,
+//! none of the seeds has it: 001 flies craft that turn at once). A vehicle ahead of its node
+//! is pulled back by the virtual leader; with eq. 12's pull twice the cruise goal-point's a
+//! few metres off, the field reverses its velocity and a flat-fish (12 m turning radius at
+//! 0.567 m/s) loops round on a 9 m lattice, the fleet weaving at a quarter of its cruise.
+//! So for such a craft the leader may take back at most [`HOLD_BACK`] of the rest of the
+//! field's pull towards the goal-point: a vehicle ahead of its node slows to half its speed
+//! instead of turning, and the ones behind close up at cruise. Sideways and forwards the
+//! leader pulls as the paper's. Flat-fish formations with its recipe (`cargo hil bench
+//! --models flatfish --params hil/recipes/flatfish.toml --families formation --seeds 68`,
+//! seeds 0–67 / 68–135): 39 → 61 and 37 → 63 of 68, spacing error 20 % → 22 % and 20 % → 21 %
+//! (a quarter: 67 with a contact, spacing 25 %; all of it, 40). A VideoRay turns on the spot
+//! and keeps the paper's field: with this, seeds 0–99, 100 of 100 either way, spacing 18 % →
+//! 24 %.
 
 use crate::field::GoalPdf;
 use crate::math::{wrap_angle, Vec2, TAU};
@@ -139,6 +154,27 @@ impl Formation {
     }
 }
 
+/// The most of the rest of the field's pull towards the goal-point that the virtual leader may
+/// take back from a craft that turns slowly ([`hold_back`]).
+pub const HOLD_BACK: f32 = 0.5;
+
+/// The whole field's force for a craft that turns slowly (module notes, "waits rather than
+/// turns back"): `full` and `without_leader` are the sampled forces with and without the
+/// virtual leader (their difference the leader's share), `to_goal` the way to the goal-point.
+/// The leader's share along that way is kept above −[`HOLD_BACK`] times the rest's.
+pub fn hold_back(full: Vec2, without_leader: Vec2, to_goal: Vec2) -> Vec2 {
+    let Some(g) = to_goal.normalized(1e-6) else {
+        return full;
+    };
+    let lead = full - without_leader;
+    let along = lead.dot(g);
+    let floor = -HOLD_BACK * crate::math::max(0.0, without_leader.dot(g));
+    if along >= floor {
+        return full;
+    }
+    full + g * (floor - along)
+}
+
 /// How far ahead a far virtual leader is carried, in σ ([`Formation::leader_pdf`]).
 pub const LEADER_CARROT_SIGMAS: f32 = 2.0;
 
@@ -167,6 +203,28 @@ mod tests {
         let hex = Formation { q: 6, ..f };
         let n = hex.node(Vec2::ZERO, Vec2::new(1.0, 1.9));
         assert!((n - Vec2::from_angle(TAU / 6.0) * 2.0).norm() < 1e-5);
+    }
+
+    #[test]
+    fn a_slow_turning_craft_ahead_of_its_node_is_slowed_not_turned_back() {
+        let to_goal = Vec2::new(10.0, 0.0);
+        let rest = Vec2::new(1.0, 0.2);
+        // The leader pulls back twice as hard as the goal: held to half the rest's pull.
+        let held = hold_back(Vec2::new(-1.0, 0.5), rest, to_goal);
+        assert!((held - Vec2::new(0.5, 0.5)).norm() < 1e-6, "{held:?}");
+        // Pulling forwards or sideways, or back by less than half, it is the paper's.
+        for full in [
+            Vec2::new(2.0, 0.0),
+            Vec2::new(1.0, -3.0),
+            Vec2::new(0.6, 0.2),
+        ] {
+            assert_eq!(hold_back(full, rest, to_goal), full);
+        }
+        // With no way to the goal-point there is nothing to hold to.
+        assert_eq!(
+            hold_back(Vec2::new(-1.0, 0.0), rest, Vec2::ZERO),
+            Vec2::new(-1.0, 0.0)
+        );
     }
 
     #[test]

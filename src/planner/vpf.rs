@@ -207,13 +207,19 @@ impl Planner {
             leave_to_map: world.map_in_use(),
         };
         let forces = field.sampled_forces(&self.circle);
+        // A craft that turns slowly waits for its node rather than turning back to it.
+        let full = if prm.turn_rate_rps > 0.0 && leader.is_some() {
+            super::formation::hold_back(forces.full, forces.without_leader, target - p)
+        } else {
+            forces.full
+        };
         // Virtual viscous friction, 000 eq. 14: F = F_nf − μ·v(k−1). Seed 001 eq. 4 prints
         // "+ μ·v(k−1)"; with μ ≥ 0 that would push the vehicle on in the direction it moves
         // and pump energy in, the opposite of the friction 001 cites from [1, 2] ("virtual
         // viscose friction") and of 000 eq. 14 (the force ξ·|v| at angle π + arg v, i.e.
         // against the motion), whose purpose is to siphon kinetic energy (000 Fig. 2 → 3).
         // 002 writes the friction against the motion too. We take the sign of 000 and 002.
-        let f = forces.full - m.integrator.velocity * prm.mu;
+        let f = full - m.integrator.velocity * prm.mu;
         let mut cmd = self.integrate(m, cx, f);
 
         // What holds a stalled vehicle (escape.rs): is there a way down without the virtual
