@@ -259,7 +259,8 @@ impl GuardConfig {
     /// through. Flat-fish with its recipe (hull 2.6 m; 2.25 m in the simulator), `cargo hil
     /// bench --models flatfish --params hil/recipes/flatfish.toml --first-seed F --seeds 34`:
     /// seeds 0–33 323 → 332 of 408, 0 → 0 contacts, worst clearance 0.55 → 0.29 m; seeds
-    /// 34–67 (held out) 315 → 323, 2 → 2 contacts (crossing movers, −0.01 m).
+    /// 34–67 (held out) 315 → 323, 2 → 2 contacts (crossing movers, −0.01 m); seeds 68–101
+    /// outside formations 289 → 286, 0 → 0 (worst clearance 0.50 → 0.20 m): a gain, noisy.
     pub fn hull_margin(&self, prm: &Params) -> f32 {
         if prm.turn_rate_rps > 0.0 {
             0.0
