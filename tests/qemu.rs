@@ -522,7 +522,13 @@ fn firmware_answers_over_its_uart() {
     assert!(tel.counters.rx_frames >= 140, "{}", tel.counters.rx_frames);
     assert_eq!(tel.counters.deadline_overruns, 0);
     assert_eq!(tel.cost_unit, vpf::link::CostUnit::Instructions);
-    assert!(tel.step_cost > 0);
+    // A step's cost is reported; not necessarily the last one's: without `-icount`, under a
+    // busy host the paused SysTick may reload late and one period's cost read 0
+    // (`PeriodTimer::count`; seen once in CI, the last telemetry's step_cost 0).
+    assert!(
+        rx.telemetry.iter().any(|t| t.step_cost > 0),
+        "no step cost in any telemetry"
+    );
 }
 
 #[path = "common/pymavlink.rs"]
