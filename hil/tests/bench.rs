@@ -91,7 +91,8 @@ fn perfect_perception_reports_no_belief_and_the_reference_is_the_grid_path() {
     assert!(row.error.is_none(), "{:?}", row.error);
     assert_eq!(row.perception_miss_m, None);
     // A wall with a gap 20–40 m off the line: the shortest path is longer than the straight line.
-    let (w, _, shortest) = case::feasible_world(&c).unwrap();
+    let d = case::feasible_world(&c).unwrap();
+    let (w, shortest) = (&d.world, d.shortest_m);
     let straight = w.crafts[0].goal.sub(w.crafts[0].start).norm();
     assert!(shortest > straight + 1.0, "{shortest} vs {straight}");
     assert!((row.reference_s.unwrap() - shortest / case::CRUISE_MPS).abs() < 1e-9);

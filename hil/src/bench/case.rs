@@ -117,39 +117,62 @@ pub struct Row {
     pub error: Option<String>,
 }
 
-/// The world of `case`, feasible for its craft: (world, attempt, shortest path of the
-/// longest mission, m). Feasible: every vehicle has a way through its mission that keeps its
-/// hull and [`FEASIBLE_MARGIN_M`] from every static obstacle (`feasible`; a waypoint mission
-/// leg by leg, from the start to the first waypoint and from each to the next, its shortest
-/// path the legs' sum), and, for a craft with a turning radius
+/// A world drawn for a case and found feasible for its craft ([`feasible_world`]).
+pub struct Drawn {
+    /// The world.
+    pub world: World,
+    /// Which draw of the (family, seed) it is.
+    pub attempt: u64,
+    /// The shortest path of the longest mission, m.
+    pub shortest_m: f64,
+    /// The reference time, s: that path at [`CRUISE_MPS`]; for a craft with a turning
+    /// radius, its first leg no faster than the craft can fly it from its start pose
+    /// (`turning::least_time`: a 40 m mission that starts pointing into an L-shaped trap
+    /// takes the flat-fish 81 m at cruise, slowing to turn).
+    pub reference_s: f64,
+}
+
+/// The world of `case`, feasible for its craft. Feasible: every vehicle has a way through its
+/// mission that keeps its hull and [`FEASIBLE_MARGIN_M`] from every static obstacle
+/// (`feasible`; a waypoint mission leg by leg, from the start to the first waypoint and from
+/// each to the next, its shortest path the legs' sum), and, for a craft with a turning radius
 /// (`crate::runner::turning_radius`), one it can fly on that radius from its start pose to its
 /// first waypoint without slowing to turn (`turning`). Worlds are drawn for the craft's hull
 /// (`worlds::generate`: a formation's lattice).
-pub fn feasible_world(case: &Case) -> Result<(World, u64, f64), Infeasible> {
+pub fn feasible_world(case: &Case) -> Result<Drawn, Infeasible> {
     let hull = hull_radius(case.model);
     let clearance = hull + FEASIBLE_MARGIN_M;
     let radius = turning_radius(case.model);
     let mut last = Infeasible::NoPath;
     for attempt in 0..MAX_ATTEMPTS {
         let w = worlds::generate(case.family, case.seed, attempt, hull);
-        let mut longest: f64 = 0.0;
+        let (mut longest, mut slowest): (f64, f64) = (0.0, 0.0);
         let mut ok = true;
         'crafts: for c in &w.crafts {
+            // A craft that turns on a radius flies its first leg from its start pose.
+            let mut turning_first = 0.0;
             if radius > 0.0 {
                 let first = w.legs(c).into_iter().next().unwrap_or(c.goal);
-                if let Err(e) =
-                    turning::reachable(&w.obstacles, c.start, c.heading, first, clearance, radius)
+                let (o, s, h) = (&w.obstacles, c.start, c.heading);
+                match turning::reachable(o, s, h, first, clearance, radius)
+                    .and_then(|_| turning::least_time(o, s, h, first, clearance, radius))
                 {
-                    last = e;
-                    ok = false;
-                    break 'crafts;
+                    Ok(d) => turning_first = d,
+                    Err(e) => {
+                        last = e;
+                        ok = false;
+                        break 'crafts;
+                    }
                 }
             }
             let mut from = c.start;
-            let mut total = 0.0;
-            for to in w.legs(c) {
+            let (mut total, mut timed) = (0.0, 0.0);
+            for (i, to) in w.legs(c).into_iter().enumerate() {
                 match feasible::shortest_path(&w.obstacles, from, to, clearance) {
-                    Ok(d) => total += d,
+                    Ok(d) => {
+                        total += d;
+                        timed += if i == 0 { d.max(turning_first) } else { d };
+                    }
                     Err(e) => {
                         last = e;
                         ok = false;
@@ -159,9 +182,15 @@ pub fn feasible_world(case: &Case) -> Result<(World, u64, f64), Infeasible> {
                 from = to;
             }
             longest = longest.max(total);
+            slowest = slowest.max(timed);
         }
         if ok {
-            return Ok((w, attempt, longest));
+            return Ok(Drawn {
+                world: w,
+                attempt,
+                shortest_m: longest,
+                reference_s: slowest / CRUISE_MPS,
+            });
         }
     }
     Err(last)
@@ -259,14 +288,18 @@ pub fn fly(case: &Case, params: Option<&Params>, run: &QuietRun, failed_dir: &Pa
         formation_spacing: None,
         error: None,
     };
-    let (world, attempt, shortest) = match feasible_world(case) {
-        Ok(w) => w,
+    let Drawn {
+        world,
+        attempt,
+        shortest_m: shortest,
+        reference_s: reference,
+    } = match feasible_world(case) {
+        Ok(d) => d,
         Err(e) => {
             row.error = Some(format!("no feasible draw in {MAX_ATTEMPTS}: {e}"));
             return row;
         }
     };
-    let reference = shortest / CRUISE_MPS;
     row.reference_s = Some(reference);
     let text = scenario_text(&world, attempt, case, duration_s(reference));
     let mut sc = match scenario::parse(&text, &case.id()) {
@@ -493,8 +526,12 @@ mod tests {
                     model: ModelKind::VideoRay,
                     sensing: Sensing::Sonar,
                 };
-                let (w, attempt, shortest) =
-                    feasible_world(&case).unwrap_or_else(|e| panic!("{}: {e}", case.id()));
+                let Drawn {
+                    world: w,
+                    attempt,
+                    shortest_m: shortest,
+                    ..
+                } = feasible_world(&case).unwrap_or_else(|e| panic!("{}: {e}", case.id()));
                 let straight = w
                     .crafts
                     .iter()
@@ -514,6 +551,30 @@ mod tests {
         }
     }
 
+    /// The flat-fish is timed against the way it can fly from its start pose: a short L-trap
+    /// mission that starts pointing into the trap takes it longer than the grid's path (seed 7:
+    /// 62 m, 81 m at cruise with its turns); the VideoRay, which turns on the spot, is timed
+    /// against the grid's path.
+    #[test]
+    fn a_turning_craft_is_timed_against_the_way_it_can_turn() {
+        let case = |model| Case {
+            family: Family::LTrap,
+            seed: 7,
+            strategy: Strategy::Vpf,
+            model,
+            sensing: Sensing::Sonar,
+        };
+        let f = feasible_world(&case(ModelKind::FlatFish)).unwrap();
+        assert!(
+            f.reference_s > f.shortest_m / CRUISE_MPS + 10.0,
+            "{} s for {} m",
+            f.reference_s,
+            f.shortest_m
+        );
+        let v = feasible_world(&case(ModelKind::VideoRay)).unwrap();
+        assert_eq!(v.reference_s, v.shortest_m / CRUISE_MPS);
+    }
+
     /// A survey world: 4–8 lines, every waypoint clear of the rocks, every leg flyable (the
     /// reference is the legs' sum, longer than the waypoints' polyline), and the scenario file
     /// gives the firmware the same lawnmower (to the millimetre).
@@ -527,7 +588,12 @@ mod tests {
                 model: ModelKind::VideoRay,
                 sensing: Sensing::Sonar,
             };
-            let (w, attempt, shortest) = feasible_world(&case).unwrap();
+            let Drawn {
+                world: w,
+                attempt,
+                shortest_m: shortest,
+                ..
+            } = feasible_world(&case).unwrap();
             let s = w.survey.unwrap();
             let lines = s.lines().unwrap();
             assert!((4..=8).contains(&lines), "{lines}");

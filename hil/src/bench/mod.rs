@@ -11,6 +11,9 @@
 //!   named), each world deterministic from (family, seed);
 //! - [`feasible`]: the grid search that checks a world is flyable by the craft and gives the
 //!   shortest feasible path (the reference time is that path at cruise speed);
+//! - [`turning`]: for a craft with a turning radius, the hybrid-A* search that checks it can
+//!   fly the world from its start pose, and the least time it can (then the reference, if
+//!   longer);
 //! - [`case`]: one run — world, scenario file, flight, measurements;
 //! - [`report`]: the tables (`bench.md`) and `bench.json`.
 //!

@@ -143,7 +143,8 @@ fn advance(from: Pose, k: f64, s: f64) -> Pose {
 
 /// Whether a craft at `start` heading `heading` (rad) that turns on `radius` m and keeps
 /// `clearance` m from every static obstacle can reach within [`GOAL_TOL_M`] of `goal` (module
-/// notes). `Ok(())` when it can.
+/// notes): `Ok(length)` when it can, the length of the way found (the primitives flown, and
+/// the straight remainder to `goal`), m.
 pub fn reachable(
     obstacles: &[SimObstacle],
     start: P2,
@@ -151,7 +152,45 @@ pub fn reachable(
     goal: P2,
     clearance: f64,
     radius: f64,
-) -> Result<(), Infeasible> {
+) -> Result<f64, Infeasible> {
+    search(obstacles, start, heading, goal, clearance, radius, &[1.0])
+}
+
+/// The least time in which that craft reaches `goal` if it may also slow down to turn
+/// tighter — its yaw rate, not its radius, is what is bounded, so at a fraction f of its
+/// cruise speed it turns on f·`radius` — as the distance it would cover at cruise in that
+/// time, m. Primitives at [`SLOWER`] fractions of cruise; this is the reference a craft with a
+/// turning radius is timed against (`crate::bench::case`): the grid's shortest path is one it
+/// cannot always fly (a 40 m mission round the end of an L-shaped trap took it 141 m at cruise).
+pub fn least_time(
+    obstacles: &[SimObstacle],
+    start: P2,
+    heading: f64,
+    goal: P2,
+    clearance: f64,
+    radius: f64,
+) -> Result<f64, Infeasible> {
+    search(obstacles, start, heading, goal, clearance, radius, &SLOWER)
+}
+
+/// The speeds, as fractions of cruise, of [`least_time`]'s primitives.
+pub const SLOWER: [f64; 3] = [1.0, 0.5, 0.25];
+
+/// Hybrid A* from (`start`, `heading`) to within [`GOAL_TOL_M`] of `goal`, with straight and
+/// turning primitives at each of `speeds` (fractions of cruise; at f the turn is on f·`radius`
+/// and a primitive costs its length ÷ f): the cost of the way found, in metres at cruise. The
+/// estimate is the straight-line distance, never more than the cost, so the way is the least
+/// the search's resolution finds (its closed set prunes by cell, so not always the least there
+/// is).
+fn search(
+    obstacles: &[SimObstacle],
+    start: P2,
+    heading: f64,
+    goal: P2,
+    clearance: f64,
+    radius: f64,
+    speeds: &[f64],
+) -> Result<f64, Infeasible> {
     let statics: Vec<&SimObstacle> = obstacles
         .iter()
         .filter(|o| o.velocity.norm() == 0.0)
@@ -200,7 +239,7 @@ pub fn reachable(
     while let Some(Open { g, at, .. }) = open.pop() {
         let q = poses[at];
         if h(q.p) <= GOAL_TOL_M {
-            return Ok(());
+            return Ok(g + h(q.p));
         }
         if !closed.insert(key(q)) {
             continue;
@@ -209,7 +248,14 @@ pub fn reachable(
         if expanded > MAX_EXPANSIONS {
             break;
         }
-        for kk in [0.0, k, -k] {
+        // Straight on at the fastest; turns at every speed.
+        let fastest = speeds.iter().copied().fold(0.0, f64::max);
+        let turns = speeds
+            .iter()
+            .filter(|&&f| f > 0.0)
+            .flat_map(|&f| [(k / f, f), (-k / f, f)])
+            .chain((fastest > 0.0).then_some((0.0, fastest)));
+        for (kk, f) in turns {
             let clear = (1..=samples).all(|n| {
                 let s = STEP_M * n as f64 / samples as f64;
                 !blocked.at(advance(q, kk, s).p)
@@ -221,10 +267,11 @@ pub fn reachable(
             if closed.contains(&key(next)) {
                 continue;
             }
+            let cost = g + STEP_M / f;
             poses.push(next);
             open.push(Open {
-                f: g + STEP_M + h(next.p),
-                g: g + STEP_M,
+                f: cost + h(next.p),
+                g: cost,
                 at: poses.len() - 1,
             });
         }
@@ -248,14 +295,35 @@ mod tests {
     #[test]
     fn open_water_is_reachable_even_behind_the_start() {
         let o = P2::new(0.0, 0.0);
-        assert_eq!(
-            reachable(&[], o, 0.0, P2::new(80.0, 0.0), 2.75, 22.0),
-            Ok(())
+        let ahead = reachable(&[], o, 0.0, P2::new(80.0, 0.0), 2.75, 22.0);
+        assert!(
+            ahead.as_ref().is_ok_and(|&d| (d - 80.0).abs() < 0.5),
+            "{ahead:?}"
         );
-        // Behind: a full turn of 22 m radius first.
-        assert_eq!(
-            reachable(&[], o, 0.0, P2::new(-30.0, 0.0), 2.75, 22.0),
-            Ok(())
+        // Behind: half a turn of 22 m radius first (π·22 = 69 m), 44 m out to the side.
+        let behind = reachable(&[], o, 0.0, P2::new(-30.0, 0.0), 2.75, 22.0);
+        assert!(
+            behind.as_ref().is_ok_and(|&d| d > 69.0 + 30.0),
+            "{behind:?}"
+        );
+    }
+
+    #[test]
+    fn slowing_to_turn_tighter_takes_less_time_than_the_cruise_circle() {
+        // Behind the start: at cruise, half a 22 m circle and back (> 99 m); at a quarter of
+        // cruise the turn is on 5.5 m (17 m of arc at 4 m a metre, then 30 m straight).
+        let o = P2::new(0.0, 0.0);
+        let cruise = reachable(&[], o, 0.0, P2::new(-30.0, 0.0), 2.75, 22.0);
+        let least = least_time(&[], o, 0.0, P2::new(-30.0, 0.0), 2.75, 22.0);
+        assert!(
+            matches!((&cruise, &least), (Ok(c), Ok(l)) if l < c && *l >= 30.0),
+            "{cruise:?} {least:?}"
+        );
+        // Straight ahead it changes nothing.
+        let ahead = least_time(&[], o, 0.0, P2::new(80.0, 0.0), 2.75, 22.0);
+        assert!(
+            ahead.as_ref().is_ok_and(|&d| (d - 80.0).abs() < 0.5),
+            "{ahead:?}"
         );
     }
 
@@ -269,10 +337,10 @@ mod tests {
             reachable(&obs, s, 0.0, g, 2.75, 22.0),
             Err(Infeasible::NoPath)
         );
-        assert_eq!(reachable(&obs, s, 0.0, g, 2.75, 3.0), Ok(()));
+        assert!(reachable(&obs, s, 0.0, g, 2.75, 3.0).is_ok());
         // Heading along the wall, the goal is a straight run away.
         let up = std::f64::consts::FRAC_PI_2;
-        assert_eq!(reachable(&obs, s, up, g, 2.75, 22.0), Ok(()));
+        assert!(reachable(&obs, s, up, g, 2.75, 22.0).is_ok());
     }
 
     #[test]
@@ -284,7 +352,7 @@ mod tests {
         ];
         // 7 m between the walls' faces: 3.5 m each side, more than 2.75 m.
         let r = reachable(&obs, P2::new(5.0, 0.0), 0.0, P2::new(95.0, 0.0), 2.75, 22.0);
-        assert_eq!(r, Ok(()));
+        assert!(r.as_ref().is_ok_and(|&d| (d - 90.0).abs() < 0.5), "{r:?}");
         let r = reachable(&obs, P2::new(5.0, 0.0), 0.0, P2::new(95.0, 0.0), 3.75, 22.0);
         assert!(r.is_err(), "{r:?}");
     }

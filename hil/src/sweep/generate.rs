@@ -501,14 +501,19 @@ pub fn batch(spec: &Spec, spec_dir: &std::path::Path) -> Result<Batch, ScenarioE
                 sensing: sc.sensing,
             };
             let id = format!("bench:{}:{}", family.name(), sc.bench_first_seed + i as u64);
-            let (w, attempt, shortest) = match crate::bench::case::feasible_world(&case) {
+            let crate::bench::case::Drawn {
+                world: w,
+                attempt,
+                reference_s,
+                ..
+            } = match crate::bench::case::feasible_world(&case) {
                 Ok(found) => found,
                 Err(e) => {
                     left_out.push((id, format!("no draw fits the craft: {e}")));
                     continue;
                 }
             };
-            let limit = crate::bench::case::duration_s(shortest / crate::bench::case::CRUISE_MPS);
+            let limit = crate::bench::case::duration_s(reference_s);
             let text = crate::bench::case::scenario_text(&w, attempt, &case, limit);
             let s = scenario::parse(&text, &id)?;
             out.push(fix(s, id, text));
