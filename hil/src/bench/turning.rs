@@ -161,7 +161,8 @@ pub fn reachable(
 /// cruise speed it turns on f·`radius` — as the distance it would cover at cruise in that
 /// time, m. Primitives at [`SLOWER`] fractions of cruise; this is the reference a craft with a
 /// turning radius is timed against (`crate::bench::case`): the grid's shortest path is one it
-/// cannot always fly (a 40 m mission round the end of an L-shaped trap took it 141 m at cruise).
+/// cannot always fly (a 62 m one into an L-shaped trap: 141 m on the cruise radius alone, 81 m
+/// slowing to turn).
 pub fn least_time(
     obstacles: &[SimObstacle],
     start: P2,
@@ -310,8 +311,9 @@ mod tests {
 
     #[test]
     fn slowing_to_turn_tighter_takes_less_time_than_the_cruise_circle() {
-        // Behind the start: at cruise, half a 22 m circle and back (> 99 m); at a quarter of
-        // cruise the turn is on 5.5 m (17 m of arc at 4 m a metre, then 30 m straight).
+        // Behind the start: at cruise, half a 22 m circle, 44 m out to the side, and back; at a
+        // quarter of cruise half a 5.5 m circle (17 m of arc, each metre four at cruise), then
+        // about 30 m straight.
         let o = P2::new(0.0, 0.0);
         let cruise = reachable(&[], o, 0.0, P2::new(-30.0, 0.0), 2.75, 22.0);
         let least = least_time(&[], o, 0.0, P2::new(-30.0, 0.0), 2.75, 22.0);
