@@ -15,7 +15,8 @@
 //!    straight line, again with less growth, down to only as much as keeps every way as wide
 //!    as the hull (none for a small craft; a disc's octagon for a larger one, [`grow`]), and
 //!    takes the widest pass whose way is at most a quarter longer than the shortest
-//!    ([`acceptable`]). Keeping 4 m off on 2 m cells closes
+//!    ([`acceptable`]); a large craft whose hull's pass finds none gets one more, with the
+//!    obstacles as they are (`Router::bare_pass`). Keeping 4 m off on 2 m cells closes
 //!    every gap under about 10 m; a waypoint 26 m away behind a 5 m gap between two rocks
 //!    was once reached after a 300 m tour of the field (`waypoints_through_clutter.toml`);
 //! 3. walks down the wavefront from the vehicle and takes the farthest cell of the walk it can
@@ -320,7 +321,7 @@ impl Router {
             }
         }
         let Some(shortest) = ways.iter().flatten().min().copied() else {
-            return false;
+            return self.bare_pass(start, source);
         };
         let chosen = passes
             .iter()
@@ -336,6 +337,23 @@ impl Router {
             }
             None => false,
         }
+    }
+
+    /// The last resort of a large craft whose hull's pass found no way: the obstacles as they
+    /// are, as a small craft's last pass has them (for which there is nothing more to try).
+    /// On 2 m cells the hull's growth closes a channel a flat-fish fits that runs at 45° to
+    /// the grid (9 m between the walls' centres): routed nowhere, it was left to the field,
+    /// which turned it at the mouth towards the goal beyond a wall and held it there for the
+    /// whole run (bench channel seed 18). The guard still keeps the hull off what is believed;
+    /// a way too narrow for it ends where the guard stops it, as no way did.
+    fn bare_pass(&mut self, start: Cell, source: Cell) -> bool {
+        if self.narrowest == 0 {
+            return false;
+        }
+        self.fill_blocked(0, start, source);
+        self.wave
+            .spread(&self.blocked, source, start, MAX_LAYERS)
+            .is_some()
     }
 
     /// Walks down from `start` (at most [`MAX_WALK`] steps) and returns the farthest cell of
@@ -622,19 +640,17 @@ mod tests {
         assert_eq!(one(true), 9, "a square");
     }
 
-    #[test]
-    fn a_channel_at_45_degrees_ten_metres_wide_is_open_to_the_flat_fish() {
-        // Two charted walls 60 m long at 45° with 10 m of water between them. The flat-fish's
-        // hull (2.25 m) grows them by one 2 m cell: a side step leaves a way; a square one
-        // (corners too) closes channels at 45° narrower than 12 m.
+    /// A router for a craft of hull `hull_m` in a channel of two charted walls 60 m long at
+    /// 45° to the grid, their centres `apart_m` apart, and its route to a goal 45 m up it.
+    fn channel_at_45_degrees(hull_m: f32, apart_m: f32) -> Route {
         let mut r = Router::new(RouteConfig::default());
         r.set_params(&Params {
-            agent_radius_m: 2.25,
+            agent_radius_m: hull_m,
             ..Params::default()
         });
         r.grid.follow(Vec2::ZERO);
         let axis = Vec2::from_angle(crate::math::PI / 4.0);
-        let side = axis.perp() * 5.5;
+        let side = axis.perp() * (0.5 * apart_m);
         for s in [side, -side] {
             let wall =
                 Shape::rectangle(axis * 25.0 + s, Vec2::new(30.0, 0.5), crate::math::PI / 4.0)
@@ -642,7 +658,30 @@ mod tests {
             r.obstacle(&wall, Vec2::ZERO);
         }
         r.set_goal(Some(axis * 45.0));
-        let route = r.on_nav(Vec2::ZERO, 0, None).unwrap();
+        r.on_nav(Vec2::ZERO, 0, None).unwrap()
+    }
+
+    #[test]
+    fn a_channel_at_45_degrees_ten_metres_wide_is_open_to_the_flat_fish() {
+        // 10 m of water. The flat-fish's hull (2.25 m) grows the walls by one 2 m cell: a side
+        // step leaves a way; a square one (corners too) closes channels at 45° narrower than
+        // 12 m.
+        let route = channel_at_45_degrees(2.25, 11.0);
         assert_ne!(route.status, RouteStatus::Blocked, "{route:?}");
+    }
+
+    #[test]
+    fn a_narrower_channel_the_hulls_pass_closes_is_still_routed_up() {
+        // 8.3 m of water (bench channel seed 18): the hull's pass closes it, the bare one does
+        // not, and the way goes up the channel, not round the walls.
+        let route = channel_at_45_degrees(2.6, 9.3);
+        assert_ne!(route.status, RouteStatus::Blocked, "{route:?}");
+        let axis = Vec2::from_angle(crate::math::PI / 4.0);
+        assert!(route.aim.dot(axis) > 5.0, "{route:?}");
+        assert!(route.aim.cross(axis).abs() < 4.65, "{route:?}");
+        // A small craft's last pass is already the bare one: nothing more to try.
+        let mut r = Router::new(RouteConfig::default());
+        r.set_params(&Params::default());
+        assert!(!r.bare_pass((0, 0), (1, 1)));
     }
 }
