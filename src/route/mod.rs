@@ -310,8 +310,7 @@ impl Router {
             if k > 0 && passes.get(k - 1) == Some(&g) {
                 continue;
             }
-            self.fill_blocked(g, start, source);
-            let d = self.wave.spread(&self.blocked, source, start, MAX_LAYERS);
+            let d = self.spread(g, start, source);
             spread_last = Some(g);
             if let (Some(d), Some(slot)) = (d, ways.get_mut(k)) {
                 *slot = Some(d);
@@ -329,12 +328,7 @@ impl Router {
             .find(|(_, d)| d.is_some_and(|d| d <= acceptable(shortest)));
         match chosen {
             Some((&g, _)) if spread_last == Some(g) => true,
-            Some((&g, _)) => {
-                self.fill_blocked(g, start, source);
-                self.wave
-                    .spread(&self.blocked, source, start, MAX_LAYERS)
-                    .is_some()
-            }
+            Some((&g, _)) => self.spread(g, start, source).is_some(),
             None => false,
         }
     }
@@ -350,10 +344,14 @@ impl Router {
         if self.narrowest == 0 {
             return false;
         }
-        self.fill_blocked(0, start, source);
-        self.wave
-            .spread(&self.blocked, source, start, MAX_LAYERS)
-            .is_some()
+        self.spread(0, start, source).is_some()
+    }
+
+    /// One pass: `blocked` filled with obstacles grown by `growth` cells and the wavefront
+    /// spread through it; the way's length in steps, if there is one.
+    fn spread(&mut self, growth: u8, start: Cell, source: Cell) -> Option<u32> {
+        self.fill_blocked(growth, start, source);
+        self.wave.spread(&self.blocked, source, start, MAX_LAYERS)
     }
 
     /// Walks down from `start` (at most [`MAX_WALK`] steps) and returns the farthest cell of
