@@ -47,7 +47,7 @@ pub struct TelemetryCounters {
     pub table_full: u32,
     /// Sensed obstacles evicted from a full table by nearer ones.
     pub table_evicted: u32,
-    /// Sonar features extracted.
+    /// Sonar features extracted (glimpses included: [`crate::sonar::GLIMPSE_INTENSITY`]).
     pub features_extracted: u32,
     /// Periods whose command the guard turned, slowed or stopped (after the sixteen above on
     /// the wire).

@@ -13,7 +13,8 @@
 //!    it to the cluster table;
 //! 4. close clusters that missed this beam one too many times, or that span `max_span_rad`.
 //!
-//! A closed cluster leaves as a [`Feature`] if it has `min_beams` hits and `min_confidence`.
+//! A closed cluster leaves as a [`Feature`] if it has `min_beams` hits and `min_confidence`,
+//! or as a *glimpse* if it is one beam of a strong echo ([`GLIMPSE_INTENSITY`]).
 
 use crate::math::{cos, sin, wrap_angle, Vec2};
 
@@ -25,6 +26,16 @@ use super::known::KnownVehicles;
 use super::{
     ConfigError, Counters, ExtractorConfig, Feature, Pose, ScanError, Scanline, MAX_RUNS_PER_BEAM,
 };
+
+/// Mean intensity from which a cluster of one beam leaves as a *glimpse*: a feature of one
+/// beam and confidence 0, which the tracker takes only as the second look at a target seen
+/// once (`crate::guidance::tracks`, "Glimpses"), never as a new obstacle. Another VideoRay,
+/// narrower than the 3° beam, is on one 1.8° ping as often as on two: two meeting head-on
+/// each saw the other on two beams at 26 m, and a sweep later, at 8 m, on one (a return of
+/// 210, saturating at 250), so neither ever rated the other (generated head-on seed 93). A
+/// spurious target, which is one ping too, returns less (the simulated ones at most 176;
+/// speckle is one bin, shorter than a run).
+pub const GLIMPSE_INTENSITY: f32 = 200.0;
 
 /// Whether bit `k` of a per-echo mask is set (none beyond the eighth).
 fn flagged(mask: u8, k: usize) -> bool {
@@ -316,10 +327,12 @@ impl Extractor {
         } = self;
         let mut accepted = 0;
         table.close_where(close, |c| {
-            let feature = (c.moments.hits() >= u32::from(cfg.min_beams))
+            let hits = c.moments.hits();
+            let glimpse = hits == 1 && c.moments.mean_intensity() >= GLIMPSE_INTENSITY;
+            let feature = (hits >= u32::from(cfg.min_beams) || glimpse)
                 .then(|| c.moments.fit(c.spanned(), c.time_ms, cfg))
                 .flatten()
-                .filter(|f| f.confidence >= cfg.min_confidence);
+                .filter(|f| f.confidence >= cfg.min_confidence || glimpse);
             match feature {
                 Some(f) if out(f) => {
                     counters.features = counters.features.saturating_add(1);
@@ -503,11 +516,17 @@ mod tests {
                 range_m: head.range,
                 bins: &bins[..nbins],
             };
-            ex.push_scanline(&scan, pose, &mut |f| found.push(f).is_ok())
+            ex.push_scanline(&scan, pose, &mut |f| keep(&mut found, f))
                 .unwrap();
         }
-        ex.flush(&mut |f| found.push(f).is_ok());
+        ex.flush(&mut |f| keep(&mut found, f));
         found
+    }
+
+    /// Collects a feature; a glimpse (one beam: speckle makes them too, and only the tracker's
+    /// second look at a target takes one) is accepted and left out.
+    fn keep(found: &mut Found, f: Feature) -> bool {
+        f.beams == 1 || found.push(f).is_ok()
     }
 
     fn circle_of(f: &Feature) -> f32 {
@@ -625,6 +644,39 @@ mod tests {
             (true, 0),
             "two beams: a surface"
         );
+    }
+
+    #[test]
+    fn a_strong_echo_on_one_beam_leaves_as_a_glimpse() {
+        // Another VideoRay at 8 m on one ping (head-on seed 93: a return of 210, saturating):
+        // a glimpse, of one beam and confidence 0, for the tracker. A weaker one-ping echo (a
+        // spurious target) leaves nothing.
+        let step = SCAN.step;
+        let fly = |level: u8| {
+            let mut bins = [0u8; 300];
+            bins[80..83].fill(level);
+            let quiet = [0u8; 300];
+            let mut ex = Extractor::new(ExtractorConfig::default()).unwrap();
+            let mut found = heapless::Vec::<Feature, 4>::new();
+            for (k, b) in [&quiet, &bins, &quiet, &quiet].iter().enumerate() {
+                let sl = Scanline {
+                    time_ms: 60 * k as u64,
+                    bearing_rad: k as f32 * step,
+                    step_rad: step,
+                    range_m: 30.0,
+                    bins: &b[..],
+                };
+                ex.push_scanline(&sl, STILL.pose(0.0), &mut |f| found.push(f).is_ok())
+                    .unwrap();
+            }
+            ex.flush(&mut |f| found.push(f).is_ok());
+            found
+        };
+        let strong = fly(200);
+        assert_eq!(strong.len(), 1, "{strong:?}");
+        assert!(strong.iter().all(|f| f.beams == 1 && f.confidence == 0.0));
+        assert!(strong.iter().all(|f| (f.center.norm() - 8.0).abs() < 0.5));
+        assert!(fly(120).is_empty());
     }
 
     #[test]

@@ -124,6 +124,11 @@ impl Moments {
         self.n
     }
 
+    /// Mean echo intensity of the hits (after the range gain).
+    pub fn mean_intensity(&self) -> f32 {
+        self.intensity / self.n.max(1) as f32
+    }
+
     /// The fitted feature, `None` if any number came out non-finite. `spanned` is the number of
     /// beams from the first to the last hit (≥ hits when beams were missed).
     pub fn fit(&self, spanned: u32, time_ms: u64, cfg: &ExtractorConfig) -> Option<Feature> {

@@ -53,7 +53,10 @@
 //!    above the simulated false targets' 176) let two VideoRays see each other more often,
 //!    but crossing and head-on worlds × 3 strategies, seeds 0–199, had 32 contacts against
 //!    18: the movers' one-beam fragments opened tracks, and sightings seconds apart gave
-//!    velocities far off; opening new tracks only, never updating one, 31.
+//!    velocities far off; opening new tracks only, never updating one, 31. The converse is
+//!    kept: a strong single beam leaves as a *glimpse* ([`GLIMPSE_INTENSITY`]: one
+//!    beam, confidence 0) that never opens a track and only gives a track seen once its
+//!    second look (`crate::guidance::tracks`, "Glimpses").
 //!
 //! **Vehicles it is told about.** An echo on a vehicle the host reports (`Contacts` of kind
 //! vehicle: a formation's mates) is that vehicle, not structure: it leaves no feature and no
@@ -104,7 +107,7 @@ pub use detect::Echo;
 pub use evidence::{
     Beam, EvidenceConfig, EvidenceError, EvidenceMap, Near, Window, MAP_SIDE, MAX_REACH_CELLS,
 };
-pub use extractor::Extractor;
+pub use extractor::{Extractor, GLIMPSE_INTENSITY};
 pub use known::{KnownVehicles, ECHO_MARGIN_M, MAX_AGE_MS, MAX_KNOWN};
 pub use lookout::{Lookout, LOOK_SECTORS};
 
