@@ -597,6 +597,17 @@ mod tests {
         );
     }
 
+    /// The `k`-th of a run of 30 m scanlines one step apart, 60 ms apart, from the bow.
+    fn nth_line(k: usize, bins: &[u8]) -> Scanline<'_> {
+        Scanline {
+            time_ms: 60 * k as u64,
+            bearing_rad: k as f32 * SCAN.step,
+            step_rad: SCAN.step,
+            range_m: 30.0,
+            bins,
+        }
+    }
+
     #[test]
     fn a_weak_echo_feeds_the_map_when_two_beams_agree_and_never_a_feature() {
         // At 4 m (within the map's near_m, gain 1.16) a raw 95 is 110 compensated: above
@@ -610,13 +621,7 @@ mod tests {
             let mut ex = Extractor::new(ExtractorConfig::default()).unwrap();
             let mut features = 0;
             for (k, bins) in lines.iter().enumerate() {
-                let sl = Scanline {
-                    time_ms: 60 * k as u64,
-                    bearing_rad: k as f32 * step,
-                    step_rad: step,
-                    range_m: 30.0,
-                    bins: &bins[..],
-                };
+                let sl = nth_line(k, &bins[..]);
                 let mut count = |_| {
                     features += 1;
                     true
@@ -651,7 +656,6 @@ mod tests {
         // Another VideoRay at 8 m on one ping (head-on seed 93: a return of 210, saturating):
         // a glimpse, of one beam and confidence 0, for the tracker. A weaker one-ping echo (a
         // spurious target) leaves nothing.
-        let step = SCAN.step;
         let fly = |level: u8| {
             let mut bins = [0u8; 300];
             bins[80..83].fill(level);
@@ -659,13 +663,7 @@ mod tests {
             let mut ex = Extractor::new(ExtractorConfig::default()).unwrap();
             let mut found = heapless::Vec::<Feature, 4>::new();
             for (k, b) in [&quiet, &bins, &quiet, &quiet].iter().enumerate() {
-                let sl = Scanline {
-                    time_ms: 60 * k as u64,
-                    bearing_rad: k as f32 * step,
-                    step_rad: step,
-                    range_m: 30.0,
-                    bins: &b[..],
-                };
+                let sl = nth_line(k, &b[..]);
                 ex.push_scanline(&sl, STILL.pose(0.0), &mut |f| found.push(f).is_ok())
                     .unwrap();
             }
