@@ -7,11 +7,12 @@ use rtic::Mutex;
 use vpf::guidance::{Background, BackgroundOutputs, Control, NavSample, Sighting};
 use vpf::link::ReplyRepr;
 use vpf::route::{Route, Router};
+use vpf::sonar::EvidenceMap;
 
 use super::mavlink::MavPort;
 use super::queues::Producers;
 use super::sonar::SonarPort;
-use super::{GoalFlown, LinkCounters, Lockstep, Stats, CONTROL_RX_SLOTS, EVIDENCE, ROUTE};
+use super::{GoalFlown, LinkCounters, Lockstep, Stats, CONTROL_RX_SLOTS, ROUTE};
 
 /// What the background shares with the periodic task: RTIC's shared resources seen from idle,
 /// each access one short lock at the periodic task's priority (the UART's is above it, so no
@@ -126,6 +127,8 @@ pub fn run(task: &mut BackgroundTask, shared: &mut impl Exchange) -> ! {
 pub struct BackgroundTask {
     background: Background,
     router: &'static mut Router,
+    /// The evidence map it writes (the periodic task reads it).
+    evidence: &'static EvidenceMap,
     inbox: Consumer<'static, u8, CONTROL_RX_SLOTS>,
     /// The control link's receive task held a byte back (its queue was full).
     held: &'static core::sync::atomic::AtomicBool,
@@ -168,7 +171,7 @@ impl BackgroundTask {
     /// The background's state around its queue ends.
     pub fn new(
         background: Background,
-        router: &'static mut Router,
+        (router, evidence): (&'static mut Router, &'static EvidenceMap),
         (inbox, held): (
             Consumer<'static, u8, CONTROL_RX_SLOTS>,
             &'static core::sync::atomic::AtomicBool,
@@ -180,6 +183,7 @@ impl BackgroundTask {
         BackgroundTask {
             background,
             router,
+            evidence,
             inbox,
             held,
             queues,
@@ -225,7 +229,7 @@ impl BackgroundTask {
                     queues: &mut self.queues,
                     exchange: &mut *exchange,
                 },
-                Some(&EVIDENCE),
+                Some(self.evidence),
                 Some(self.router),
             );
             if let Some(time_ms) = exchange.period_pending() {
@@ -321,7 +325,7 @@ impl BackgroundTask {
             now,
             pose,
             &mut |f| outbox.send(f),
-            &mut |scan, pose| background.on_scanline(scan, pose, &mut outlet, Some(&EVIDENCE)),
+            &mut |scan, pose| background.on_scanline(scan, pose, &mut outlet, Some(self.evidence)),
         );
         crate::board::active::kick_sonar_tx();
     }
@@ -351,7 +355,7 @@ impl BackgroundTask {
             now,
             background,
             &mut outlet,
-            Some(&EVIDENCE),
+            Some(self.evidence),
             Some(&mut **router),
         );
     }
@@ -376,7 +380,7 @@ impl BackgroundTask {
                     queues: &mut self.queues,
                     exchange: &mut *exchange,
                 },
-                Some(&EVIDENCE),
+                Some(self.evidence),
                 Some(self.router),
             );
         }

@@ -42,7 +42,7 @@ use core::mem::MaybeUninit;
 use vpf::guidance::{Background, BackgroundCounters, Periodic, RuntimeConfig, RX_QUEUE, TX_QUEUE};
 use vpf::link::RxCounters;
 use vpf::params::Params;
-use vpf::route::{RouteSlot, Router};
+use vpf::route::{RouteConfig, RouteSlot, Router};
 use vpf::sonar::ping360::{Ping360, Ping360Config, Ping360Counters};
 use vpf::sonar::{EvidenceMap, ExtractorConfig};
 
@@ -139,9 +139,6 @@ impl Fill {
     }
 }
 
-/// The evidence map: written by the background, read by the periodic task (atomic cells and a
-/// sequence-counted window: `vpf::sonar::evidence`), so it needs no lock.
-static EVIDENCE: EvidenceMap = EvidenceMap::empty();
 /// The newest route: written by the background, read by the periodic task (a sequence-counted
 /// slot of atomics: `vpf::route::handoff`).
 static ROUTE: RouteSlot = RouteSlot::new();
@@ -154,6 +151,10 @@ pub struct Memory {
     missions: MissionQueue,
     queues: Queues,
     runtime: MaybeUninit<Periodic>,
+    router: MaybeUninit<Router>,
+    /// Written by the background, read by the periodic task (atomic cells and a
+    /// sequence-counted window: `vpf::sonar::evidence`), so it needs no lock.
+    evidence: MaybeUninit<EvidenceMap>,
 }
 
 impl Memory {
@@ -166,6 +167,8 @@ impl Memory {
             missions: MissionQueue::new(),
             queues: Queues::new(),
             runtime: MaybeUninit::uninit(),
+            router: MaybeUninit::uninit(),
+            evidence: MaybeUninit::uninit(),
         }
     }
 }
@@ -213,7 +216,6 @@ fn runtime_config() -> RuntimeConfig {
 /// not to be).
 pub fn start(
     memory: &'static mut Memory,
-    router: &'static mut Router,
     params: Params,
     timer: PeriodTimer,
     watchdog: board::Watchdog,
@@ -222,6 +224,8 @@ pub fn start(
     let runtime = memory.runtime.write(runtime);
     // Contacts get the planner's A_s⁺ when the periodic task admits them.
     let background = Background::new(ExtractorConfig::default(), params.a_plus).ok()?;
+    let router = memory.router.write(Router::new(RouteConfig::DEFAULT));
+    let evidence: &'static EvidenceMap = memory.evidence.write(EvidenceMap::empty());
     router.set_params(&params);
     let ping360 = Ping360::new(Ping360Config::BOARD).ok()?;
     let sonar = memory.sonar.split();
@@ -231,7 +235,7 @@ pub fn start(
     let link = memory.control.split();
     let (producers, consumers) = memory.queues.split();
     let mut periodic = PeriodicTask::new(
-        runtime,
+        (runtime, evidence),
         link.outbox,
         link.dropped,
         consumers,
@@ -244,7 +248,7 @@ pub fn start(
         periodic,
         background: BackgroundTask::new(
             background,
-            router,
+            (router, evidence),
             (link.inbox, link.held),
             producers,
             SonarPort::new(ping360, sonar.inbox, sonar.outbox, sonar.held),

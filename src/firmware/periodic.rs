@@ -6,10 +6,11 @@ use core::sync::atomic::Ordering;
 use vpf::guidance::{Control, NavSample, Periodic, PeriodicInputs, Sighting};
 use vpf::link::ReplyRepr;
 use vpf::route::Route;
+use vpf::sonar::EvidenceMap;
 
 use super::mavlink::MavOut;
 use super::queues::Consumers;
-use super::{ControlOutbox, GoalFlown, LinkCounters, Lockstep, Stats, EVIDENCE, ROUTE};
+use super::{ControlOutbox, GoalFlown, LinkCounters, Lockstep, Stats, ROUTE};
 use crate::board::active as board;
 use crate::board::systick::PeriodTimer;
 
@@ -18,6 +19,8 @@ pub struct PeriodicTask {
     /// The runtime's hard-real-time half (built in place in its own static: it is the one big
     /// object).
     pub runtime: &'static mut Periodic,
+    /// The evidence map the background writes.
+    evidence: &'static EvidenceMap,
     /// Frames out, to the control link's transmit interrupt.
     pub outbox: ControlOutbox,
     /// The control link's count of received bytes dropped on a full queue.
@@ -91,7 +94,7 @@ impl PeriodicInputs for Inlet<'_> {
 impl PeriodicTask {
     /// The task's state; the timer is not running yet ([`PeriodicTask::start`]).
     pub fn new(
-        runtime: &'static mut Periodic,
+        (runtime, evidence): (&'static mut Periodic, &'static EvidenceMap),
         outbox: ControlOutbox,
         rx_dropped: &'static core::sync::atomic::AtomicU32,
         queues: Consumers,
@@ -101,6 +104,7 @@ impl PeriodicTask {
     ) -> Self {
         PeriodicTask {
             runtime,
+            evidence,
             outbox,
             rx_dropped,
             queues,
@@ -172,7 +176,7 @@ impl PeriodicTask {
         let cmd = self.runtime.on_tick(
             now,
             &mut inputs,
-            Some(&EVIDENCE),
+            Some(self.evidence),
             &mut board::cost_now,
             &mut send,
         );

@@ -7,7 +7,6 @@
 mod app {
     use vpf::guidance::NavSample;
     use vpf::params::Params;
-    use vpf::route::{RouteConfig, Router};
 
     use crate::board::mps2_an386 as board;
     use crate::firmware::background::{self, BackgroundTask, IdleShared};
@@ -64,11 +63,10 @@ mod app {
     }
 
     /// Start-up, interrupts masked: the stack guard, UART0 and SysTick, the runtime built in
-    /// its statics (`memory` in `.bss`; the route layer's grid built at compile time in `.data`,
-    /// so its 2.5 KiB never pass through the stack), the queues split into their ends.
+    /// its statics (`memory` in `.bss`, with the route layer and the evidence map: in `.data`
+    /// their initial values took 4.5 KiB of flash), the queues split into their ends.
     #[init(local = [
         memory: Memory = Memory::new(),
-        router: Router = Router::new(RouteConfig::DEFAULT),
     ])]
     fn init(cx: init::Context) -> (Shared, Local) {
         board::log(concat!("vpf-firmware ", env!("CARGO_PKG_VERSION"), "\n").as_bytes());
@@ -78,7 +76,6 @@ mod app {
         };
         let Some(fw) = crate::firmware::start(
             cx.local.memory,
-            cx.local.router,
             Params::default(),
             parts.timer,
             parts.watchdog,
