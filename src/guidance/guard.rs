@@ -155,8 +155,8 @@
 //! and one closest-approach per mover ([`TRACK_STEPS`] of them for a slow-turning craft).
 //! The worst case is a slow-turning craft in traffic closing from all round, which searches
 //! every heading twice for a clear motion and once more for the least bad: `cargo selftest`'s
-//! flat-fish in traffic, whole period at most 423 280 instructions (393 280 without the least
-//! bad, when that was measured), the planner's step 88 320.
+//! flat-fish in traffic, whole period at most 430 160 instructions (393 280 without the least
+//! bad, when that was measured), the planner's step 88 440.
 
 use super::tracks::Tracks;
 use crate::math::{cos, max, min, sin, wrap_angle, Vec2};

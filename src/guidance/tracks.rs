@@ -115,7 +115,11 @@
 //! track — one beam cannot tell a small target from a spurious one — but is the second look
 //! at a compact track seen once: taken when it lies on nothing believed (a rock's edge on one
 //! beam is that rock), a sweep or more after the sighting, within that track's unrated gate
-//! and no other's (one beam between two tracks seen once is dropped, not guessed).
+//! and no other's. One beam in two tracks' gates is held, not guessed, until the head has
+//! looked at them again (at most `revisit_ms`): a candidate seen again where it was is still,
+//! and the glimpse was the other (head-on seed 111: another VideoRay seen once 29 m off and a
+//! rock seen once 14 m off both gated a glimpse 13 m off; dropped, the vehicle stayed a
+//! "still rock" and the two met 8 s later).
 //! Only a track no larger than [`GLIMPSED_DM`] takes one: for every compact track, multipoint
 //! lost 9 of 400 clutter and box worlds (a glimpse near a rock seen once gave it a velocity).
 //! Crossing and head-on worlds × 3 strategies, seeds 0–199: contacts 19 → 17, none new;
@@ -382,6 +386,16 @@ fn decimetres(r: f32) -> u8 {
 pub struct Tracks {
     next_id: u16,
     tracks: Vec<Track, MAX_TRACKS>,
+    /// A glimpse in two tracks' gates (centre, time), until a later sighting settles which.
+    held: Option<(Vec2, u64)>,
+}
+
+/// Which track a glimpse is the second look at.
+enum Glimpsed {
+    None,
+    One(usize),
+    /// Two or more: held ([`Tracks::settle_held`]).
+    Many,
 }
 
 impl Default for Tracks {
@@ -389,6 +403,7 @@ impl Default for Tracks {
         Tracks {
             next_id: SONAR_ID_BASE,
             tracks: Vec::new(),
+            held: None,
         }
     }
 }
@@ -467,10 +482,11 @@ impl Tracks {
         }
     }
 
-    /// A glimpse `f` (one strong beam, confidence 0: [`crate::sonar::GLIMPSE_INTENSITY`]) as the
-    /// second look at the nearest compact track seen once, a sweep or more ago, whose gate it
+    /// A glimpse `f` (one beam, confidence 0: [`crate::sonar::GLIMPSE_INTENSITY`]) as the
+    /// second look at the one compact track seen once, a sweep or more ago, whose gate it
     /// falls in — if it lies on nothing else believed (a rock's edge on one beam is that rock).
-    /// Otherwise it is dropped: it never opens a track (module notes, "Glimpses").
+    /// In two tracks' gates it is held until the sweep has looked at them again; with none it
+    /// is dropped: it never opens a track (module notes, "Glimpses").
     fn glimpse(
         &mut self,
         cfg: &TrackConfig,
@@ -481,41 +497,93 @@ impl Tracks {
         if f.runs_on {
             return Admission::LowConfidence;
         }
-        let gated = |t: &Track| {
-            let gap = f.time_ms.saturating_sub(t.time_ms) as f32 * 1e-3;
+        match self.glimpsed(cfg, world, f.center, f.time_ms) {
+            Glimpsed::One(i) => self.take_glimpse(cfg, world, i, (f.center, f.time_ms), vehicle),
+            Glimpsed::Many => {
+                self.held = Some((f.center, f.time_ms));
+                Admission::LowConfidence
+            }
+            Glimpsed::None => Admission::LowConfidence,
+        }
+    }
+
+    /// The track a glimpse at `center`, `time_ms` is the second look at, if one.
+    fn glimpsed(&self, cfg: &TrackConfig, world: &World, center: Vec2, time_ms: u64) -> Glimpsed {
+        let gated = |t: &&Track| {
+            let gap = time_ms.saturating_sub(t.time_ms) as f32 * 1e-3;
             let gate = t.extent_m() + cfg.gate_m + cfg.gate_speed_mps * min(gap, UNRATED_GAP_S);
             !t.rated
                 && (1..=GLIMPSED_DM).contains(&t.largest_dm)
-                && f.time_ms >= t.time_ms.saturating_add(cfg.revisit_ms)
-                && (t.center - f.center).norm() <= gate
+                && time_ms >= t.time_ms.saturating_add(cfg.revisit_ms)
+                && (t.center - center).norm() <= gate
         };
-        // One beam says little of what it saw: on something believed it is that thing's face,
-        // and one two tracks could have come to is dropped.
-        let on_believed = world
-            .obstacles()
-            .iter()
-            .any(|o| o.shape.signed_distance(f.center) <= cfg.gate_m);
-        let mut candidates = self.tracks.iter_mut().filter(|t| gated(t));
-        let (false, Some(t), None) = (on_believed, candidates.next(), candidates.next()) else {
+        let mut candidates = self.tracks.iter().enumerate().filter(|(_, t)| gated(t));
+        let (first, second) = (candidates.next(), candidates.next());
+        // One beam says little of what it saw: on something believed it is that thing's face.
+        let on_believed = || {
+            world
+                .obstacles()
+                .iter()
+                .any(|o| o.shape.signed_distance(center) <= cfg.gate_m)
+        };
+        match (first, second) {
+            (None, _) => Glimpsed::None,
+            _ if on_believed() => Glimpsed::None,
+            (Some((i, _)), None) => Glimpsed::One(i),
+            (Some(_), Some(_)) => Glimpsed::Many,
+        }
+    }
+
+    /// Track `i` takes the glimpse at (`center`, `time_ms`) as its second look.
+    fn take_glimpse(
+        &mut self,
+        cfg: &TrackConfig,
+        world: &mut World,
+        i: usize,
+        (center, time_ms): (Vec2, u64),
+        vehicle: Vec2,
+    ) -> Admission {
+        let Some(t) = self.tracks.get_mut(i) else {
             return Admission::LowConfidence;
         };
         let Some(o) = world.obstacles().iter().find(|o| o.id == t.id).copied() else {
             return Admission::LowConfidence;
         };
-        t.update(cfg, f.center, f.time_ms);
+        t.update(cfg, center, time_ms);
         let radius = o.shape.bounding_radius();
         let moved = Obstacle::new(
             t.id,
             o.shape.translated(t.center - o.shape.center()),
             o.a_plus(),
             Origin::Sonar,
-            f.time_ms,
+            time_ms,
         )
         .and_then(|m| m.moving(t.reported_velocity(cfg, radius)));
         match moved.map(|m| world.upsert_obstacle_or_evict(m, vehicle)) {
             Ok(Ok(_)) => Admission::Updated(t.id),
             Ok(Err(_)) => Admission::TableFull,
             Err(_) => Admission::Invalid,
+        }
+    }
+
+    /// The held glimpse, once a sighting at `now_ms` may have settled which track it is: a
+    /// candidate seen again where it was is rated, or no longer a sweep behind the glimpse.
+    /// Held no longer than `revisit_ms` (about half a sweep).
+    fn settle_held(&mut self, cfg: &TrackConfig, world: &mut World, now_ms: u64, vehicle: Vec2) {
+        let Some((center, time_ms)) = self.held else {
+            return;
+        };
+        if now_ms > time_ms.saturating_add(cfg.revisit_ms) {
+            self.held = None;
+            return;
+        }
+        match self.glimpsed(cfg, world, center, time_ms) {
+            Glimpsed::Many => {}
+            Glimpsed::None => self.held = None,
+            Glimpsed::One(i) => {
+                self.held = None;
+                let _ = self.take_glimpse(cfg, world, i, (center, time_ms), vehicle);
+            }
         }
     }
 
@@ -612,7 +680,7 @@ impl Tracks {
         let Ok(o) = o else {
             return Admission::Invalid;
         };
-        match world.upsert_obstacle_or_evict(o, vehicle) {
+        let admitted = match world.upsert_obstacle_or_evict(o, vehicle) {
             Ok(_) if fresh => {
                 self.next_id = self.next_id.checked_add(1).unwrap_or(SONAR_ID_BASE);
                 // Drop the track of an obstacle this one evicted; then there is room, since
@@ -634,7 +702,9 @@ impl Tracks {
             }
             Ok(_) => Admission::Updated(id),
             Err(_) => Admission::TableFull,
-        }
+        };
+        self.settle_held(cfg, world, f.time_ms, vehicle);
+        admitted
     }
 }
 
@@ -1187,5 +1257,46 @@ mod tests {
             v.is_some_and(|v| (v - Vec2::new(-1.0, -1.0 / 3.0)).norm() < 0.05),
             "{v:?}"
         );
+    }
+
+    #[test]
+    fn a_glimpse_between_two_tracks_waits_for_the_sweep_to_say_which_moved() {
+        // Another VideoRay seen once at 25 m and a rock at 9 m off the way; a sweep later a
+        // glimpse lies in both gates (generated head-on seed 111). When the head comes to the
+        // rock again, a second later, and sees it where it was, the glimpse was the vehicle.
+        let velocity = |w: &World, id: u16| {
+            w.obstacles()
+                .iter()
+                .find(|o| o.id == id)
+                .map(|o| o.velocity)
+        };
+        let fly = |rock_again_ms: u64| {
+            let (mut w, mut t) = (World::new(), Tracks::default());
+            let cfg = TrackConfig::default();
+            let mut admit = |w: &mut World, f: Feature| t.admit(&cfg, 2.5, w, &f, Vec2::ZERO);
+            admit(&mut w, at(feature(25.0, 0.0, 0.3, 0.9), 1000));
+            admit(&mut w, at(feature(16.0, 9.0, 1.0, 0.9), 1000));
+            assert_eq!(
+                admit(&mut w, glimpse(20.0, 5.0, 10_000)),
+                Admission::LowConfidence,
+                "held"
+            );
+            assert_eq!(velocity(&w, SONAR_ID_BASE), Some(Vec2::ZERO));
+            let rock = at(feature(16.0, 9.0, 1.0, 0.9), rock_again_ms);
+            assert_eq!(admit(&mut w, rock), Admission::Updated(SONAR_ID_BASE + 1));
+            (
+                velocity(&w, SONAR_ID_BASE).unwrap_or_default(),
+                velocity(&w, SONAR_ID_BASE + 1).unwrap_or_default(),
+            )
+        };
+        let (vehicle, rock) = fly(11_000);
+        assert!(
+            (vehicle - Vec2::new(-5.0 / 9.0, 5.0 / 9.0)).norm() < 0.05,
+            "{vehicle:?}"
+        );
+        assert!(rock.norm() < 0.05, "{rock:?}");
+        // Held no longer than `revisit_ms`: then it is dropped, and nothing moves.
+        let (vehicle, rock) = fly(15_000);
+        assert_eq!((vehicle, rock), (Vec2::ZERO, Vec2::ZERO));
     }
 }

@@ -13,6 +13,9 @@ use heapless::Vec;
 use super::fit::{Hit, Moments};
 use super::{MAX_CLUSTERS, MAX_RUNS_PER_BEAM};
 
+/// Ranges closer than this are one echo's (a range recomputed from its world point), m.
+const SAME_RANGE_M: f32 = 0.01;
+
 /// One open cluster.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct Cluster {
@@ -28,6 +31,8 @@ pub(crate) struct Cluster {
     pub span_rad: f32,
     /// Ping time of its last hit, ms.
     pub time_ms: u64,
+    /// A neighbouring beam returned an echo (strong or weak) beside one of its hits.
+    pub seconded: bool,
 }
 
 impl Cluster {
@@ -144,10 +149,20 @@ impl Table {
                     last_beam: beam,
                     span_rad: 0.0,
                     time_ms,
+                    seconded: false,
                 });
                 Assign::Opened(i)
             }
             None => Assign::Full,
+        }
+    }
+
+    /// Marks seconded the cluster whose last hit is on beam `beam` at range `range_m`, if any.
+    pub fn second(&mut self, beam: u32, range_m: f32) {
+        for c in self.slots.iter_mut().flatten() {
+            if c.last_beam == beam && (c.last_range - range_m).abs() <= SAME_RANGE_M {
+                c.seconded = true;
+            }
         }
     }
 

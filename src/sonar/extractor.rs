@@ -14,7 +14,9 @@
 //! 4. close clusters that missed this beam one too many times, or that span `max_span_rad`.
 //!
 //! A closed cluster leaves as a [`Feature`] if it has `min_beams` hits and `min_confidence`,
-//! or as a *glimpse* if it is one beam of a strong echo ([`GLIMPSE_INTENSITY`]).
+//! or as a *glimpse* if it is one beam of a strong echo ([`GLIMPSE_INTENSITY`]) or one beam
+//! the neighbouring beam returned a weaker echo beside (*seconded*: not one ping, so not a
+//! spurious target).
 
 use crate::math::{cos, sin, wrap_angle, Vec2};
 
@@ -34,7 +36,10 @@ use super::{
 /// each saw the other on two beams at 26 m, and a sweep later, at 8 m, on one (a return of
 /// 210, saturating at 250), so neither ever rated the other (generated head-on seed 93). A
 /// spurious target, which is one ping too, returns less (the simulated ones at most 176;
-/// speckle is one bin, shorter than a run).
+/// speckle is one bin, shorter than a run). A weaker hit is a glimpse when a neighbouring
+/// beam returned an echo beside it, too weak to be a hit (the map believes such a pair,
+/// `EvidenceMap::believe`): head-on seed 111 saw the other vehicle so a sweep after its
+/// first sighting, a hit of mean 182 and a 114 beside it.
 pub const GLIMPSE_INTENSITY: f32 = 200.0;
 
 /// Whether bit `k` of a per-echo mask is set (none beyond the eighth).
@@ -219,24 +224,28 @@ impl Extractor {
             .vehicle_echoes
             .saturating_add(vehicle.count_ones());
         let strong = crate::math::max(self.cfg.peak_min, self.cfg.feature_peak_min);
-        if let Some(map) = map {
-            // An echo the neighbouring beam also returned (within the cluster gap) is the
-            // second look a far cell needs: a false target or a fish is one ping, a surface
-            // spans beams. Both ends of the pair are believed.
-            let gap2 = self.cfg.cluster_gap_m * self.cfg.cluster_gap_m;
-            let mut seconded = 0u8;
-            if let Some(prev) = neighbour {
-                let before = prev.echoes.get(..prev.echo_count).unwrap_or(&[]);
-                for (k, p) in here.echoes.iter().take(here.echo_count).enumerate() {
-                    if flagged(vehicle, k) {
-                        continue;
-                    }
-                    if let Some(q) = before.iter().find(|q| (**q - *p).norm2() <= gap2) {
-                        seconded |= 1 << k;
-                        map.believe(*q);
-                    }
+        // An echo the neighbouring beam also returned (within the cluster gap), weak or strong:
+        // the second look a far cell needs, and what makes a one-beam cluster a glimpse — a
+        // false target or a fish is one ping, a surface or a vehicle spans beams. `partner[k]`
+        // is echo k's on the previous beam.
+        let gap2 = self.cfg.cluster_gap_m * self.cfg.cluster_gap_m;
+        let mut partner = [None; MAX_RUNS_PER_BEAM];
+        if let Some(prev) = neighbour {
+            let before = prev.echoes.get(..prev.echo_count).unwrap_or(&[]);
+            for (k, (p, slot)) in here.echoes.iter().zip(partner.iter_mut()).enumerate() {
+                if k < here.echo_count && !flagged(vehicle, k) {
+                    *slot = before.iter().find(|q| (**q - *p).norm2() <= gap2).copied();
                 }
             }
+        }
+        let seconded = partner
+            .iter()
+            .enumerate()
+            .filter(|(_, q)| q.is_some())
+            .fold(0u8, |m, (k, _)| m | 1u8.checked_shl(k as u32).unwrap_or(0));
+        if let Some(map) = map {
+            // Both ends of a seconded pair are believed.
+            partner.iter().flatten().for_each(|q| map.believe(*q));
             // A weak echo is a wall at a grazing angle only if the neighbouring beam saw it too;
             // alone it may be a false target, and it is left out.
             let mut ranges: heapless::Vec<f32, MAX_RUNS_PER_BEAM> = heapless::Vec::new();
@@ -291,6 +300,15 @@ impl Extractor {
         let fates = self
             .table
             .assign_beam(&hits, beam, scan.time_ms, self.cfg.cluster_gap_m);
+        // Both ends of a seconded pair mark their clusters (this beam's hit, the previous
+        // beam's, whichever is strong enough to be one).
+        for (e, q) in echoes.iter().zip(partner) {
+            if let (Some(q), Some(prev)) = (q, neighbour) {
+                self.table.second(beam, e.range_m);
+                self.table
+                    .second(beam.wrapping_sub(advance), (q - prev.sensor).norm());
+            }
+        }
         let dropped = fates.iter().filter(|a| **a == Assign::Full).count() as u32;
         self.counters.clusters_dropped = self.counters.clusters_dropped.saturating_add(dropped);
 
@@ -328,7 +346,8 @@ impl Extractor {
         let mut accepted = 0;
         table.close_where(close, |c| {
             let hits = c.moments.hits();
-            let glimpse = hits == 1 && c.moments.mean_intensity() >= GLIMPSE_INTENSITY;
+            let glimpse =
+                hits == 1 && (c.seconded || c.moments.mean_intensity() >= GLIMPSE_INTENSITY);
             let feature = (hits >= u32::from(cfg.min_beams) || glimpse)
                 .then(|| c.moments.fit(c.spanned(), c.time_ms, cfg))
                 .flatten()
@@ -675,6 +694,33 @@ mod tests {
         assert!(strong.iter().all(|f| f.beams == 1 && f.confidence == 0.0));
         assert!(strong.iter().all(|f| (f.center.norm() - 8.0).abs() < 0.5));
         assert!(fly(120).is_empty());
+    }
+
+    #[test]
+    fn a_hit_the_neighbouring_beam_seconds_with_a_weak_echo_leaves_as_a_glimpse() {
+        // At 8 m (gain 1.32): a raw 120 is a hit (158), too weak for a glimpse alone; a raw 80
+        // beside it (106) is an echo but no hit. Another VideoRay at 13 m was seen so, a sweep
+        // after its first sighting (generated head-on seed 111): one beam, but not one ping.
+        let fly = |lines: &[u8]| {
+            let mut found = heapless::Vec::<Feature, 4>::new();
+            let mut ex = Extractor::new(ExtractorConfig::default()).unwrap();
+            for (k, &level) in lines.iter().enumerate() {
+                let mut bins = [0u8; 300];
+                bins[80..83].fill(level);
+                let sl = nth_line(k, &bins[..]);
+                ex.push_scanline(&sl, STILL.pose(0.0), &mut |f| found.push(f).is_ok())
+                    .unwrap();
+            }
+            ex.flush(&mut |f| found.push(f).is_ok());
+            found
+        };
+        for lines in [[0, 120, 80, 0, 0], [0, 80, 120, 0, 0]] {
+            let found = fly(&lines);
+            assert_eq!(found.len(), 1, "{lines:?}: {found:?}");
+            assert!(found.iter().all(|f| f.beams == 1 && f.confidence == 0.0));
+        }
+        // The weak echo a beam further off seconds nothing.
+        assert!(fly(&[0, 120, 0, 80, 0]).is_empty());
     }
 
     #[test]
