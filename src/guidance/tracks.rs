@@ -303,6 +303,15 @@ impl Track {
         (self.center + self.velocity * dt, dt)
     }
 
+    /// Time from the last update to `time_ms` an unrated track may have moved over, s (at most
+    /// [`UNRATED_GAP_S`]).
+    fn unrated_gap_s(&self, time_ms: u64) -> f32 {
+        min(
+            time_ms.saturating_sub(self.time_ms) as f32 * 1e-3,
+            UNRATED_GAP_S,
+        )
+    }
+
     /// The alpha–beta update with measurement `z` at `time_ms` (see the module notes).
     fn update(&mut self, cfg: &TrackConfig, z: Vec2, time_ms: u64) {
         let (predicted, dt) = self.predict(time_ms);
@@ -311,10 +320,7 @@ impl Track {
         let dt = if self.rated {
             dt
         } else {
-            min(
-                time_ms.saturating_sub(self.time_ms) as f32 * 1e-3,
-                UNRATED_GAP_S,
-            )
+            self.unrated_gap_s(time_ms)
         };
         let r = z - predicted;
         self.center = predicted + r * cfg.alpha;
@@ -510,8 +516,7 @@ impl Tracks {
     /// The track a glimpse at `center`, `time_ms` is the second look at, if one.
     fn glimpsed(&self, cfg: &TrackConfig, world: &World, center: Vec2, time_ms: u64) -> Glimpsed {
         let gated = |t: &&Track| {
-            let gap = time_ms.saturating_sub(t.time_ms) as f32 * 1e-3;
-            let gate = t.extent_m() + cfg.gate_m + cfg.gate_speed_mps * min(gap, UNRATED_GAP_S);
+            let gate = t.extent_m() + cfg.gate_m + cfg.gate_speed_mps * t.unrated_gap_s(time_ms);
             !t.rated
                 && (1..=GLIMPSED_DM).contains(&t.largest_dm)
                 && time_ms >= t.time_ms.saturating_add(cfg.revisit_ms)
@@ -641,7 +646,7 @@ impl Tracks {
                 let v = t.velocity;
                 (v, (STEADY_FRACTION * v.norm() + MANOEUVRE_MPS) * dt)
             } else if revisit {
-                (Vec2::ZERO, cfg.gate_speed_mps * min(gap, UNRATED_GAP_S))
+                (Vec2::ZERO, cfg.gate_speed_mps * t.unrated_gap_s(f.time_ms))
             } else {
                 (Vec2::ZERO, 0.0)
             };
