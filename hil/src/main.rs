@@ -54,6 +54,11 @@ enum Command {
     Compare(hil::compare::Args),
     #[command(about = "fly generated worlds, tabulate success and safety")]
     Bench(hil::bench::Args),
+    #[command(
+        name = "bench-diff",
+        about = "two benches of the same worlds, run by run: what a change gained and lost"
+    )]
+    BenchDiff(hil::bench::diff::Args),
     #[command(about = "fly each scenario under each fault, print a table")]
     Faults(hil::campaign::Args),
     #[command(about = "what the firmware believed at given times of a run, from its frame log")]
@@ -320,6 +325,7 @@ fn main() -> ExitCode {
         Command::Merge(a) => hil::sweep::cli::cli_merge(a),
         Command::Compare(a) => hil::compare::cli(a),
         Command::Bench(a) => hil::bench::cli(a),
+        Command::BenchDiff(a) => hil::bench::diff::cli(&a),
         Command::Faults(a) => hil::campaign::cli(a),
         Command::Beliefs(a) => hil::beliefs::cli(&a),
         Command::SonarReplay(a) => hil::ping360::replay::cli(a),

@@ -15,7 +15,8 @@
 //!   fly the world from its start pose, and the least time it can (then the reference, if
 //!   longer);
 //! - [`case`]: one run — world, scenario file, flight, measurements;
-//! - [`report`]: the tables (`bench.md`) and `bench.json`.
+//! - [`report`]: the tables (`bench.md`) and `bench.json`;
+//! - [`diff`]: `hil bench-diff`, two benches of the same worlds compared run by run.
 //!
 //! Every (family × seed × strategy × model × sensing) is one run, on all cores, in lockstep with
 //! the host-process firmware, ended at arrival, at the first contact, or at three reference
@@ -25,6 +26,7 @@
 //! `plot.svg` and its scenario file (`world.toml`, for `hil run`) are kept under `failed/`.
 
 pub mod case;
+pub mod diff;
 pub mod feasible;
 pub mod report;
 pub mod turning;
@@ -265,13 +267,11 @@ pub fn bench(o: &Options) -> Result<(PathBuf, report::Report), Error> {
 
     // Rows already there: complete lines of runs.jsonl (a cut-off last line is dropped).
     let rows_path = dir.join("runs.jsonl");
-    let mut rows: Vec<Row> = std::fs::read_to_string(&rows_path)
-        .map(|t| {
-            t.lines()
-                .filter_map(|l| serde_json::from_str(l).ok())
-                .collect()
-        })
-        .unwrap_or_default();
+    let mut rows: Vec<Row> = if rows_path.exists() {
+        diff::read_rows(&rows_path)?.into_values().collect()
+    } else {
+        Vec::new()
+    };
     let done: HashSet<String> = rows.iter().map(|r| r.id.clone()).collect();
     let pending: Vec<usize> = (0..all.len())
         .filter(|&i| !done.contains(&all[i].id()))
