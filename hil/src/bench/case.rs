@@ -1,7 +1,9 @@
 //! One benchmark run: a generated world, checked feasible for the craft, written as a scenario
 //! file, flown in lockstep with the host-process firmware, and measured into a [`Row`].
 
+use std::collections::BTreeMap;
 use std::fmt::Write as _;
+use std::io::Read as _;
 use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
@@ -10,6 +12,7 @@ use vpf::{Params, Strategy};
 use super::feasible::{self, Infeasible};
 use super::turning;
 use super::worlds::{self, Family, World};
+use crate::error::Error;
 use crate::output::{plot, RunOutput, Summary};
 use crate::runner::{hull_radius, run_quiet, turning_radius, QuietRun};
 use crate::scenario::{self, Sensing};
@@ -115,6 +118,66 @@ pub struct Row {
     pub formation_spacing: Option<f64>,
     /// Why the run was not flown or failed to run (then `success` is false).
     pub error: Option<String>,
+}
+
+impl Row {
+    /// A run not (yet) flown: no success, no contact, nothing measured.
+    pub fn unflown(id: String, family: &str, seed: u64, config: String) -> Row {
+        Row {
+            id,
+            family: family.to_string(),
+            seed,
+            config,
+            success: false,
+            collided: false,
+            min_clearance_m: None,
+            time_ratio: None,
+            path_ratio: None,
+            reference_s: None,
+            guard_periods: 0,
+            cruise_frac: None,
+            held_frac: None,
+            perception_miss_m: None,
+            perception_miss_mean_m: None,
+            perception_false_frac: None,
+            formation_spacing: None,
+            error: None,
+        }
+    }
+}
+
+/// Largest `runs.jsonl` read, bytes (a row is under 1 KiB; `MAX_RUNS` of them fit).
+pub const MAX_ROWS_BYTES: u64 = 128 << 20;
+
+/// The rows of a bench directory's `runs.jsonl` (or of that file), by run id. A line that does
+/// not parse (a cut-off last line) is skipped; a later row for the same id replaces an earlier.
+pub fn read_rows(path: &Path) -> Result<BTreeMap<String, Row>, Error> {
+    read_rows_within(path, MAX_ROWS_BYTES)
+}
+
+/// [`read_rows`], refusing a file longer than `max_bytes`.
+fn read_rows_within(path: &Path, max_bytes: u64) -> Result<BTreeMap<String, Row>, Error> {
+    let file = if path.is_dir() {
+        path.join("runs.jsonl")
+    } else {
+        path.to_path_buf()
+    };
+    let f = std::fs::File::open(&file).map_err(Error::io("cannot open", &file))?;
+    let mut text = String::new();
+    f.take(max_bytes.saturating_add(1))
+        .read_to_string(&mut text)
+        .map_err(Error::io("cannot read", &file))?;
+    if text.len() as u64 > max_bytes {
+        return Err(Error::Unreadable {
+            path: file,
+            message: format!("larger than {max_bytes} bytes: not a bench's runs"),
+        });
+    }
+    Ok(text
+        .lines()
+        .filter_map(|l| serde_json::from_str::<Row>(l).ok())
+        .map(|r| (r.id.clone(), r))
+        .collect())
 }
 
 /// A world drawn for a case and found feasible for its craft ([`feasible_world`]).
@@ -268,26 +331,7 @@ pub fn duration_s(reference_s: f64) -> f64 {
 /// Flies `case` and measures it. `params`: planner parameters from a recipe (the case's
 /// strategy kept). `failed_dir`: where a failed run's plot and scenario file go.
 pub fn fly(case: &Case, params: Option<&Params>, run: &QuietRun, failed_dir: &Path) -> Row {
-    let mut row = Row {
-        id: case.id(),
-        family: case.family.name().to_string(),
-        seed: case.seed,
-        config: case.config(),
-        success: false,
-        collided: false,
-        min_clearance_m: None,
-        time_ratio: None,
-        path_ratio: None,
-        reference_s: None,
-        guard_periods: 0,
-        cruise_frac: None,
-        held_frac: None,
-        perception_miss_m: None,
-        perception_miss_mean_m: None,
-        perception_false_frac: None,
-        formation_spacing: None,
-        error: None,
-    };
+    let mut row = Row::unflown(case.id(), case.family.name(), case.seed, case.config());
     let Drawn {
         world,
         attempt,
@@ -446,6 +490,29 @@ fn keep_failure(dir: &Path, case: &Case, text: &str, out: &RunOutput) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_missing_or_oversized_file_is_refused_with_its_name() {
+        let dir = std::env::temp_dir().join(format!("bench-diff-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let e = read_rows(&dir.join("nothing")).unwrap_err().to_string();
+        assert!(e.contains("nothing"), "{e}");
+        // A bench directory's runs.jsonl, with a cut-off last line.
+        let line = serde_json::to_string(&Row::unflown(
+            "rocks:3:vpf:videoray:scanlines".into(),
+            "rocks",
+            3,
+            "vpf / videoray / scanlines".into(),
+        ))
+        .unwrap();
+        std::fs::write(dir.join("runs.jsonl"), format!("{line}\n{{\"id\":\"cut")).unwrap();
+        let rows = read_rows(&dir).unwrap();
+        assert_eq!(rows.len(), 1);
+        assert!(rows.contains_key("rocks:3:vpf:videoray:scanlines"));
+        let e = read_rows_within(&dir, 64).unwrap_err().to_string();
+        assert!(e.contains("larger than 64 bytes"), "{e}");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
     use worlds::{FAMILIES, MISSION_FAMILIES};
 
     #[test]

@@ -12,15 +12,10 @@
 
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
-use std::io::Read as _;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
-use super::case::Row;
-use crate::error::Error;
-
-/// Largest `runs.jsonl` read, bytes (a row is under 1 KiB; `MAX_RUNS` of them fit).
-pub const MAX_ROWS_BYTES: u64 = 128 << 20;
+use super::case::{read_rows, Row};
 
 /// `hil bench-diff`'s command line.
 #[derive(Clone, Debug, clap::Parser)]
@@ -40,37 +35,6 @@ pub struct Args {
     /// Fail (exit status 1) when a run has a contact after the change and had none before.
     #[arg(long)]
     pub no_new_contacts: bool,
-}
-
-/// The rows of a bench directory's `runs.jsonl` (or of that file), by run id. A line that does
-/// not parse (a cut-off last line) is skipped; a later row for the same id replaces an earlier.
-pub fn read_rows(path: &Path) -> Result<BTreeMap<String, Row>, Error> {
-    read_rows_within(path, MAX_ROWS_BYTES)
-}
-
-/// [`read_rows`], refusing a file longer than `max_bytes`.
-fn read_rows_within(path: &Path, max_bytes: u64) -> Result<BTreeMap<String, Row>, Error> {
-    let file = if path.is_dir() {
-        path.join("runs.jsonl")
-    } else {
-        path.to_path_buf()
-    };
-    let f = std::fs::File::open(&file).map_err(Error::io("cannot open", &file))?;
-    let mut text = String::new();
-    f.take(max_bytes.saturating_add(1))
-        .read_to_string(&mut text)
-        .map_err(Error::io("cannot read", &file))?;
-    if text.len() as u64 > max_bytes {
-        return Err(Error::Unreadable {
-            path: file,
-            message: format!("larger than {max_bytes} bytes: not a bench's runs"),
-        });
-    }
-    Ok(text
-        .lines()
-        .filter_map(|l| serde_json::from_str::<Row>(l).ok())
-        .map(|r| (r.id.clone(), r))
-        .collect())
 }
 
 /// One configuration × family of the diff.
@@ -316,25 +280,12 @@ mod tests {
     use super::*;
 
     fn row(family: &str, seed: u64, success: bool, collided: bool) -> Row {
+        let id = format!("{family}:{seed}:vpf:videoray:scanlines");
+        let config = "vpf / videoray / scanlines".to_string();
         Row {
-            id: format!("{family}:{seed}:vpf:videoray:scanlines"),
-            family: family.to_string(),
-            seed,
-            config: "vpf / videoray / scanlines".to_string(),
             success,
             collided,
-            min_clearance_m: None,
-            time_ratio: None,
-            path_ratio: None,
-            reference_s: None,
-            guard_periods: 0,
-            cruise_frac: None,
-            held_frac: None,
-            perception_miss_m: None,
-            perception_miss_mean_m: None,
-            perception_false_frac: None,
-            formation_spacing: None,
-            error: None,
+            ..Row::unflown(id, family, seed, config)
         }
     }
 
@@ -389,22 +340,5 @@ mod tests {
         // Large n stays finite.
         let p = sign_test(5000, 5000).unwrap();
         assert!(p.is_finite() && p > 0.9, "{p}");
-    }
-
-    #[test]
-    fn a_missing_or_oversized_file_is_refused_with_its_name() {
-        let dir = std::env::temp_dir().join(format!("bench-diff-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
-        let e = read_rows(&dir.join("nothing")).unwrap_err().to_string();
-        assert!(e.contains("nothing"), "{e}");
-        // A bench directory's runs.jsonl, with a cut-off last line.
-        let line = serde_json::to_string(&row("rocks", 3, true, false)).unwrap();
-        std::fs::write(dir.join("runs.jsonl"), format!("{line}\n{{\"id\":\"cut")).unwrap();
-        let rows = read_rows(&dir).unwrap();
-        assert_eq!(rows.len(), 1);
-        assert!(rows.contains_key("rocks:3:vpf:videoray:scanlines"));
-        let e = read_rows_within(&dir, 64).unwrap_err().to_string();
-        assert!(e.contains("larger than 64 bytes"), "{e}");
-        std::fs::remove_dir_all(&dir).unwrap();
     }
 }

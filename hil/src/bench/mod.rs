@@ -268,7 +268,7 @@ pub fn bench(o: &Options) -> Result<(PathBuf, report::Report), Error> {
     // Rows already there: complete lines of runs.jsonl (a cut-off last line is dropped).
     let rows_path = dir.join("runs.jsonl");
     let mut rows: Vec<Row> = if rows_path.exists() {
-        diff::read_rows(&rows_path)?.into_values().collect()
+        case::read_rows(&rows_path)?.into_values().collect()
     } else {
         Vec::new()
     };
