@@ -76,6 +76,9 @@ pub struct Belief {
     /// How many sightings each sonar obstacle's track has had, by obstacle id (1: seen once,
     /// with no velocity yet: the guard's head-on hypothesis may apply).
     pub sightings: Vec<(u16, u16)>,
+    /// The slow velocity each still sonar track's sightings suggest but no third has borne out
+    /// yet (`Tracks::tentative`: the guard may meet it on it), by obstacle id.
+    pub tentative: Vec<(u16, Vec2)>,
     /// The other vehicles it knew of.
     pub agents: Vec<Agent>,
     /// Centres of the believed map cells within the asked radius of the vehicle, m.
@@ -144,6 +147,9 @@ fn belief(fw: &OneThreadRuntime, at_s: f64, radius_m: f32) -> Belief {
         pose,
         obstacles: p.world().obstacles().to_vec(),
         sightings: p.tracks().tracks().iter().map(|t| (t.id, t.hits)).collect(),
+        tentative: (p.world().obstacles().iter())
+            .filter_map(|o| Some((o.id, p.tracks().tentative(o.id)?)))
+            .collect(),
         agents: p.world().agents().to_vec(),
         cells: pose.map_or(Vec::new(), |(h, _)| believed_cells(fw, h, radius_m)),
         radius_m,
@@ -207,6 +213,9 @@ impl fmt::Display for Belief {
             )?;
             if o.velocity == Vec2::ZERO {
                 write!(f, "still")?;
+                if let Some((_, v)) = self.tentative.iter().find(|(id, _)| *id == o.id) {
+                    write!(f, " (tentatively {})", Xy(*v))?;
+                }
             } else {
                 write!(f, "moving {}", Xy(o.velocity))?;
             }

@@ -87,8 +87,9 @@
 //! half-sweep correction above, 64 with both. Without the confirmation the slow floor gave 54,
 //! but rocks' wander made phantom movers: the flat-fish, whose guard stops for a mover,
 //! reached 270 of 408 worlds against 285, and the shipped survey took 100 s longer, detouring
-//! round a rock. The guard of a slow-turning craft meets such a velocity before it is borne
-//! out ([`Tracks::tentative`], `crate::guidance::guard`, "Slow tracks"); the planner does not.
+//! round a rock. The guard meets such a velocity before it is borne out, until the sighting
+//! that should bear it out is overdue ([`Tracks::tentative`], `crate::guidance::guard`, "Slow
+//! tracks"); the planner does not.
 //!
 //! *Measured and left as it is.* A slow mover's sightings wander round its course: one crossing
 //! at 0.41 m/s was seen four times, a sweep apart, and its third sighting fell 3.6 m from where
