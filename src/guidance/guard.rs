@@ -138,6 +138,19 @@
 //! rose by a quarter (rocks' wandering fits) and the shipped waypoint mission above missed a
 //! waypoint.
 //!
+//! **Unmapped tracks.** While an evidence map is in use, still sonar tracks are left to it
+//! ([`World::left_to_map`]): its cells, not the fits, are what the field and the guard meet. A
+//! small box (2.2 × 1 m) fitted twice from 12–17 m never made a believed cell — its echoes
+//! never reached two in one — and a navfn VideoRay that had turned about 7 m from it ran into
+//! it at 1 m/s, the table holding it all the while and the route's detour point on it (bench
+//! boxes seed 90). So a still track seen more than once, near enough to block a segment,
+//! with none of this period's map cells within its extent (and a cell's half-diagonal) is
+//! judged as its shape too, and counts in the clearance the vehicle has now. Where the map
+//! shows it, it speaks for it as before; cells hidden behind a nearer one in the same bearing
+//! sector make a track judged twice, which errs on the safe side. All families × 3
+//! strategies, seeds 0–199: that contact went, and no other run changed; crossing and head-on
+//! seeds 200–399: run for run the same.
+//!
 //! **Lookout.** What was never believed cannot block a motion, and the sonar believes only
 //! what it has looked at. So the command also goes no faster than the vehicle can stop from,
 //! hull and margin included, within the way the sonar last saw clear in its direction
@@ -158,11 +171,12 @@
 //!
 //! Cost: one point-to-segment distance per map cell and still agent per heading tried, samples
 //! every [`SAMPLE_M`] along the segment for the table's still obstacles near enough to matter,
-//! and one closest-approach per mover ([`TRACK_STEPS`] of them for a slow-turning craft).
-//! The worst case is a slow-turning craft in traffic closing from all round, which searches
+//! and one closest-approach per mover ([`TRACK_STEPS`] of them for a slow-turning craft);
+//! once a period, a distance per map cell for each still track seen again within reach
+//! (at most 32 × 32). The worst case is a slow-turning craft in traffic closing from all round, which searches
 //! every heading twice for a clear motion and once more for the least bad: `cargo selftest`'s
-//! flat-fish in traffic, whole period at most 430 160 instructions (393 280 without the least
-//! bad, when that was measured), the planner's step 88 440.
+//! flat-fish in traffic, whole period at most 430 880 instructions (393 280 without the least
+//! bad, when that was measured), the planner's step 88 400.
 
 use super::tracks::Tracks;
 use crate::math::{cos, max, min, sin, wrap_angle, Vec2};
@@ -310,6 +324,9 @@ struct Believed<'a> {
     /// `world.map_cells()[i]` (a mask, not a copy: the guard's frame is the deepest of the
     /// periodic task's, `cargo selftest`'s stack high-water).
     cells: u32,
+    /// The still sonar tracks the map does not show (module notes, "Unmapped tracks"): bit i
+    /// for `world.obstacles()[i]`, judged as shapes like charted obstacles.
+    unmapped: u32,
     hull: f32,
     /// Radius of another vehicle's circle, m.
     agent_r: f32,
@@ -383,8 +400,10 @@ impl Believed<'_> {
         }
         // Shapes: sampled along the segment, only those that can reach it.
         let samples = (len / SAMPLE_M) as u32 + 1;
-        let still = |o: &&crate::world::Obstacle| still(o.velocity) && !w.left_to_map(o);
-        for o in w.obstacles().iter().filter(still) {
+        let judged = |(i, o): &(usize, &crate::world::Obstacle)| {
+            still(o.velocity) && (!w.left_to_map(o) || self.unmapped & bit(*i) != 0)
+        };
+        for (_, o) in w.obstacles().iter().enumerate().filter(judged) {
             let reach = (o.shape.center() - p).norm() - o.shape.bounding_radius();
             if reach > len + self.hull {
                 continue;
@@ -686,6 +705,16 @@ pub fn check(
         .enumerate()
         .filter(|&(_, c)| (*c - p).norm2() <= near * near)
         .fold(0, |m, (i, _)| m | bit(i));
+    // Still tracks seen more than once, near enough to matter, with none of this period's map
+    // cells within their extent (module notes, "Unmapped tracks").
+    let unmapped = (world.obstacles().iter().enumerate())
+        .filter(|(_, o)| world.left_to_map(o) && tracks.seen_again(o.id))
+        .filter(|(_, o)| (o.shape.center() - p).norm() - o.shape.bounding_radius() <= near)
+        .filter(|(_, o)| {
+            let (c, r) = (o.shape.center(), o.shape.bounding_radius() + r_map);
+            world.map_cells().iter().all(|&m| (m - c).norm2() > r * r)
+        })
+        .fold(0, |k, (i, _)| k | bit(i));
     let age = |seen_ms: u64| min(now_ms.saturating_sub(seen_ms) as f32 * 1e-3, CPA_HORIZON_S);
     // A sonar track's last fit may be a sliver of it: take its largest sighting.
     let extent = |o: &crate::world::Obstacle| {
@@ -792,14 +821,21 @@ pub fn check(
         world,
         movers,
         cells,
+        unmapped,
         hull: prm.agent_radius_m + cfg.hull_margin(prm),
         agent_r: prm.agent_radius_m,
         r_map,
-        here: crate::math::min_num(
-            world.clearance(p, prm.agent_radius_m),
-            crate::world::nearest_cell(world.map_cells(), p)
-                .map_or(f32::INFINITY, |(_, d)| d - r_map),
-        ),
+        here: (world.obstacles().iter().enumerate())
+            .filter(|(i, _)| unmapped & bit(*i) != 0)
+            .map(|(_, o)| o.shape.signed_distance(p))
+            .fold(
+                crate::math::min_num(
+                    world.clearance(p, prm.agent_radius_m),
+                    crate::world::nearest_cell(world.map_cells(), p)
+                        .map_or(f32::INFINITY, |(_, d)| d - r_map),
+                ),
+                crate::math::min_num,
+            ),
     };
     let helm = Helm {
         cfg,
@@ -1656,6 +1692,32 @@ mod tests {
                 "bar {half} m to a {r} m craft: {v:?}"
             );
         }
+    }
+
+    #[test]
+    fn a_track_seen_twice_that_the_map_does_not_show_is_judged_as_a_shape() {
+        // A box 2 m ahead, fitted twice by the tracker, where the evidence map believes
+        // nothing (bench boxes seed 90: its echoes never made a cell). Still sonar tracks are
+        // left to the map; this one is judged as its shape.
+        use crate::sonar::FeatureKind;
+        let (g, p) = (GuardConfig::default(), Params::default());
+        let cfg = crate::guidance::TrackConfig::default();
+        let (mut w, mut tracks) = (World::new(), Tracks::default());
+        for time_ms in [0, 9000] {
+            let box_ahead = FeatureKind::Circle { radius: 1.0 };
+            let f = sighting(Vec2::new(3.0, 0.0), box_ahead, time_ms);
+            tracks.admit(&cfg, 2.5, &mut w, &f, Vec2::ZERO);
+        }
+        let moving = nav(Vec2::new(1.0, 0.0));
+        let mut go = |cells: &[Vec2]| {
+            w.set_map(cells.iter().copied(), 0.25);
+            check(&g, &p, 9000, &moving, &w, &tracks, None, cmd(0.0, 1.0), 1.0).1
+        };
+        // A map in use, its one cell this period far astern.
+        assert_ne!(go(&[Vec2::new(-20.0, 0.0)]), Verdict::Clear);
+        // Once the map shows something within its extent, it speaks for the track (its cells,
+        // not the fit, are what the guard meets): here a cell on the box's far face.
+        assert_eq!(go(&[Vec2::new(3.9, 0.0)]), Verdict::Clear);
     }
 
     #[test]

@@ -462,6 +462,11 @@ impl Tracks {
         self.tracks.iter().any(|t| t.id == id && t.largest_dm > 0)
     }
 
+    /// Whether obstacle `id` is a sonar track seen more than once.
+    pub fn seen_again(&self, id: u16) -> bool {
+        self.tracks.iter().any(|t| t.id == id && t.hits >= 2)
+    }
+
     /// Whether obstacle `id` is a sonar track seen only once so far (no velocity can have been
     /// estimated for it: it may be still, or a mover seen once).
     pub fn unrated(&self, id: u16) -> bool {

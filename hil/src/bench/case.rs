@@ -328,9 +328,12 @@ pub fn duration_s(reference_s: f64) -> f64 {
     (3.0 * reference_s + 60.0).max(120.0)
 }
 
-/// Flies `case` and measures it. `params`: planner parameters from a recipe (the case's
+/// A recipe's planner parameters and the file they came from.
+pub type Recipe<'a> = (&'a Params, &'a Path);
+
+/// Flies `case` and measures it. `recipe`: planner parameters from a recipe (the case's
 /// strategy kept). `failed_dir`: where a failed run's plot and scenario file go.
-pub fn fly(case: &Case, params: Option<&Params>, run: &QuietRun, failed_dir: &Path) -> Row {
+pub fn fly(case: &Case, recipe: Option<Recipe>, run: &QuietRun, failed_dir: &Path) -> Row {
     let mut row = Row::unflown(case.id(), case.family.name(), case.seed, case.config());
     let Drawn {
         world,
@@ -353,7 +356,7 @@ pub fn fly(case: &Case, params: Option<&Params>, run: &QuietRun, failed_dir: &Pa
             return row;
         }
     };
-    if let Some(p) = params {
+    if let Some((p, _)) = recipe {
         sc.params = Params {
             strategy: case.strategy,
             period_s: sc.dt_s as f32,
@@ -369,6 +372,7 @@ pub fn fly(case: &Case, params: Option<&Params>, run: &QuietRun, failed_dir: &Pa
     };
     measure(&mut row, &out, &world, shortest, reference);
     if !row.success {
+        let text = format!("{}{text}", flown_with(recipe.map(|(_, f)| f)));
         keep_failure(failed_dir, case, &text, &out);
     }
     row
@@ -478,6 +482,18 @@ pub fn formation_spacing(out: &RunOutput, lattice: f64) -> Option<f64> {
     (n > 0).then(|| sum / f64::from(n))
 }
 
+/// The head of a failed run's scenario file flown with a recipe: the file does not carry the
+/// recipe's `[planner]`, and without it `hil run` flies another planner.
+fn flown_with(recipe: Option<&Path>) -> String {
+    recipe.map_or_else(String::new, |f| {
+        format!(
+            "# Flown by the bench with `--params {0}`: fly it again as the bench did with\n\
+             # `hil run world.toml --params {0}` (without it, the [planner] below).\n",
+            f.display()
+        )
+    })
+}
+
 /// A failed run's plot and scenario file, under `dir/<id>/`, so `hil run` can fly it again.
 fn keep_failure(dir: &Path, case: &Case, text: &str, out: &RunOutput) {
     let d: PathBuf = dir.join(crate::output::file_stem(&case.id()));
@@ -490,6 +506,22 @@ fn keep_failure(dir: &Path, case: &Case, text: &str, out: &RunOutput) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_failure_flown_with_a_recipe_says_how_to_fly_it_again() {
+        assert_eq!(flown_with(None), "");
+        let head = flown_with(Some(Path::new("hil/recipes/flatfish.toml")));
+        assert!(head.lines().all(|l| l.starts_with("# ")), "{head}");
+        assert!(
+            head.contains("--params hil/recipes/flatfish.toml"),
+            "{head}"
+        );
+        let world = format!("{head}name = \"w\"\n");
+        assert!(
+            toml::from_str::<toml::Table>(&world).is_ok(),
+            "still a scenario file"
+        );
+    }
 
     #[test]
     fn a_missing_or_oversized_file_is_refused_with_its_name() {

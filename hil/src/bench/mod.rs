@@ -302,7 +302,8 @@ pub fn bench(o: &Options) -> Result<(PathBuf, report::Report), Error> {
             .open(&rows_path)
             .map_err(Error::io("cannot open", &rows_path))?;
         let mut file = std::io::BufWriter::new(file);
-        let fly = |i: usize| case::fly(&all[i], params.as_ref(), &run, &failed);
+        let recipe = params.as_ref().zip(o.params.as_deref());
+        let fly = |i: usize| case::fly(&all[i], recipe, &run, &failed);
         pool::run_all(
             &fly,
             &pending,
