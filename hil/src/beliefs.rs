@@ -87,6 +87,11 @@ pub struct Belief {
     pub radius_m: f32,
     /// The route it held.
     pub route: Option<Route>,
+    /// Where the sonar's lookout last saw clear along the vehicle's heading: the kept beam's
+    /// end (`vpf::sonar::lookout`), or `None` if it never looked that way.
+    pub lookout_end: Option<Vec2>,
+    /// The hull's radius, m (how far to the side a beam may run and still vouch for the way).
+    pub hull_m: f32,
 }
 
 /// Runs `hil beliefs`: prints what was believed at each time; exit status 2 on an error.
@@ -154,6 +159,11 @@ fn belief(fw: &OneThreadRuntime, at_s: f64, radius_m: f32) -> Belief {
         cells: pose.map_or(Vec::new(), |(h, _)| believed_cells(fw, h, radius_m)),
         radius_m,
         route: p.route().copied(),
+        lookout_end: pose.and_then(|(h, heading)| {
+            let map = fw.map();
+            map.lookout().end(h, heading, map.cell_m())
+        }),
+        hull_m: p.planner().params().agent_radius_m,
     }
 }
 
@@ -252,6 +262,17 @@ impl fmt::Display for Belief {
             match nearest.min_by(|a, b| a.1.total_cmp(&b.1)) {
                 Some((c, d)) => writeln!(f, ", nearest at {} ({d:.1} m)", Xy(c))?,
                 None => writeln!(f)?,
+            }
+        }
+        if let Some((p, heading)) = self.pose {
+            match self.lookout_end {
+                Some(q) => writeln!(
+                    f,
+                    "  lookout ahead: the kept beam ended at {}, clear {:.1} m for the hull",
+                    Xy(q),
+                    vpf::sonar::lookout::clear_ahead(q, p, heading, self.hull_m)
+                )?,
+                None => writeln!(f, "  lookout ahead: never looked this way")?,
             }
         }
         match &self.route {

@@ -84,6 +84,12 @@ fn a_replayed_frame_log_gives_back_the_route_the_rock_and_the_mover() {
     let seen = end.sightings.iter().find(|(id, _)| *id == still.id);
     assert!(seen.is_some_and(|&(_, n)| n >= 3), "{seen:?}");
     assert!(end.to_string().contains(" times, last "), "{end}");
+    // By then the head has looked along every bearing: the lookout vouches for the way ahead
+    // as far as the kept beam ran.
+    assert!(end.lookout_end.is_some());
+    assert!(end
+        .to_string()
+        .contains("lookout ahead: the kept beam ended at"));
     // The target moves north at 0.8 m/s: its track, seen at least twice by now, says so.
     assert!(
         sonar().any(|o| o.velocity.y > 0.5 && o.velocity.x.abs() < 0.3),

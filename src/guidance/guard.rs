@@ -167,7 +167,12 @@
 //! 3) 56 → 62 (another vehicle beside the track stops a few beams short). Setting no bound
 //! when the beam ended on something believed in the way, or on a mover's recent track (the
 //! checks here judge those), changed no mover contact, and let a navfn VideoRay run into a
-//! wall whose first echo the head-on hypothesis had made a mover (channel 110).
+//! wall whose first echo the head-on hypothesis had made a mover (channel 110). *Left as it
+//! is:* the floor is the risk. A VPF VideoRay beside a channel's wall (held-out channel 254),
+//! turned about by the guard, crept at 0.25 m/s into the wall 0.6 m off its side, whose
+//! stretch there the map did not believe and whose bearings the head had last looked along
+//! from 8 m away (`hil beliefs … --at 157` prints the lookout ahead). Withholding the floor
+//! when the kept beam ended on an echo in the hull's way changed nothing there.
 //!
 //! Cost: one point-to-segment distance per map cell and still agent per heading tried, samples
 //! every [`SAMPLE_M`] along the segment for the table's still obstacles near enough to matter,
