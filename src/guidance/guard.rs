@@ -1704,15 +1704,9 @@ mod tests {
         // A box 2 m ahead, fitted twice by the tracker, where the evidence map believes
         // nothing (bench boxes seed 90: its echoes never made a cell). Still sonar tracks are
         // left to the map; this one is judged as its shape.
-        use crate::sonar::FeatureKind;
         let (g, p) = (GuardConfig::default(), Params::default());
-        let cfg = crate::guidance::TrackConfig::default();
-        let (mut w, mut tracks) = (World::new(), Tracks::default());
-        for time_ms in [0, 9000] {
-            let box_ahead = FeatureKind::Circle { radius: 1.0 };
-            let f = sighting(Vec2::new(3.0, 0.0), box_ahead, time_ms);
-            tracks.admit(&cfg, 2.5, &mut w, &f, Vec2::ZERO);
-        }
+        let box_ahead = Vec2::new(3.0, 0.0);
+        let (mut w, tracks) = seen_at(1.0, &[(box_ahead, 0), (box_ahead, 9000)]);
         let moving = nav(Vec2::new(1.0, 0.0));
         let mut go = |cells: &[Vec2]| {
             w.set_map(cells.iter().copied(), 0.25);
@@ -1725,6 +1719,17 @@ mod tests {
         assert_eq!(go(&[Vec2::new(3.9, 0.0)]), Verdict::Clear);
     }
 
+    /// The world and tracks after a target of `radius` m is seen at each (centre, time).
+    fn seen_at(radius: f32, sightings: &[(Vec2, u64)]) -> (World, Tracks) {
+        let cfg = crate::guidance::TrackConfig::default();
+        let (mut w, mut tracks) = (World::new(), Tracks::default());
+        for &(c, time_ms) in sightings {
+            let f = sighting(c, crate::sonar::FeatureKind::Circle { radius }, time_ms);
+            tracks.admit(&cfg, 2.5, &mut w, &f, Vec2::ZERO);
+        }
+        (w, tracks)
+    }
+
     #[test]
     fn a_slow_track_not_yet_borne_out_is_met_on_its_velocity_too() {
         // The flat-fish at 0.5 m/s. A target seen 7.2 m off its track and, a sweep later,
@@ -1732,21 +1737,13 @@ mod tests {
         // velocity before a third sighting bears it out, it is still in the table; the guard
         // meets it moving all the same, a slow-turning craft's and a VideoRay's — until that
         // third sighting is overdue.
-        use crate::sonar::FeatureKind;
         let g = GuardConfig::default();
         let flatfish = flatfish();
         let moving = nav(Vec2::new(0.5, 0.0));
-        let mut w = World::new();
-        let mut tracks = Tracks::default();
-        let cfg = crate::guidance::TrackConfig::default();
-        for (y, time_ms) in [(7.2, 0), (3.6, 9000)] {
-            let f = sighting(
-                Vec2::new(4.0, y),
-                FeatureKind::Circle { radius: 0.3 },
-                time_ms,
-            );
-            tracks.admit(&cfg, 2.5, &mut w, &f, Vec2::ZERO);
-        }
+        let (w, tracks) = seen_at(
+            0.3,
+            &[(Vec2::new(4.0, 7.2), 0), (Vec2::new(4.0, 3.6), 9000)],
+        );
         let o = w.obstacles()[0];
         assert_eq!(o.velocity, Vec2::ZERO, "not yet given a velocity");
         let v = tracks.tentative(o.id).unwrap();
@@ -1760,32 +1757,17 @@ mod tests {
         // The same, seen 4.4 m farther off, judged a sweep later: where its velocity would
         // put it now it is again on the way, but its third sighting is overdue (a rock's
         // wander, not a mover) and it is met still.
-        let (mut w, mut tracks) = (World::new(), Tracks::default());
-        for (y, time_ms) in [(11.6, 0), (8.0, 9000)] {
-            let f = sighting(
-                Vec2::new(4.0, y),
-                FeatureKind::Circle { radius: 0.3 },
-                time_ms,
-            );
-            tracks.admit(&cfg, 2.5, &mut w, &f, Vec2::ZERO);
-        }
+        let (w, tracks) = seen_at(
+            0.3,
+            &[(Vec2::new(4.0, 11.6), 0), (Vec2::new(4.0, 8.0), 9000)],
+        );
         let overdue = 9000 + (CPA_HORIZON_S * 1000.0) as u64 + 100;
+        let at = |prm: &Params, now_ms: u64| {
+            check(&g, prm, now_ms, &moving, &w, &tracks, None, go, 0.567).1
+        };
         for prm in [&flatfish, &videoray] {
-            let v = check(&g, prm, overdue, &moving, &w, &tracks, None, go, 0.567).1;
-            assert_eq!(v, Verdict::Clear);
-            let due = check(
-                &g,
-                prm,
-                overdue - 200,
-                &moving,
-                &w,
-                &tracks,
-                None,
-                go,
-                0.567,
-            )
-            .1;
-            assert_ne!(due, Verdict::Clear, "a sweep since: met");
+            assert_eq!(at(prm, overdue), Verdict::Clear);
+            assert_ne!(at(prm, overdue - 200), Verdict::Clear, "a sweep since: met");
         }
     }
 
