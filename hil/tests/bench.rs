@@ -37,6 +37,7 @@ fn one_world_of_every_family_is_flown_without_contact() {
                 strategy: Strategy::Vpf,
                 model: ModelKind::VideoRay,
                 sensing: Sensing::Sonar,
+                trial: 0,
             };
             case::fly(&c, None, &run, &failed_dir())
         })
@@ -86,6 +87,7 @@ fn perfect_perception_reports_no_belief_and_the_reference_is_the_grid_path() {
         strategy: Strategy::Vpf,
         model: ModelKind::VideoRay,
         sensing: Sensing::Contacts,
+        trial: 0,
     };
     let row = case::fly(&c, None, &quiet(), &failed_dir());
     assert!(row.error.is_none(), "{:?}", row.error);

@@ -41,9 +41,23 @@ pub struct Case {
     pub model: ModelKind,
     /// Sensing.
     pub sensing: Sensing,
+    /// The sea's draw ([`Case::sim_seed`]): 0 flies the world with its own seed.
+    pub trial: u64,
 }
 
 impl Case {
+    /// The simulation's seed — the sonar's noise, speckle and false echoes, and every other
+    /// draw of the flight: the world's seed for trial 0, else one mixed from both, so another
+    /// trial flies the same world through other chance (`hil bench --trial`).
+    pub fn sim_seed(&self) -> u64 {
+        if self.trial == 0 {
+            return self.seed;
+        }
+        let mixed = crate::sweep::fnv1a(&[&self.seed.to_le_bytes(), &self.trial.to_le_bytes()]);
+        // The scenario schema's seed is a non-negative TOML integer (an i64).
+        mixed >> 1
+    }
+
     /// `clutter:3:vpf:videoray:scanlines`: the row's key in `runs.jsonl`.
     pub fn id(&self) -> String {
         format!(
@@ -272,7 +286,7 @@ pub fn scenario_text(world: &World, attempt: u64, case: &Case, duration_s: f64) 
     let _ = writeln!(
         t,
         "duration_s = {duration_s:.1}\ndt_s = 0.1\nseed = {}",
-        case.seed
+        case.sim_seed()
     );
     let _ = writeln!(t, "\n[planner]\nstrategy = \"{}\"", case.strategy.name());
     let _ = writeln!(t, "\n[sonar]\nmode = \"{}\"", sensing_name(case.sensing));
@@ -615,6 +629,47 @@ mod tests {
     }
 
     #[test]
+    fn another_trial_flies_the_same_world_through_other_chance() {
+        let case = |trial| Case {
+            family: Family::Crossing,
+            seed: 5,
+            strategy: Strategy::Vpf,
+            model: ModelKind::VideoRay,
+            sensing: Sensing::Sonar,
+            trial,
+        };
+        assert_eq!(
+            case(0).sim_seed(),
+            5,
+            "trial 0: the world's own seed, as before trials"
+        );
+        let seeds = [case(1).sim_seed(), case(2).sim_seed()];
+        assert!(
+            seeds.iter().all(|&s| s != 5 && s <= i64::MAX as u64),
+            "{seeds:?}"
+        );
+        assert_ne!(seeds[0], seeds[1]);
+        let text = |c: &Case| {
+            let d = feasible_world(c).unwrap();
+            scenario_text(&d.world, d.attempt, c, 100.0)
+        };
+        let (t0, t1) = (text(&case(0)), text(&case(1)));
+        let but_seed = |t: &str| {
+            t.lines()
+                .filter(|l| !l.starts_with("seed = "))
+                .collect::<Vec<_>>()
+                .join("\n")
+        };
+        assert_eq!(
+            but_seed(&t0),
+            but_seed(&t1),
+            "the same world, vehicles and movers"
+        );
+        let sc = scenario::parse(&t1, "trial 1").unwrap();
+        assert_eq!(sc.seed, seeds[0]);
+    }
+
+    #[test]
     fn every_family_gives_a_feasible_scenario_the_parser_accepts() {
         for family in FAMILIES.into_iter().chain(MISSION_FAMILIES) {
             for seed in 0..3 {
@@ -624,6 +679,7 @@ mod tests {
                     strategy: Strategy::Vpf,
                     model: ModelKind::VideoRay,
                     sensing: Sensing::Sonar,
+                    trial: 0,
                 };
                 let Drawn {
                     world: w,
@@ -662,6 +718,7 @@ mod tests {
             strategy: Strategy::Vpf,
             model,
             sensing: Sensing::Sonar,
+            trial: 0,
         };
         let f = feasible_world(&case(ModelKind::FlatFish)).unwrap();
         assert!(
@@ -686,6 +743,7 @@ mod tests {
                 strategy: Strategy::Vpf,
                 model: ModelKind::VideoRay,
                 sensing: Sensing::Sonar,
+                trial: 0,
             };
             let Drawn {
                 world: w,

@@ -2,7 +2,7 @@
 //! project was not tuned on, generated from seeds, flown with default parameters.
 //!
 //! ```text
-//! hil bench [--families a,b,...] [--seeds N] [--first-seed F] [--strategies vpf,...]
+//! hil bench [--families a,b,...] [--seeds N] [--first-seed F] [--trial K] [--strategies vpf,...]
 //!           [--models videoray,...] [--sensing scanlines,contacts] [--params RECIPE.toml]
 //!           [--jobs N] [--out DIR] [--quiet]
 //! ```
@@ -61,6 +61,8 @@ pub struct Options {
     pub seeds: u64,
     /// The first seed.
     pub first_seed: u64,
+    /// The sea's draw (`Case::sim_seed`; 0: each world's own seed).
+    pub trial: u64,
     /// Strategies.
     pub strategies: Vec<Strategy>,
     /// Models.
@@ -83,6 +85,7 @@ impl Default for Options {
             families: FAMILIES.to_vec(),
             seeds: 17,
             first_seed: 0,
+            trial: 0,
             strategies: vec![Strategy::Vpf],
             models: vec![ModelKind::VideoRay],
             sensing: vec![Sensing::Sonar],
@@ -116,6 +119,11 @@ pub struct Args {
     /// `--first-seed 200 --seeds 100`
     #[arg(long, value_name = "F", value_parser = clap::value_parser!(u64).range(0..=1_000_000))]
     first_seed: Option<u64>,
+    /// the sea's draw K (default 0): the same worlds flown through other chance — the sonar's
+    /// noise, speckle and false echoes drawn anew — so `hil bench-diff` of two trials shows
+    /// how many outcomes chance alone turns over, the floor a change must beat
+    #[arg(long, value_name = "K", value_parser = clap::value_parser!(u64).range(0..=1_000_000))]
+    trial: Option<u64>,
     /// vpf, multipoint, navfn (default vpf)
     #[arg(long, value_name = "a,b,...", value_delimiter = ',', value_parser = strategy)]
     strategies: Vec<Strategy>,
@@ -155,6 +163,7 @@ impl From<Args> for Options {
             families: or(a.families, d.families),
             seeds: a.seeds.unwrap_or(d.seeds),
             first_seed: a.first_seed.unwrap_or(d.first_seed),
+            trial: a.trial.unwrap_or(d.trial),
             strategies: or(a.strategies, d.strategies),
             models: or(a.models, d.models),
             sensing: or(a.sensing, d.sensing),
@@ -210,6 +219,7 @@ pub fn cases(o: &Options) -> Vec<Case> {
                             strategy,
                             model,
                             sensing,
+                            trial: o.trial,
                         });
                     }
                 }
@@ -245,10 +255,14 @@ pub fn bench(o: &Options) -> Result<(PathBuf, report::Report), Error> {
         PathBuf::from("bench").join(crate::output::file_stem(&name))
     });
     std::fs::create_dir_all(&dir).map_err(Error::io("cannot create", &dir))?;
-    let identity = format!(
-        "{:016x}",
-        fnv1a(&[FORMAT.as_bytes(), recipe_text.as_bytes()])
-    );
+    // Trial 0's identity is the one benches had before trials: their directories stay valid.
+    let trial = o.trial.to_le_bytes();
+    let parts: &[&[u8]] = if o.trial == 0 {
+        &[FORMAT.as_bytes(), recipe_text.as_bytes()]
+    } else {
+        &[FORMAT.as_bytes(), recipe_text.as_bytes(), &trial]
+    };
+    let identity = format!("{:016x}", fnv1a(parts));
     let id_path = dir.join("identity");
     match std::fs::read_to_string(&id_path) {
         Ok(old) if old.trim() != identity => {
@@ -328,11 +342,19 @@ pub fn bench(o: &Options) -> Result<(PathBuf, report::Report), Error> {
         all.iter().enumerate().map(|(i, c)| (c.id(), i)).collect();
     rows.sort_by_key(|r| order.get(&r.id).copied().unwrap_or(usize::MAX));
     rows.dedup_by(|a, b| a.id == b.id);
-    let rep = report::Report::of(&rows, &params.unwrap_or_default(), o.params.as_deref());
+    let mut rep = report::Report::of(&rows, &params.unwrap_or_default(), o.params.as_deref());
+    if o.trial != 0 {
+        rep.params.push_str(&format!(", trial {}", o.trial));
+    }
     let md = dir.join("bench.md");
     std::fs::write(&md, rep.markdown()).map_err(Error::io("cannot write", &md))?;
     let js = dir.join("bench.json");
-    let json = serde_json::json!({ "format": FORMAT, "summary": rep.json(), "runs": rows });
+    let json = serde_json::json!({
+        "format": FORMAT,
+        "trial": o.trial,
+        "summary": rep.json(),
+        "runs": rows
+    });
     std::fs::write(
         &js,
         serde_json::to_string_pretty(&json).unwrap_or_default() + "\n",
@@ -390,6 +412,9 @@ mod tests {
         let o = parse(&["--families", "rocks", "--seeds", "5", "--first-seed", "200"]).unwrap();
         let seeds: Vec<u64> = cases(&o).iter().map(|c| c.seed).collect();
         assert_eq!(seeds, [200, 201, 202, 203, 204]);
+        assert!(cases(&o).iter().all(|c| c.trial == 0));
+        let o = parse(&["--families", "rocks", "--seeds", "2", "--trial", "3"]).unwrap();
+        assert!(cases(&o).iter().all(|c| c.trial == 3));
         assert_eq!(cases(&Options::default()).len(), 12 * 17);
     }
 }

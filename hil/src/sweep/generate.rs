@@ -499,6 +499,7 @@ pub fn batch(spec: &Spec, spec_dir: &std::path::Path) -> Result<Batch, ScenarioE
                 strategy: vpf::Strategy::Vpf,
                 model: spec.craft.model,
                 sensing: sc.sensing,
+                trial: 0,
             };
             let id = format!("bench:{}:{}", family.name(), sc.bench_first_seed + i as u64);
             let crate::bench::case::Drawn {
