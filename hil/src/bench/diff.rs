@@ -9,6 +9,11 @@
 //! (McNemar's test: under "the change did nothing", each changed run is as likely to have
 //! gone either way). A small p says the change is real; a large one, that the two benches
 //! differ by no more than a trajectory a centimetre off would.
+//!
+//! Which runs end in a contact is chance (`hil bench --trial`: the same worlds flown again turn
+//! over every contact run), so one pair of benches is often too few. More pairs — the same
+//! change benched at other trials, `hil bench-diff B0 A0 B1 A1 …` — are pooled: every run of
+//! every pair counts once, its id tagged with its pair (`#2`), and the sign test weighs them all.
 
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
@@ -24,14 +29,19 @@ use super::case::{read_rows, Row};
     long_about = "Compares two benches of the same worlds run by run: successes gained and lost, \
                   contacts gone and new, per configuration and family, with the sign test's p.",
     after_help = "Each argument is a bench's output directory (or its runs.jsonl). Runs in only \
-                  one of them are counted, not compared. Exit status 1 with --no-new-contacts \
-                  when AFTER has a contact BEFORE did not."
+                  one of them are counted, not compared. Further BEFORE AFTER pairs (the same \
+                  change at other trials, `hil bench --trial K`) are pooled with the first. \
+                  Exit status 1 with --no-new-contacts when an AFTER has a contact its BEFORE \
+                  did not."
 )]
 pub struct Args {
     /// The bench before the change.
     pub before: PathBuf,
     /// The bench after it.
     pub after: PathBuf,
+    /// More pairs, pooled: BEFORE AFTER ...
+    #[arg(value_name = "BEFORE AFTER")]
+    pub more: Vec<PathBuf>,
     /// Fail (exit status 1) when a run has a contact after the change and had none before.
     #[arg(long)]
     pub no_new_contacts: bool,
@@ -89,6 +99,9 @@ impl Group {
     }
 }
 
+/// A bench's rows by run id.
+pub type Bench = BTreeMap<String, Row>;
+
 /// The whole diff.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Diff {
@@ -100,7 +113,7 @@ pub struct Diff {
 
 impl Diff {
     /// Matches `before` and `after` by run id.
-    pub fn of(before: &BTreeMap<String, Row>, after: &BTreeMap<String, Row>) -> Diff {
+    pub fn of(before: &Bench, after: &Bench) -> Diff {
         let mut d = Diff::default();
         for (id, b) in before {
             match after.get(id) {
@@ -113,6 +126,34 @@ impl Diff {
             }
         }
         d.unmatched.1 = after.keys().filter(|id| !before.contains_key(*id)).count();
+        d
+    }
+
+    /// `pairs` pooled: each pair matched by run id ([`Diff::of`]), its ids tagged `#k` (k from
+    /// 1) when there is more than one pair, and every pair's groups merged.
+    pub fn pooled(pairs: &[(Bench, Bench)]) -> Diff {
+        let mut d = Diff::default();
+        for (k, (before, after)) in pairs.iter().enumerate() {
+            let mut one = Diff::of(before, after);
+            if pairs.len() > 1 {
+                for g in one.groups.values_mut() {
+                    for ids in [
+                        &mut g.gained,
+                        &mut g.lost,
+                        &mut g.contacts_gone,
+                        &mut g.contacts_new,
+                    ] {
+                        ids.iter_mut()
+                            .for_each(|id| *id = format!("{id}#{}", k + 1));
+                    }
+                }
+            }
+            for (key, g) in &one.groups {
+                d.groups.entry(key.clone()).or_default().merge(g);
+            }
+            d.unmatched.0 += one.unmatched.0;
+            d.unmatched.1 += one.unmatched.1;
+        }
         d
     }
 
@@ -186,13 +227,15 @@ fn short_ids(ids: &[String]) -> String {
     if ids.is_empty() {
         return "–".to_string();
     }
-    let mut short: Vec<(&str, u64, &str)> = ids
+    let mut short: Vec<(&str, u64, &str, &str)> = ids
         .iter()
         .map(|id| {
+            // A pooled diff's pair tag (`#2`) is kept.
+            let (id, pair) = id.split_once('#').unwrap_or((id, ""));
             let mut parts = id.split(':');
             match (parts.next(), parts.next().and_then(|s| s.parse().ok())) {
-                (Some(f), Some(seed)) => (f, seed, ""),
-                _ => ("", 0, id.as_str()),
+                (Some(f), Some(seed)) => (f, seed, pair, ""),
+                _ => ("", 0, pair, id),
             }
         })
         .collect();
@@ -200,11 +243,16 @@ fn short_ids(ids: &[String]) -> String {
     short.sort_unstable();
     short
         .iter()
-        .map(|&(f, seed, whole)| {
-            if whole.is_empty() {
-                format!("{f} {seed}")
+        .map(|&(f, seed, pair, whole)| {
+            let pair = if pair.is_empty() {
+                String::new()
             } else {
-                whole.to_string()
+                format!(" #{pair}")
+            };
+            if whole.is_empty() {
+                format!("{f} {seed}{pair}")
+            } else {
+                format!("{whole}{pair}")
             }
         })
         .collect::<Vec<_>>()
@@ -249,11 +297,24 @@ pub fn cli(args: &Args) -> ExitCode {
             ExitCode::FAILURE
         })
     };
-    let (before, after) = match (read(&args.before), read(&args.after)) {
-        (Ok(b), Ok(a)) => (b, a),
-        (Err(e), _) | (_, Err(e)) => return e,
-    };
-    let d = Diff::of(&before, &after);
+    if args.more.len() % 2 == 1 {
+        eprintln!("hil bench-diff: benches come in BEFORE AFTER pairs; one is left over");
+        return ExitCode::FAILURE;
+    }
+    let paths: Vec<&PathBuf> = [&args.before, &args.after]
+        .into_iter()
+        .chain(&args.more)
+        .collect();
+    let mut pairs = Vec::new();
+    for pair in paths.chunks(2) {
+        if let [b, a] = pair {
+            match (read(b), read(a)) {
+                (Ok(b), Ok(a)) => pairs.push((b, a)),
+                (Err(e), _) | (_, Err(e)) => return e,
+            }
+        }
+    }
+    let d = Diff::pooled(&pairs);
     if d.groups.is_empty() {
         eprintln!(
             "hil bench-diff: no run is in both {} and {}",
@@ -323,6 +384,38 @@ mod tests {
             "{md}"
         );
         assert!(md.contains("1 runs only before, 1 only after"), "{md}");
+    }
+
+    #[test]
+    fn pairs_at_other_trials_are_pooled_run_by_run() {
+        // The same change benched at two trials: a contact gone in each, one new in the second.
+        let pair = |gone: u64, new: Option<u64>| {
+            let before = bench(&[
+                row("head_on", gone, false, true),
+                row("head_on", 8, true, false),
+            ]);
+            let after = bench(&[
+                row("head_on", gone, true, false),
+                row("head_on", 8, new.is_none(), new.is_some()),
+            ]);
+            (before, after)
+        };
+        let one = Diff::pooled(&[pair(3, None)]);
+        assert_eq!(
+            one,
+            Diff::of(&pair(3, None).0, &pair(3, None).1),
+            "one pair: as before"
+        );
+        let d = Diff::pooled(&[pair(3, None), pair(5, Some(8))]);
+        let all = &d.totals()["vpf / videoray / scanlines"];
+        assert_eq!(all.runs, 4, "every run of every pair counts");
+        assert_eq!((all.contacts_gone.len(), all.contacts_new.len()), (2, 1));
+        let md = d.markdown();
+        assert!(
+            md.contains("contacts gone (2): head_on 3 #1, head_on 5 #2"),
+            "{md}"
+        );
+        assert!(md.contains("contacts new (1): head_on 8 #2"), "{md}");
     }
 
     #[test]
