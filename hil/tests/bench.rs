@@ -1,6 +1,6 @@
 //! A fixed slice of `hil bench`: one generated world of every family (seed 1; the waypoint
 //! mission families too, which pass on their seed 1 as they are), flown by the
-//! VideoRay with its own sonar (scanlines), default parameters, VPF, on the host-process
+//! VideoRay with its own sonar (scanlines, the schema's default set-up), default parameters, VPF, on the host-process
 //! firmware. Nothing may be touched; the perception columns must be filled (the firmware
 //! reported its map) and honest (a perfect-perception run reports none); the formation must
 //! keep its lattice.
@@ -38,6 +38,7 @@ fn one_world_of_every_family_is_flown_without_contact() {
                 model: ModelKind::VideoRay,
                 sensing: Sensing::Sonar,
                 trial: 0,
+                head: case::Head::default(),
             };
             case::fly(&c, None, &run, &failed_dir())
         })
@@ -88,6 +89,7 @@ fn perfect_perception_reports_no_belief_and_the_reference_is_the_grid_path() {
         model: ModelKind::VideoRay,
         sensing: Sensing::Contacts,
         trial: 0,
+        head: case::Head::default(),
     };
     let row = case::fly(&c, None, &quiet(), &failed_dir());
     assert!(row.error.is_none(), "{:?}", row.error);

@@ -139,7 +139,14 @@ pub struct Situation {
     pub speed: f32,
     /// F_max, m/s².
     pub f_max: f32,
+    /// The vehicle's motion brings it nearer that surface: the clearance a moment on along
+    /// its velocity ([`CLOSING_LOOKAHEAD_S`]) is smaller.
+    pub closing: bool,
 }
+
+/// How far on along its velocity the vehicle is looked at to tell whether it is closing on
+/// the nearest surface, s.
+pub const CLOSING_LOOKAHEAD_S: f32 = 0.5;
 
 /// Frozen navigation: a source that keeps sending the very same fix (position and heading
 /// identical to the last bit) while the vehicle is commanded to move has stopped measuring —
@@ -220,8 +227,12 @@ pub fn check(cfg: &FailsafeConfig, s: &Situation) -> Option<HoldReason> {
     if s.clearance_m < 0.0 {
         return Some(HoldReason::InsideObstacle);
     }
+    // Only while closing: a vehicle already moving away from the nearest surface is not
+    // stopped beside it. A mover that came out of a rock's echo 3 m off a VideoRay passing at
+    // 1 m/s made it all-stop in the mover's way (bench crossing 1, sonar 20 m / 3.6°); going
+    // on, it would have passed 0.3 m clear.
     let stopping = s.speed * s.speed / (2.0 * s.f_max);
-    if s.clearance_m < stopping {
+    if s.clearance_m < stopping && s.closing {
         return Some(HoldReason::CollisionImminent);
     }
     None
@@ -326,6 +337,7 @@ mod tests {
             clearance_m: 5.0,
             speed: 1.0,
             f_max: 0.5,
+            closing: true,
         }
     }
 
@@ -392,6 +404,12 @@ mod tests {
             ..ok()
         };
         assert_eq!(check(&c, &close), Some(HoldReason::CollisionImminent));
+        // ... but not one already moving away from that surface.
+        let leaving = Situation {
+            closing: false,
+            ..close
+        };
+        assert_eq!(check(&c, &leaving), None);
         let slow = Situation {
             clearance_m: 0.9,
             speed: 0.5,

@@ -433,14 +433,19 @@ impl Periodic {
         cost: &mut impl FnMut() -> u32,
     ) -> Command {
         let params = *self.planner.params();
+        let (clearance_m, closing) = nav.map_or((f32::INFINITY, true), |n| {
+            let (p, r) = (n.nav.position, params.agent_radius_m);
+            let now = self.world.clearance(p, r);
+            let on = p + n.nav.velocity * failsafe::CLOSING_LOOKAHEAD_S;
+            (now, self.world.clearance(on, r) < now)
+        });
         let situation = Situation {
             has_mission: self.planner.mission().is_some(),
             nav_age_ms: nav.map(|n| now_ms.saturating_sub(n.time_ms)),
-            clearance_m: nav.map_or(f32::INFINITY, |n| {
-                self.world.clearance(n.nav.position, params.agent_radius_m)
-            }),
+            clearance_m,
             speed: nav.map_or(0.0, |n| n.nav.velocity.norm()),
             f_max: params.f_max,
+            closing,
         };
         let commanded = self.last.map_or(0.0, |(_, c)| c.v_set);
         let frozen = nav.is_some_and(|n| self.freeze.update(&n.nav, n.time_ms, commanded));

@@ -28,8 +28,40 @@ pub const FEASIBLE_MARGIN_M: f64 = 0.5;
 /// reaches (its top speed is about 1.4 m/s) and the flat-fish cruises at (seed 003 §5).
 pub const CRUISE_MPS: f64 = 1.0;
 
+/// The sonar head's set-up a bench flies: its range (also the contacts' range with perfect
+/// perception) and step. [`Default`]: the scenario schema's (`scenario::Sonar`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Head {
+    /// Range, m.
+    pub range_m: f64,
+    /// Step, degrees.
+    pub step_deg: f64,
+}
+
+impl Head {
+    /// `sonar 20 m, 3.6° steps`: how the tables name it.
+    pub fn name(&self) -> String {
+        format!("sonar {} m, {}° steps", self.range_m, round3(self.step_deg))
+    }
+}
+
+/// `x` to three decimals (3.6, not the 3.6000000000000005 of a round trip through radians).
+fn round3(x: f64) -> f64 {
+    (x * 1000.0).round() / 1000.0
+}
+
+impl Default for Head {
+    fn default() -> Self {
+        let d = scenario::Sonar::default();
+        Head {
+            range_m: d.range_m,
+            step_deg: d.step.to_degrees(),
+        }
+    }
+}
+
 /// What to fly.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Case {
     /// World family.
     pub family: Family,
@@ -43,6 +75,8 @@ pub struct Case {
     pub sensing: Sensing,
     /// The sea's draw ([`Case::sim_seed`]): 0 flies the world with its own seed.
     pub trial: u64,
+    /// The sonar's set-up.
+    pub head: Head,
 }
 
 impl Case {
@@ -293,7 +327,13 @@ pub fn scenario_text(world: &World, attempt: u64, case: &Case, duration_s: f64) 
         case.sim_seed()
     );
     let _ = writeln!(t, "\n[planner]\nstrategy = \"{}\"", case.strategy.name());
-    let _ = writeln!(t, "\n[sonar]\nmode = \"{}\"", sensing_name(case.sensing));
+    let _ = writeln!(
+        t,
+        "\n[sonar]\nmode = \"{}\"\nrange_m = {:.2}\nstep_deg = {:.3}",
+        sensing_name(case.sensing),
+        case.head.range_m,
+        case.head.step_deg
+    );
     if world.formation_m.is_some() {
         // The virtual leader needs the neighbours' positions (seed 001 takes them as known).
         t.push_str("vehicle_contacts = true\n");
@@ -633,6 +673,39 @@ mod tests {
     }
 
     #[test]
+    fn the_world_file_names_the_sonar_set_up_it_was_flown_with() {
+        let case = |head| Case {
+            family: Family::HeadOn,
+            seed: 3,
+            strategy: Strategy::Vpf,
+            model: ModelKind::VideoRay,
+            sensing: Sensing::Sonar,
+            trial: 0,
+            head,
+        };
+        for head in [
+            Head::default(),
+            Head {
+                range_m: 30.0,
+                step_deg: 1.8,
+            },
+        ] {
+            let c = case(head);
+            let d = feasible_world(&c).unwrap();
+            let sc = scenario::parse(&scenario_text(&d.world, d.attempt, &c, 100.0), "t").unwrap();
+            assert_eq!(sc.sonar.range_m, head.range_m);
+            assert!((sc.sonar.step.to_degrees() - head.step_deg).abs() < 1e-9);
+        }
+        let d = scenario::Sonar::default();
+        assert_eq!(
+            (Head::default().range_m, round3(Head::default().step_deg)),
+            (d.range_m, 3.6),
+            "the bench flies the schema's default: a 360° sweep in {:.1} s",
+            360.0 / 3.6 * (2.0 * d.range_m / 1500.0 + 0.005)
+        );
+    }
+
+    #[test]
     fn another_trial_flies_the_same_world_through_other_chance() {
         let case = |trial| Case {
             family: Family::Crossing,
@@ -641,6 +714,7 @@ mod tests {
             model: ModelKind::VideoRay,
             sensing: Sensing::Sonar,
             trial,
+            head: Head::default(),
         };
         assert_eq!(
             case(0).sim_seed(),
@@ -687,6 +761,7 @@ mod tests {
                     model: ModelKind::VideoRay,
                     sensing: Sensing::Sonar,
                     trial: 0,
+                    head: Head::default(),
                 };
                 let Drawn {
                     world: w,
@@ -726,6 +801,7 @@ mod tests {
             model,
             sensing: Sensing::Sonar,
             trial: 0,
+            head: Head::default(),
         };
         let f = feasible_world(&case(ModelKind::FlatFish)).unwrap();
         assert!(
@@ -751,6 +827,7 @@ mod tests {
                 model: ModelKind::VideoRay,
                 sensing: Sensing::Sonar,
                 trial: 0,
+                head: Head::default(),
             };
             let Drawn {
                 world: w,

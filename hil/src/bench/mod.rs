@@ -4,7 +4,7 @@
 //! ```text
 //! hil bench [--families a,b,...] [--seeds N] [--first-seed F] [--trial K] [--strategies vpf,...]
 //!           [--models videoray,...] [--sensing scanlines,contacts] [--params RECIPE.toml]
-//!           [--jobs N] [--out DIR] [--quiet]
+//!           [--sonar-range M] [--sonar-step DEG] [--jobs N] [--out DIR] [--quiet]
 //! ```
 //!
 //! - [`worlds`]: the twelve families, and the waypoint-mission family `survey` (flown when
@@ -44,7 +44,7 @@ use crate::runner::QuietRun;
 use crate::scenario::{self, Sensing};
 use crate::sim::ModelKind;
 use crate::sweep::{fnv1a, pool};
-use case::{Case, Row};
+use case::{Case, Head, Row};
 use worlds::{Family, FAMILIES};
 
 /// Bumped when the worlds or the row format change, so old rows are not mixed in.
@@ -63,6 +63,8 @@ pub struct Options {
     pub first_seed: u64,
     /// The sea's draw (`Case::sim_seed`; 0: each world's own seed).
     pub trial: u64,
+    /// The sonar's set-up.
+    pub head: Head,
     /// Strategies.
     pub strategies: Vec<Strategy>,
     /// Models.
@@ -86,6 +88,7 @@ impl Default for Options {
             seeds: 17,
             first_seed: 0,
             trial: 0,
+            head: Head::default(),
             strategies: vec![Strategy::Vpf],
             models: vec![ModelKind::VideoRay],
             sensing: vec![Sensing::Sonar],
@@ -124,6 +127,13 @@ pub struct Args {
     /// how many outcomes chance alone turns over, the floor a change must beat
     #[arg(long, value_name = "K", value_parser = clap::value_parser!(u64).range(0..=1_000_000))]
     trial: Option<u64>,
+    /// the sonar's range, m (default 20; with contacts, the range they are given within)
+    #[arg(long, value_name = "M", value_parser = sonar_range)]
+    sonar_range: Option<f64>,
+    /// the sonar head's step, degrees (default 3.6: a 360° sweep in 3.2 s at 20 m); 1.8 at
+    /// 30 m is the Micron's high-resolution 9 s sweep
+    #[arg(long, value_name = "DEG", value_parser = sonar_step)]
+    sonar_step: Option<f64>,
     /// vpf, multipoint, navfn (default vpf)
     #[arg(long, value_name = "a,b,...", value_delimiter = ',', value_parser = strategy)]
     strategies: Vec<Strategy>,
@@ -164,6 +174,10 @@ impl From<Args> for Options {
             seeds: a.seeds.unwrap_or(d.seeds),
             first_seed: a.first_seed.unwrap_or(d.first_seed),
             trial: a.trial.unwrap_or(d.trial),
+            head: Head {
+                range_m: a.sonar_range.unwrap_or(d.head.range_m),
+                step_deg: a.sonar_step.unwrap_or(d.head.step_deg),
+            },
             strategies: or(a.strategies, d.strategies),
             models: or(a.models, d.models),
             sensing: or(a.sensing, d.sensing),
@@ -173,6 +187,33 @@ impl From<Args> for Options {
             quiet: a.quiet,
         }
     }
+}
+
+/// A number within `lo ..= hi` (the firmware's scanline limits).
+fn within(s: &str, lo: f32, hi: f32, unit: &str) -> Result<f64, String> {
+    let (lo, hi) = (f64::from(lo), f64::from(hi));
+    match s.parse::<f64>() {
+        Ok(v) if (lo..=hi).contains(&v) => Ok(v),
+        _ => Err(format!(
+            "`{s}`: a number of {unit} within {lo:.3} ..= {hi:.3}"
+        )),
+    }
+}
+
+fn sonar_range(s: &str) -> Result<f64, String> {
+    within(
+        s,
+        vpf::sonar::MIN_RANGE_M,
+        vpf::sonar::MAX_RANGE_M,
+        "metres",
+    )
+}
+
+fn sonar_step(s: &str) -> Result<f64, String> {
+    // Rounded inward to what the scenario schema takes.
+    let lo = (vpf::sonar::MIN_STEP_RAD.to_degrees() * 100.0).ceil() / 100.0;
+    let hi = (vpf::sonar::MAX_STEP_RAD.to_degrees() * 100.0).floor() / 100.0;
+    within(s, lo, hi, "degrees")
 }
 
 fn family(s: &str) -> Result<Family, String> {
@@ -220,6 +261,7 @@ pub fn cases(o: &Options) -> Vec<Case> {
                             model,
                             sensing,
                             trial: o.trial,
+                            head: o.head,
                         });
                     }
                 }
@@ -255,14 +297,14 @@ pub fn bench(o: &Options) -> Result<(PathBuf, report::Report), Error> {
         PathBuf::from("bench").join(crate::output::file_stem(&name))
     });
     std::fs::create_dir_all(&dir).map_err(Error::io("cannot create", &dir))?;
-    // Trial 0's identity is the one benches had before trials: their directories stay valid.
+    // The head's set-up is part of what was flown; trial 0 adds nothing more.
     let trial = o.trial.to_le_bytes();
-    let parts: &[&[u8]] = if o.trial == 0 {
-        &[FORMAT.as_bytes(), recipe_text.as_bytes()]
-    } else {
-        &[FORMAT.as_bytes(), recipe_text.as_bytes(), &trial]
-    };
-    let identity = format!("{:016x}", fnv1a(parts));
+    let head = o.head.name();
+    let mut parts: Vec<&[u8]> = vec![FORMAT.as_bytes(), recipe_text.as_bytes(), head.as_bytes()];
+    if o.trial != 0 {
+        parts.push(&trial);
+    }
+    let identity = format!("{:016x}", fnv1a(&parts));
     let id_path = dir.join("identity");
     match std::fs::read_to_string(&id_path) {
         Ok(old) if old.trim() != identity => {
@@ -343,6 +385,7 @@ pub fn bench(o: &Options) -> Result<(PathBuf, report::Report), Error> {
     rows.sort_by_key(|r| order.get(&r.id).copied().unwrap_or(usize::MAX));
     rows.dedup_by(|a, b| a.id == b.id);
     let mut rep = report::Report::of(&rows, &params.unwrap_or_default(), o.params.as_deref());
+    rep.params.push_str(&format!("; {}", o.head.name()));
     if o.trial != 0 {
         rep.params.push_str(&format!(", trial {}", o.trial));
     }
@@ -352,6 +395,7 @@ pub fn bench(o: &Options) -> Result<(PathBuf, report::Report), Error> {
     let json = serde_json::json!({
         "format": FORMAT,
         "trial": o.trial,
+        "sonar": { "range_m": o.head.range_m, "step_deg": o.head.step_deg },
         "summary": rep.json(),
         "runs": rows
     });
@@ -416,5 +460,24 @@ mod tests {
         let o = parse(&["--families", "rocks", "--seeds", "2", "--trial", "3"]).unwrap();
         assert!(cases(&o).iter().all(|c| c.trial == 3));
         assert_eq!(cases(&Options::default()).len(), 12 * 17);
+        // The sonar's set-up: the scenario schema's unless named, checked against the
+        // firmware's scanline limits.
+        let d = crate::scenario::Sonar::default();
+        assert!(cases(&o).iter().all(|c| c.head.range_m == d.range_m
+            && (c.head.step_deg.to_radians() - d.step).abs() < 1e-12));
+        let o = parse(&["--sonar-range", "30", "--sonar-step", "1.8"]).unwrap();
+        assert!(cases(&o).iter().all(|c| c.head
+            == Head {
+                range_m: 30.0,
+                step_deg: 1.8
+            }));
+        for bad in [
+            ["--sonar-range", "0.1"],
+            ["--sonar-step", "20"],
+            ["--sonar-step", "NaN"],
+        ] {
+            let e = parse(&bad).unwrap_err().to_string();
+            assert!(e.contains("within"), "{bad:?}: {e}");
+        }
     }
 }

@@ -500,6 +500,7 @@ pub fn batch(spec: &Spec, spec_dir: &std::path::Path) -> Result<Batch, ScenarioE
                 model: spec.craft.model,
                 sensing: sc.sensing,
                 trial: 0,
+                head: crate::bench::case::Head::default(),
             };
             let id = format!("bench:{}:{}", family.name(), sc.bench_first_seed + i as u64);
             let crate::bench::case::Drawn {
