@@ -472,7 +472,9 @@ fn the_base_scenario_is_valid_and_defaults_apply() {
     assert_eq!(s.mode, RunMode::Lockstep);
     assert_eq!(s.params, vpf::Params::default());
     assert_eq!(s.sonar, scenario::Sonar::default());
-    assert_eq!(s.sonar.range_m, 30.0);
+    // The transit set-up: 20 m in 3.6° steps (a 3.2 s sweep).
+    assert_eq!(s.sonar.range_m, 20.0);
+    assert!((s.sonar.step.to_degrees() - 3.6).abs() < 1e-9);
     assert_eq!(s.navigation.rate_hz, 10.0);
     assert_eq!(s.faults, scenario::Faults::default());
     assert_eq!(s.vehicles[0].heading, 0.0);

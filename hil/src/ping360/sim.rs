@@ -424,10 +424,11 @@ mod tests {
 
     #[test]
     fn scenario_settings_map_to_the_driver() {
+        // The scenario default: 20 m in 3.6° (4-gradian) steps over 300 samples.
         let spec = Spec::default();
         let cfg = firmware_config(&spec).unwrap();
-        assert_eq!((cfg.step_grad, cfg.samples), (2, 300));
-        assert!((cfg.range_m() - 30.0).abs() < 0.01);
+        assert_eq!((cfg.step_grad, cfg.samples), (4, 300));
+        assert!((cfg.range_m() - 20.0).abs() < 0.01);
         let bad = Spec {
             step: 1.0f64.to_radians(),
             ..spec
