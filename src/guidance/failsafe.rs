@@ -230,7 +230,7 @@ pub fn check(cfg: &FailsafeConfig, s: &Situation) -> Option<HoldReason> {
     // Only while closing: a vehicle already moving away from the nearest surface is not
     // stopped beside it. A mover that came out of a rock's echo 3 m off a VideoRay passing at
     // 1 m/s made it all-stop in the mover's way (bench crossing 1, sonar 20 m / 3.6°); going
-    // on, it would have passed 0.3 m clear.
+    // on, it passed 0.6 m clear.
     let stopping = s.speed * s.speed / (2.0 * s.f_max);
     if s.clearance_m < stopping && s.closing {
         return Some(HoldReason::CollisionImminent);
