@@ -15,7 +15,7 @@ use crate::math::Vec2;
 use crate::params::Params;
 use crate::planner::{Command, Planner};
 use crate::route::{Route, RouteConfig};
-use crate::world::World;
+use crate::world::{Origin, World};
 
 use super::failsafe::{self, FailsafeConfig, FreezeDetector, Situation, SonarWatch};
 use super::guard::{self, GuardConfig, Verdict};
@@ -28,7 +28,7 @@ use super::{
 use crate::link::RxCounters;
 use crate::link::{BeliefRepr, BELIEF_ROWS};
 use crate::sonar::ping360::Ping360Counters;
-use crate::sonar::{EvidenceMap, Near, MAP_SIDE};
+use crate::sonar::{EvidenceMap, Near, MAP_SIDE, MAX_WAKES};
 use crate::world::MAX_MAP_CELLS;
 
 /// The runtime's own settings (the planner's are [`Params`]).
@@ -75,6 +75,10 @@ pub const MAX_NAV_LEAD_MS: u64 = 1000;
 
 /// A quiet sonar's speed bound below which the vehicle holds instead, m/s.
 const QUIET_STOP_MPS: f32 = 0.05;
+
+/// A mover not seen for this long, ms, is not carried on to hide its echoes
+/// ([`Periodic::movers`]): a sweep or three, as far as the tracker extrapolates one.
+const WAKE_AGE_MS: u64 = 10_000;
 
 /// `c` with its speed set-point and planned velocity at most `v` (the planner is then handed
 /// the velocity that went out, `Planner::override_velocity`).
@@ -317,6 +321,7 @@ impl Periodic {
         self.world.expire(now_ms, self.config.max_age_ms);
         if let (Some(m), Some(n)) = (map, nav) {
             self.snapshot(m, n.nav.position);
+            self.publish_wakes(m, n.nav.position, now_ms);
         }
 
         if let Some(r) = inputs.route() {
@@ -378,6 +383,31 @@ impl Periodic {
         // Cells as discs of half their side: neighbours touch, so a wall has no seams.
         self.world
             .set_map(near.iter().map(|c| c.center), 0.5 * m.cell_m());
+    }
+
+    /// Hands the map the sensed obstacles believed to move, carried to `now_ms` on their
+    /// velocity (seen within [`WAKE_AGE_MS`]): the [`MAX_WAKES`] nearest `p`, nearest first.
+    /// Their echoes leave no wake in the map (`crate::sonar::wakes`). Not inlined: its buffer
+    /// would otherwise sit on top of [`Self::snapshot`]'s.
+    #[inline(never)]
+    fn publish_wakes(&self, m: &EvidenceMap, p: Vec2, now_ms: u64) {
+        let mut out: [Option<(f32, Vec2, f32)>; MAX_WAKES] = [None; MAX_WAKES];
+        for o in self.world.obstacles() {
+            let age = now_ms.saturating_sub(o.seen_ms);
+            if o.velocity == Vec2::ZERO || o.origin == Origin::Charted || age > WAKE_AGE_MS {
+                continue;
+            }
+            let c = o.shape.center() + o.velocity * (age as f32 * 1e-3);
+            let mut entry = Some(((c - p).norm2(), c, o.shape.bounding_radius()));
+            // Insertion, nearest first: the farthest falls off the end.
+            for slot in out.iter_mut() {
+                if slot.is_none_or(|(d, _, _)| entry.is_some_and(|(e, _, _)| e < d)) {
+                    core::mem::swap(slot, &mut entry);
+                }
+            }
+        }
+        m.wakes()
+            .publish(out.iter().flatten().map(|&(_, c, r)| (c, r)));
     }
 
     /// Every `belief_every` periods, the next chunk of the evidence map (round-robin).

@@ -45,7 +45,8 @@
 //! wall's believed run at its near end.)
 //!
 //! **Contexts.** One writer, the background (scanlines, [`EvidenceMap::observe`]), and one
-//! reader, the periodic task ([`EvidenceMap::nearest`], [`EvidenceMap::row_bits`]). Cells are
+//! reader, the periodic task ([`EvidenceMap::nearest`], [`EvidenceMap::row_bits`]); the
+//! other way round for the movers' places ([`Wakes`]: their echoes leave no wake). Cells are
 //! packed two to an `AtomicU8` (plain byte loads and stores on a Cortex-M4; the one writer
 //! rewrites a byte whole), the window origin is published under a sequence counter, so neither
 //! side ever waits: a reader that catches the origin mid-move simply uses no map for that period.
@@ -57,6 +58,7 @@
 use core::sync::atomic::{AtomicI32, AtomicU32, AtomicU8, Ordering};
 
 use super::lookout::Lookout;
+use super::wakes::Wakes;
 use crate::math::{min, Vec2};
 
 /// Cells per side of the window.
@@ -233,6 +235,8 @@ pub struct EvidenceMap {
     cfg: EvidenceConfig,
     /// How far the sonar last saw clear along each bearing ([`Lookout`]), written with the cells.
     lookout: Lookout,
+    /// Where the movers are ([`Wakes`]): written by the periodic task, read by `observe`.
+    wakes: Wakes,
 }
 
 /// A believed-occupied cell near the vehicle.
@@ -291,6 +295,7 @@ impl EvidenceMap {
             placed: AtomicU8::new(0),
             cfg: DEFAULT,
             lookout: Lookout::new(),
+            wakes: Wakes::new(),
         }
     }
 
@@ -362,6 +367,11 @@ impl EvidenceMap {
         &self.lookout
     }
 
+    /// The movers whose echoes add no evidence (the periodic task publishes them: [`Wakes`]).
+    pub fn wakes(&self) -> &Wakes {
+        &self.wakes
+    }
+
     /// How far ahead of `p` on `heading` the beam the lookout keeps for that bearing saw clear
     /// for a hull `beside_m` wide either side, m ([`Lookout::clear_ahead`] on this map's cells);
     /// `None` if the sonar never looked that way.
@@ -373,8 +383,12 @@ impl EvidenceMap {
     // ---- The writer's side (background) ----
 
     /// Believes the cell at `p` (writer only): an echo there was seconded by the next beam.
+    /// Not one on a believed mover ([`Wakes`]).
     pub fn believe(&self, p: Vec2) {
         let Some(w) = self.window() else { return };
+        if self.wakes.covers(p) {
+            return;
+        }
         let (i, j) = self.cell_of(p);
         if w.contains(i, j) {
             self.set(i, j, self.value(i, j).max(self.cfg.occupied));
@@ -444,7 +458,7 @@ impl EvidenceMap {
 
     /// Puts one ping in the map (writer only): misses along the beam up to its first echo (less
     /// `stop_short_m`) or to `free_range_m` when it returned nothing, a hit at every echo
-    /// (enough to be believed within `near_m`).
+    /// (enough to be believed within `near_m`) but one on a believed mover ([`Wakes`]).
     /// Cost: O(range / cell) byte updates.
     pub fn observe(&self, beam: &Beam<'_>) {
         let Some(w) = self.window() else { return };
@@ -488,7 +502,11 @@ impl EvidenceMap {
             if k < 8 && beam.vehicles & (1 << k) != 0 {
                 continue;
             }
-            let (i, j) = self.cell_of(beam.origin + beam.look * r);
+            let p = beam.origin + beam.look * r;
+            if self.wakes.covers(p) {
+                continue;
+            }
+            let (i, j) = self.cell_of(p);
             if w.contains(i, j) {
                 let seconded = k < 8 && beam.seconded & (1 << k) != 0;
                 let add = if r <= cfg.near_m || seconded {
@@ -603,7 +621,7 @@ impl EvidenceMap {
     /// one beyond the extent, on two sides at least a right angle apart as seen from the
     /// centre. Its own echoes are believed cells within the ring's inside; a wall's fragment
     /// has the rest of the wall on both sides; a mover has at most its wake on one side (the
-    /// last sweep's echoes, a sweep's travel behind it) and a rock it passes on another —
+    /// echoes of its sightings before it was rated: [`Wakes`]) and a rock it passes on another —
     /// with any believed cell in the ring, real movers of the bench's crossing worlds lost
     /// their velocity (contacts 6 → 26 in 300 runs).
     /// Cost: O(((extent + [`RUN_ON_M`]) / cell)²) nibble loads; for the background.
@@ -715,6 +733,36 @@ mod tests {
     fn ping(m: &EvidenceMap, from: Vec2, angle: f32, echo: Option<f32>) {
         look(m, from, angle, echo);
         look(m, from, angle, echo);
+    }
+
+    #[test]
+    fn a_published_mover_leaves_no_wake_and_a_rock_beside_it_is_still_seen() {
+        let m = map();
+        let w = m.window().unwrap();
+        // A mover of radius 1 m crossing at 5 m, pinged once a metre along its track.
+        for k in 0..6 {
+            let at = Vec2::new(5.0, k as f32 - 2.0);
+            m.wakes().publish([(at, 1.0)].into_iter());
+            ping(
+                &m,
+                Vec2::ZERO,
+                libm::atan2f(at.y, at.x),
+                Some(at.norm() - 1.0),
+            );
+            m.believe(at - Vec2::new(1.0, 0.0));
+        }
+        let mut near: heapless::Vec<Near, 8> = heapless::Vec::new();
+        m.nearest(Vec2::ZERO, 10.0, 0.0, &mut near);
+        assert!(
+            near.is_empty(),
+            "a wake: {:?}",
+            near.first().map(|c| c.center)
+        );
+        // The same echoes with no mover published are structure; one 2.5 m off the mover is
+        // not the mover's.
+        m.wakes().publish([(Vec2::new(5.0, 3.0), 1.0)].into_iter());
+        ping(&m, Vec2::ZERO, 0.0, Some(4.0));
+        assert!(m.is_occupied(w, 8, 0));
     }
 
     #[test]

@@ -96,6 +96,7 @@ mod fit;
 mod known;
 pub mod lookout;
 pub mod ping360;
+pub mod wakes;
 
 use crate::field::{Shape, ShapeError};
 use crate::math::{Vec2, PI};
@@ -110,6 +111,7 @@ pub use evidence::{
 pub use extractor::{Extractor, GLIMPSE_INTENSITY};
 pub use known::{KnownVehicles, ECHO_MARGIN_M, MAX_AGE_MS, MAX_KNOWN};
 pub use lookout::{Lookout, LOOK_SECTORS};
+pub use wakes::{Wakes, MAX_WAKES};
 
 /// Largest accepted vehicle coordinate, m (100 km, as the planner's limit: `f32` still resolves
 /// 8 mm there).
