@@ -101,6 +101,17 @@
 //! whole gap of up to 20 s, not 10 (a mover missed for two sweeps was not gated by its own
 //! track, and came back as a new, still one): 55 → 55.
 //!
+//! *Movers passing a rock, tried and not kept.* A mover passing a rock is one blob with it for
+//! a sweep or two: its fit is pulled off its course (1.8 m, for one at 0.45 m/s borne out three
+//! times) and the map's rock runs on through it, so the miss clears `steady` and the sighting
+//! counts as structure, and the rock's track takes the blob (generated crossing seeds 39, and
+//! 190 at `--trial 1`: the mover came out of the rock believed still, into the VideoRay).
+//! Halving `steady` on a miss and keeping a moving track's velocity whatever runs on through
+//! it kept those movers (with the map's wakes gone, `crate::sonar::wakes`: VPF, all families,
+//! seeds 0–199 × 2 trials, contacts 2 → 1), but also kept the wall fragments of a channel's
+//! bend that had once been rated as moving: no longer structure, their echoes were left out of
+//! the map as a mover's, and a multipoint VideoRay grazed the corner they hid (channel 68).
+//!
 //! **Hasty looks.** A vehicle that turns meets a target twice within a second or two. A track
 //! seen once that took such a second look was rated on it — a velocity of the fits' wander
 //! over the half-sweep floor, about 0.25 m/s, which is "still" — and a rated track's tight
@@ -147,22 +158,6 @@
 //! vehicle's speed turned it back in its channel, and the route layer then led it through a
 //! stretch of wall the sonar had only grazed (bench channels × 3 strategies, contacts: seeds
 //! 0–299 28 → 26, seeds 300–599 42 → 30; all families, seeds 0–99: 23 → 20).
-//!
-//! **Movers passing structure.** A mover passing a rock is one blob with it for a sweep or
-//! two: its fit is pulled off its course, and the map's rock runs on through it. Either undid
-//! the mover. The miss cleared `steady`, and below [`SURE_MPS`] a velocity then waits for the
-//! next borne-out sighting; a sighting structure runs on through is structure, with no
-//! velocity. A crossing mover at 0.45 m/s, borne out three times, had its fifth fit 1.8 m off;
-//! the rock's track took the next ones, and the mover came out of it, believed still, into a
-//! VideoRay passing the rock (generated crossing seed 39; seed 190 at `--trial 1`). So a miss
-//! halves `steady` rather than clearing it (a rock's chance velocity, borne out once, still
-//! goes at its first miss), and a sighting of a track the planner already has as moving keeps
-//! its velocity whatever runs on through it. Both with the map's wakes gone
-//! (`crate::sonar::wakes`), against the wakes alone: VPF, all families, seeds 0–199 × trials
-//! 0 and 1, contacts 2 → 1 (crossing 190 at trial 1 gone), successes 4 792 → 4 791; crossing
-//! and head-on × 3 strategies, seeds 200–399 × 2 trials, run for run the same. Without the
-//! wakes' change these two cost navfn 8 crossing worlds of 200 at trial 0: kept a mover, its
-//! wake led the route after it.
 //!
 //! **Extent.** Each track keeps the largest radius of its compact sightings
 //! ([`Tracks::extent`]), which the guard uses for a mover (`crate::guidance::guard`).
@@ -312,8 +307,7 @@ pub struct Track {
     pub hits: u16,
     /// Centre at the first sighting, m.
     pub first: Vec2,
-    /// Sightings since the velocity was set that fell where it predicted, halved by each one
-    /// that did not.
+    /// Consecutive sightings since the velocity was set that fell where it predicted.
     pub steady: u16,
     /// Its velocity has been estimated (two sightings far enough apart in time).
     pub rated: bool,
@@ -366,12 +360,10 @@ impl Track {
             let gain = if self.hits == 1 { 1.0 } else { cfg.beta };
             if self.hits > 1 {
                 let tol = cfg.gate_m + STEADY_FRACTION * self.velocity.norm() * dt;
-                // A miss halves the count rather than clearing it: one fit pulled off by
-                // a rock the target passes does not unmake a mover (module notes).
                 self.steady = if r.norm() <= tol {
                     self.steady.saturating_add(1)
                 } else {
-                    self.steady / 2
+                    0
                 };
             }
             // A fit's centre is a metre or so off (another face of the target), so two fits
@@ -709,13 +701,15 @@ impl Tracks {
         let Ok(shape) = f.to_shape() else {
             return Admission::Invalid;
         };
-        // A long echo is a wall seen from a new place, not a wall on the move.
-        let long = match f.kind {
-            crate::sonar::FeatureKind::Rectangle { half, .. } => {
-                crate::math::max(half.x, half.y) > cfg.max_mover_half_m
-            }
-            crate::sonar::FeatureKind::Circle { .. } => false,
-        };
+        // A long echo, or one the map's structure runs on from, is a wall seen from a new
+        // place, not a wall on the move.
+        let structure = f.runs_on
+            || match f.kind {
+                crate::sonar::FeatureKind::Rectangle { half, .. } => {
+                    crate::math::max(half.x, half.y) > cfg.max_mover_half_m
+                }
+                crate::sonar::FeatureKind::Circle { .. } => false,
+            };
         self.tracks
             .retain(|t| world.obstacles().iter().any(|o| o.id == t.id));
         self.hand_back(cfg, world, f, vehicle);
@@ -750,14 +744,6 @@ impl Tracks {
                 best = Some((i, d));
             }
         }
-        // So is one the map's structure runs on from, unless it is the next sighting of a
-        // mover the planner already has: a mover passing a rock (module notes, "Movers
-        // passing structure").
-        let moving = best.and_then(|(i, _)| self.tracks.get(i)).is_some_and(|t| {
-            let o = world.obstacles().iter().find(|o| o.id == t.id);
-            o.is_some_and(|o| o.velocity != Vec2::ZERO)
-        });
-        let structure = long || (f.runs_on && !moving);
         let (id, track) = match best.and_then(|(i, _)| self.tracks.get_mut(i)) {
             Some(t) => {
                 t.update(cfg, f.center, f.time_ms);
@@ -1107,37 +1093,6 @@ mod tests {
         // the wall's fragment abeam (a grazing wall returns a short run of echoes).
         let (w, _) = run_along_marked(1.0, true);
         assert_eq!(w.obstacles()[0].velocity, Vec2::ZERO);
-    }
-
-    #[test]
-    fn a_mover_passing_a_rock_keeps_its_velocity() {
-        // A target crossing at 0.45 m/s, seen once a 3.2 s sweep: rated at its second sighting,
-        // borne out by the next two. Its fifth fit takes in the rock it passes: 1.8 m off where
-        // the velocity put it, and the map's structure (the rock) runs on through it.
-        let (cfg, mut w, mut t) = (TrackConfig::default(), World::new(), Tracks::default());
-        let x = |k: u64| 20.0 - 0.45 * 3.2 * k as f32;
-        for k in 0..4u64 {
-            t.admit(
-                &cfg,
-                2.5,
-                &mut w,
-                &at(feature(x(k), 0.0, 1.3, 0.9), 3200 * k),
-                Vec2::ZERO,
-            );
-        }
-        let v = w.obstacles()[0].velocity;
-        assert!((v - Vec2::new(-0.45, 0.0)).norm() < 0.05, "rated {v:?}");
-        let pulled = Feature {
-            runs_on: true,
-            ..at(feature(x(4), -1.8, 1.3, 0.9), 3200 * 4)
-        };
-        t.admit(&cfg, 2.5, &mut w, &pulled, Vec2::ZERO);
-        assert_eq!(w.obstacles().len(), 1, "the same track");
-        let v = w.obstacles()[0].velocity;
-        assert!(
-            (v.x + 0.45).abs() < 0.05 && v.norm() < 0.5,
-            "still a mover: {v:?}"
-        );
     }
 
     #[test]
