@@ -77,7 +77,7 @@ pub const MAX_NAV_LEAD_MS: u64 = 1000;
 const QUIET_STOP_MPS: f32 = 0.05;
 
 /// A mover not seen for this long, ms, is not carried on to hide its echoes
-/// ([`Periodic::movers`]): a sweep or three, as far as the tracker extrapolates one.
+/// ([`Periodic::publish_wakes`]): a sweep or three, as far as the tracker extrapolates one.
 const WAKE_AGE_MS: u64 = 10_000;
 
 /// `c` with its speed set-point and planned velocity at most `v` (the planner is then handed

@@ -758,8 +758,8 @@ mod tests {
             "a wake: {:?}",
             near.first().map(|c| c.center)
         );
-        // The same echoes with no mover published are structure; one 2.5 m off the mover is
-        // not the mover's.
+        // An echo 3.2 m from the mover now published (beyond its hull and the margin) is
+        // structure.
         m.wakes().publish([(Vec2::new(5.0, 3.0), 1.0)].into_iter());
         ping(&m, Vec2::ZERO, 0.0, Some(4.0));
         assert!(m.is_occupied(w, 8, 0));
