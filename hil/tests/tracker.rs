@@ -9,6 +9,12 @@ use vpf::guidance::tracks::{TrackConfig, Tracks};
 use vpf::sonar::{Extractor, ExtractorConfig, Pose};
 use vpf::{Vec2, World};
 
+/// The sonar's pose in the tests: a vehicle at the origin heading +x.
+const STATION: Pose = Pose {
+    position: Vec2::ZERO,
+    heading: 0.0,
+};
+
 #[test]
 fn sonar_features_of_a_crossing_target_are_tracked_with_its_velocity() {
     // Crossing at 0.8 m/s from 28 m to starboard to 28 m to port, inside the 30 m range for the
@@ -38,10 +44,6 @@ fn sonar_features_of_a_crossing_target_are_tracked_with_its_velocity() {
     let mut world = World::new();
     let mut tracks = Tracks::default();
     let cfg = TrackConfig::default();
-    let pose = Pose {
-        position: Vec2::ZERO,
-        heading: 0.0,
-    };
     let mut features = 0;
     let dt = 0.1;
     let duration_s = 70.0;
@@ -49,7 +51,7 @@ fn sonar_features_of_a_crossing_target_are_tracked_with_its_velocity() {
         let t = k as f64 * dt;
         for ping in sonar.poll(t, &vehicle, &obstacles, &[]) {
             let mut found = Vec::new();
-            let _ = extractor.push_scanline(&ping.as_scanline(), pose, &mut |f| {
+            let _ = extractor.push_scanline(&ping.as_scanline(), STATION, &mut |f| {
                 found.push(f);
                 true
             });
@@ -118,16 +120,12 @@ fn sweeps_seeing_a_videoray(cfg: ExtractorConfig, range_m: f64, bearing: f64, se
     let mut sonar = Sonar::new(sonar_cfg);
     let mut extractor = Extractor::new(cfg).unwrap();
     let other = P2::new(range_m * bearing.cos(), range_m * bearing.sin());
-    let pose = Pose {
-        position: Vec2::ZERO,
-        heading: 0.0,
-    };
     let sweeps = 5;
     let mut seen = vec![false; sweeps];
     for k in 0..(sweeps as f64 * sweep_s / 0.1) as usize {
         let t = k as f64 * 0.1;
         for ping in sonar.poll(t, &VehicleState::default(), &[], &[(other, 0.2)]) {
-            let _ = extractor.push_scanline(&ping.as_scanline(), pose, &mut |f| {
+            let _ = extractor.push_scanline(&ping.as_scanline(), STATION, &mut |f| {
                 // A glimpse (one beam) is no sighting here: only the tracker's second look takes it.
                 let near = f.beams > 1
                     && (f.center - Vec2::new(other.x as f32, other.y as f32)).norm() < 0.6;
@@ -203,10 +201,6 @@ fn wake_cells(publish: bool) -> usize {
     let mut world = World::new();
     let mut tracks = Tracks::default();
     let cfg = TrackConfig::default();
-    let pose = Pose {
-        position: Vec2::ZERO,
-        heading: 0.0,
-    };
     let (dt, duration_s) = (0.1, 40.0);
     for k in 0..(duration_s / dt) as usize {
         let t = k as f64 * dt;
@@ -228,7 +222,7 @@ fn wake_cells(publish: bool) -> usize {
         for ping in sonar.poll(t, &vehicle, &obstacles, &[]) {
             let mut found = Vec::new();
             let scan = ping.as_scanline();
-            let _ = extractor.push_scanline_mapped(&scan, pose, Some(&map), &mut |f| {
+            let _ = extractor.push_scanline_mapped(&scan, STATION, Some(&map), &mut |f| {
                 found.push(f);
                 true
             });
