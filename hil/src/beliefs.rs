@@ -98,15 +98,22 @@ pub struct Belief {
 pub fn cli(a: &Args) -> std::process::ExitCode {
     match beliefs(&a.frames, &a.at, a.radius) {
         Ok(all) => {
+            let mut text = String::new();
             for b in all {
-                print!("{b}");
+                text.push_str(&b.to_string());
                 if a.cells {
                     for c in &b.cells {
-                        println!("    cell {:.2} {:.2}", c.x, c.y);
+                        text.push_str(&format!("    cell {:.2} {:.2}\n", c.x, c.y));
                     }
                 }
             }
-            std::process::ExitCode::SUCCESS
+            match crate::output::stdout::print(&text) {
+                Ok(()) => std::process::ExitCode::SUCCESS,
+                Err(e) => {
+                    eprintln!("hil beliefs: standard output: {e}");
+                    std::process::ExitCode::from(2)
+                }
+            }
         }
         Err(e) => {
             eprintln!("hil beliefs: {e}");

@@ -95,6 +95,23 @@ fn a_replayed_frame_log_gives_back_the_route_the_rock_and_the_mover() {
         sonar().any(|o| o.velocity.y > 0.5 && o.velocity.x.abs() < 0.3),
         "no track moving north"
     );
+
+    // `hil beliefs … | head`: a reader that goes away early ends the command quietly. Every
+    // second with its cells is more than a pipe holds, so the write meets the closed pipe.
+    let times: Vec<String> = (1..40).map(|t| t.to_string()).collect();
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_hil"))
+        .arg("beliefs")
+        .arg(&frames)
+        .args(["--radius", "20", "--cells", "--at", &times.join(",")])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(child.stdout.take());
+    let out = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{:?}: {stderr}", out.status);
+    assert!(!stderr.contains("panicked"), "{stderr}");
 }
 
 #[test]

@@ -323,7 +323,10 @@ pub fn cli(args: &Args) -> ExitCode {
         );
         return ExitCode::FAILURE;
     }
-    print!("{}", d.markdown());
+    if let Err(e) = crate::output::stdout::print(&d.markdown()) {
+        eprintln!("hil bench-diff: standard output: {e}");
+        return ExitCode::FAILURE;
+    }
     let new = d
         .totals()
         .values()

@@ -15,6 +15,7 @@ pub mod commands;
 pub mod frames;
 pub mod metrics;
 pub mod plot;
+pub mod stdout;
 pub(crate) mod svg;
 pub mod trajectory;
 

@@ -322,7 +322,7 @@ pub fn cli(args: Args) -> ExitCode {
         let bytes = read_bounded(&file)?;
         let r = replay(&bytes, cfg, ex)?;
         let c = r.counters;
-        println!(
+        let mut text = format!(
             "{}: {} bytes; {} device_data frames accepted, {} checksum errors, {} malformed, {} bytes skipped (resyncs on 'B' 'R')",
             file.display(),
             bytes.len(),
@@ -331,21 +331,22 @@ pub fn cli(args: Args) -> ExitCode {
             c.malformed,
             c.bytes_skipped
         );
+        text.push('\n');
         for p in &r.pings {
-            println!(
-                "  angle {:3} grad, bearing {:+7.1} deg, range {:6.3} m: {}",
+            text.push_str(&format!(
+                "  angle {:3} grad, bearing {:+7.1} deg, range {:6.3} m: {}\n",
                 p.angle,
                 p.bearing.to_degrees(),
                 p.range_m,
                 p.echo_m.map_or("no echo".to_string(), |e| format!(
                     "nearest echo at {e:.3} m"
                 ))
-            );
+            ));
         }
-        println!("{} features:", r.features.len());
+        text.push_str(&format!("{} features:\n", r.features.len()));
         for f in &r.features {
-            println!(
-                "  {} at bearing {:+6.1} deg, range {:.3} m (centre ({:.3}, {:.3}) m, radius {:.3} m), {} beams, confidence {:.2}",
+            text.push_str(&format!(
+                "  {} at bearing {:+6.1} deg, range {:.3} m (centre ({:.3}, {:.3}) m, radius {:.3} m), {} beams, confidence {:.2}\n",
                 match f.kind {
                     FeatureKind::Circle { .. } => "circle",
                     _ => "rectangle",
@@ -357,12 +358,14 @@ pub fn cli(args: Args) -> ExitCode {
                 f.radius,
                 f.beams,
                 f.confidence
-            );
+            ));
         }
         if let Some(p) = &plot_to {
             std::fs::write(p, plot(&r)).map_err(ReplayError::io(p))?;
-            println!("plot: {}", p.display());
+            text.push_str(&format!("plot: {}\n", p.display()));
         }
+        crate::output::stdout::print(&text)
+            .map_err(ReplayError::io(Path::new("standard output")))?;
         Ok(())
     };
     match run() {
