@@ -20,8 +20,10 @@ use cortex_m::peripheral::scb::VectActive;
 use cortex_m::peripheral::SCB;
 use critical_section::Mutex;
 
-/// The up channel's ring buffer, bytes (one is always left free).
-const BUF_SIZE: usize = 1024;
+/// The up channel's ring buffer, bytes (one is always left free). It holds the longest line
+/// the firmware logs (a self-test report, 246 bytes) with room to spare; the host drains
+/// it as it goes. 512 rather than 1 KiB: the RAM budget (README, "RAM") is within bytes.
+const BUF_SIZE: usize = 512;
 /// SEGGER's "non-blocking, trim" mode, as the flags tell the host.
 const MODE_NON_BLOCKING_TRIM: u32 = 1;
 
