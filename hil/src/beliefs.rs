@@ -19,7 +19,7 @@
 //! That is how the causes of the bench's remaining collisions were found: a crossing target
 //! seen once, 7 s before contact, believed still.
 
-use std::fmt;
+use std::fmt::{self, Write as _};
 use std::path::{Path, PathBuf};
 
 use vpf::guidance::{OneThreadRuntime, RuntimeConfig};
@@ -100,10 +100,10 @@ pub fn cli(a: &Args) -> std::process::ExitCode {
         Ok(all) => {
             let mut text = String::new();
             for b in all {
-                text.push_str(&b.to_string());
+                let _ = write!(text, "{b}");
                 if a.cells {
                     for c in &b.cells {
-                        text.push_str(&format!("    cell {:.2} {:.2}\n", c.x, c.y));
+                        let _ = writeln!(text, "    cell {:.2} {:.2}", c.x, c.y);
                     }
                 }
             }

@@ -7,6 +7,7 @@
 //! recording). `hil ping360-raw DUMP.txt OUT.bin` makes such a file from a `brping` text dump
 //! (each frame rebuilt and checked against the checksum the dump logged).
 
+use std::fmt::Write as _;
 use std::io::Read;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -322,7 +323,9 @@ pub fn cli(args: Args) -> ExitCode {
         let bytes = read_bounded(&file)?;
         let r = replay(&bytes, cfg, ex)?;
         let c = r.counters;
-        let mut text = format!(
+        let mut text = String::new();
+        let _ = writeln!(
+            text,
             "{}: {} bytes; {} device_data frames accepted, {} checksum errors, {} malformed, {} bytes skipped (resyncs on 'B' 'R')",
             file.display(),
             bytes.len(),
@@ -331,22 +334,23 @@ pub fn cli(args: Args) -> ExitCode {
             c.malformed,
             c.bytes_skipped
         );
-        text.push('\n');
         for p in &r.pings {
-            text.push_str(&format!(
-                "  angle {:3} grad, bearing {:+7.1} deg, range {:6.3} m: {}\n",
+            let _ = writeln!(
+                text,
+                "  angle {:3} grad, bearing {:+7.1} deg, range {:6.3} m: {}",
                 p.angle,
                 p.bearing.to_degrees(),
                 p.range_m,
                 p.echo_m.map_or("no echo".to_string(), |e| format!(
                     "nearest echo at {e:.3} m"
                 ))
-            ));
+            );
         }
-        text.push_str(&format!("{} features:\n", r.features.len()));
+        let _ = writeln!(text, "{} features:", r.features.len());
         for f in &r.features {
-            text.push_str(&format!(
-                "  {} at bearing {:+6.1} deg, range {:.3} m (centre ({:.3}, {:.3}) m, radius {:.3} m), {} beams, confidence {:.2}\n",
+            let _ = writeln!(
+                text,
+                "  {} at bearing {:+6.1} deg, range {:.3} m (centre ({:.3}, {:.3}) m, radius {:.3} m), {} beams, confidence {:.2}",
                 match f.kind {
                     FeatureKind::Circle { .. } => "circle",
                     _ => "rectangle",
@@ -358,11 +362,11 @@ pub fn cli(args: Args) -> ExitCode {
                 f.radius,
                 f.beams,
                 f.confidence
-            ));
+            );
         }
         if let Some(p) = &plot_to {
             std::fs::write(p, plot(&r)).map_err(ReplayError::io(p))?;
-            text.push_str(&format!("plot: {}\n", p.display()));
+            let _ = writeln!(text, "plot: {}", p.display());
         }
         crate::output::stdout::print(&text)
             .map_err(ReplayError::io(Path::new("standard output")))?;

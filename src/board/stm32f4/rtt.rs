@@ -22,7 +22,8 @@ use critical_section::Mutex;
 
 /// The up channel's ring buffer, bytes (one is always left free). It holds the longest line
 /// the firmware logs (a self-test report, 246 bytes) with room to spare; the host drains
-/// it as it goes. 512 rather than 1 KiB: the RAM budget (README, "RAM") is within bytes.
+/// it as it goes. 512 rather than 1 KiB: with 1 KiB the guard's close quarters left
+/// 52 bytes of the RAM budget (README, "RAM").
 const BUF_SIZE: usize = 512;
 /// SEGGER's "non-blocking, trim" mode, as the flags tell the host.
 const MODE_NON_BLOCKING_TRIM: u32 = 1;
