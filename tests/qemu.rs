@@ -181,6 +181,20 @@ fn selftest_meets_the_budgets_on_the_emulated_cortex_m4() {
             "{strategy}: the background was not flooded: {scanlines}"
         );
     }
+    // The guard's worst case, a VideoRay among sonar contacts seen once, with the evidence
+    // map empty and full: the planner's step within the budget, the guard's whole period
+    // reported (the record above holds the contacts and the overruns).
+    let contacts: Vec<&str> = text
+        .lines()
+        .filter(|l| l.contains("sonar contacts seen once ahead periods"))
+        .collect();
+    assert_eq!(contacts.len(), 2, "{contacts:?}");
+    for line in contacts {
+        let max = number_after(line, "step cost max");
+        let whole = number_after(line, "whole period max");
+        assert!(max <= 100_000, "{line}");
+        assert!(whole > max, "{line}");
+    }
     // The stack on top of the larger image's static RAM (the NUCLEO's, as recorded by
     // `.ci/sizes`) stays within the 32 KiB budget.
     let stack = number_after(&text, "stack high-water");

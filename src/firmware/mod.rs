@@ -113,6 +113,9 @@ pub struct Fill {
     pub map_cells: u8,
     /// Ghost goal-points stacked.
     pub ghosts: u8,
+    /// Sonar contacts no sighting has given a velocity (the guard's head-on and close-quarters
+    /// hypotheses: `vpf::guidance::guard`).
+    pub contacts: u8,
 }
 
 impl Fill {
@@ -120,8 +123,11 @@ impl Fill {
     pub fn of(runtime: &vpf::guidance::Periodic) -> Fill {
         let world = runtime.world();
         let obstacles = world.obstacles().iter().filter(|o| !world.left_to_map(o));
+        let contacts = (world.obstacles().iter())
+            .filter(|o| o.origin == vpf::Origin::Sonar && o.velocity == vpf::Vec2::ZERO);
         Fill {
             obstacles: obstacles.count() as u8,
+            contacts: contacts.count() as u8,
             agents: world.agents().len() as u8,
             map_cells: world.map_cells().len() as u8,
             ghosts: runtime.planner().ghosts().len() as u8,
@@ -135,6 +141,7 @@ impl Fill {
             agents: self.agents.min(o.agents),
             map_cells: self.map_cells.min(o.map_cells),
             ghosts: self.ghosts.min(o.ghosts),
+            contacts: self.contacts.min(o.contacts),
         }
     }
 }

@@ -19,12 +19,16 @@
 //!    periods; then the stack high-water mark. It exits successfully only if no strategy
 //!    overran, every measured period ran at full tables and every worst step was within
 //!    [`STEP_BUDGET`]. Half the obstacles of the spread world move, so the prediction of moving obstacles is in the measured path.
-//! 4. A further flood (VPF, the spread world) brings its pings as Ping360 `device_data`
+//! 4. Before the floods and after them (the evidence map empty, then full), the guard's worst
+//!    case, which no charted world reaches: a VideoRay (VPF) among 32 sonar contacts seen
+//!    once ahead, each of which may be another vehicle ([`contacts`]), on navigation alone.
+//! 5. A further flood (VPF, the spread world) brings its pings as Ping360 `device_data`
 //!    through the Ping360 driver and its navigation as MAVLink (ATTITUDE, LOCAL_POSITION_NED)
 //!    through the MAVLink line's decoder, so their paths are measured and in the stack's
 //!    high-water mark; every period also sends the MAVLink set-point and what else is due.
 
 use vpf::field::Shape;
+use vpf::guidance::tracks::SONAR_ID_BASE;
 use vpf::guidance::Sighting;
 use vpf::link::{Message, NavRepr, Payload};
 use vpf::sonar::Scanline;
@@ -59,6 +63,8 @@ enum Phase {
     Spread,
     Clutter,
     Traffic,
+    /// No charted obstacles: sonar contacts ([`contacts`]).
+    Contacts,
 }
 
 /// `p` for a flat-fish (seed 003's AUV, `hil/recipes/flatfish.toml`'s craft): a hull of
@@ -78,7 +84,10 @@ fn flatfish(p: Params) -> Params {
 pub fn run(idle: &mut BackgroundTask, x: &mut impl Exchange, params: Params) -> ! {
     board::log(b"selftest: full tables, sonar flood, 50 periods per strategy and world\n");
     link_costs(idle, x);
-    let mut ok = true;
+    // Before any flood, with the evidence map empty (so that the nearest contact is near
+    // enough for close quarters), and again after the floods, with it full.
+    let mut ok = contacts(idle, x, params);
+    remove_boot_contacts(idle, x);
     let strategies = [Strategy::Vpf, Strategy::Multipoint, Strategy::Navfn];
     for (strategy, w) in strategies
         .iter()
@@ -132,6 +141,7 @@ pub fn run(idle: &mut BackgroundTask, x: &mut impl Exchange, params: Params) -> 
     let s = x.take_stats();
     report_ping360(idle, params.strategy, &s, &sonar);
     ok &= s.overruns == 0 && s.periods >= PERIODS && s.max_cost <= STEP_BUDGET;
+    ok &= contacts(idle, x, params);
     report_object_costs();
     report_stack();
     board::log(if ok {
@@ -501,6 +511,110 @@ fn load_world(idle: &mut BackgroundTask, x: &mut impl Exchange, w: Phase) {
     next_period(idle, x);
 }
 
+/// The guard's worst case, which the flooded worlds (charted) never reach: a VideoRay at
+/// cruise in open water with every table slot a sonar contact seen once — a small circle
+/// within 55° of the bow, alone (4.7 m from the next), so each may be another vehicle coming
+/// its way (`guidance::guard`, "Head-on"). With the evidence map empty the nearest (3 m
+/// ahead) is also near enough for "Close quarters"; with it full, every "alone" test reads
+/// its cells too, and the nearest, inside the flood's ring of echoes, is structure.
+/// Navigation only, no scanlines: a sighting would take a contact's slot or see it again.
+/// True if no period overran,
+/// every step was within [`STEP_BUDGET`] and every contact stayed one seen once.
+#[inline(never)]
+fn contacts(idle: &mut BackgroundTask, x: &mut impl Exchange, params: Params) -> bool {
+    use vpf::sonar::{Feature, FeatureKind};
+    set_strategy(
+        idle,
+        x,
+        Params {
+            strategy: Strategy::Vpf,
+            ..params
+        },
+    );
+    let clear = Message::ChartClear(vpf::link::ChartClearRepr::All);
+    let mut frame = [0u8; 32];
+    if let Ok(n) = clear.emit_frame(0, &mut frame) {
+        if let Some(f) = frame.get(..n) {
+            idle.feed(f, x);
+        }
+    }
+    load_world(idle, x, Phase::Contacts);
+    // Rows across the bow 4.7 m apart, from 3 m out, as many as fit within 55° of it.
+    let rows = (0..8u32).flat_map(|row| {
+        let r = 3.0 + 4.7 * row as f32;
+        let n = ((1.92 * r / 4.7) as u32).max(1);
+        let step = 1.92 / n.saturating_sub(1).max(1) as f32;
+        let first = if n > 1 { -0.96 } else { 0.0 };
+        (0..n).map(move |k| Vec2::from_angle(first + step * k as f32) * r)
+    });
+    for c in rows.take(MAX_OBSTACLES) {
+        let f = Feature {
+            center: c,
+            radius: 0.25,
+            kind: FeatureKind::Circle { radius: 0.25 },
+            confidence: 0.2,
+            time_ms: x.now_ms(),
+            beams: 2,
+            runs_on: false,
+        };
+        while !idle.push_sighting(Sighting::Feature(f)) {
+            next_period(idle, x);
+        }
+    }
+    let _ = quiet(idle, x, WARMUP_PERIODS);
+    let s = quiet(idle, x, PERIODS);
+    let mut line = Line::new();
+    line.push(b"selftest: vpf, sonar contacts seen once ahead periods ");
+    line.num(u64::from(s.periods));
+    line.push(b", step cost max ");
+    line.num(u64::from(s.max_cost));
+    line.push(b" mean ");
+    line.num(s.sum_cost / u64::from(s.periods.max(1)));
+    line.push(b" instructions, whole period max ");
+    line.num(u64::from(s.max_period));
+    line.push(b", overruns ");
+    line.num(u64::from(s.overruns));
+    line.push(b", least contacts ");
+    line.num(u64::from(s.least_fill.contacts));
+    line.push(b" of ");
+    line.num(MAX_OBSTACLES as u64);
+    line.push(b", map cells ");
+    line.num(u64::from(s.least_fill.map_cells));
+    line.push(b"\n");
+    board::log(line.bytes());
+    s.overruns == 0
+        && s.max_cost <= STEP_BUDGET
+        && s.periods >= PERIODS
+        && usize::from(s.least_fill.contacts) == MAX_OBSTACLES
+}
+
+/// Removes the contacts [`contacts`] left at boot, by id as a host may, so that the charted
+/// worlds get the table: the tracker numbers its tracks from its base, and nothing else had
+/// been tracked.
+fn remove_boot_contacts(idle: &mut BackgroundTask, x: &mut impl Exchange) {
+    let mut frame = [0u8; 32];
+    for id in (0..MAX_OBSTACLES as u16).map(|k| k.saturating_add(SONAR_ID_BASE)) {
+        let clear = Message::ChartClear(vpf::link::ChartClearRepr::One(id));
+        if let Ok(n) = clear.emit_frame(0, &mut frame) {
+            if let Some(f) = frame.get(..n) {
+                idle.feed(f, x);
+            }
+        }
+        // One request a period: the control queue is short.
+        next_period(idle, x);
+    }
+}
+
+/// `periods` periods with fresh navigation and nothing else; their stats.
+fn quiet(idle: &mut BackgroundTask, x: &mut impl Exchange, periods: u32) -> Stats {
+    let _ = x.take_stats();
+    while x.stats().periods < periods {
+        send_nav(idle, x);
+        next_period(idle, x);
+    }
+    x.take_stats()
+}
+
 /// Obstacle `i` of the self-test's world: a circle, a rectangle, an ellipse or a hexagon.
 ///
 /// - Spread: a grid 10–59 m ahead, 20 m either side, as a sonar's table
@@ -522,6 +636,7 @@ fn obstacle(i: usize, now_ms: u64, w: Phase) -> Option<Obstacle> {
             let v = if i.is_multiple_of(2) { 0.5 } else { 0.0 };
             (c, 1.0, Vec2::new(0.0, v))
         }
+        Phase::Contacts => return None,
         Phase::Traffic => {
             let u = Vec2::from_angle(i as f32 * (2.0 * core::f32::consts::PI / 32.0));
             (u * 16.0, 0.5, u * -1.0)
@@ -563,6 +678,7 @@ fn report(strategy: Strategy, w: Phase, flood: &Flood, x: &mut impl Exchange, gh
             Phase::Spread => b"",
             Phase::Clutter => b" in clutter",
             Phase::Traffic => b", a flat-fish in traffic",
+            Phase::Contacts => b", sonar contacts",
         });
     };
     let s = x.take_stats();

@@ -145,11 +145,12 @@
 //! 0 → 0, row for row. The contacts left are vehicles that saw each other within 2 m and
 //! turned into each other while stopping (head-on 292), or that neither saw before they
 //! touched (head-on 248: converging side by side at 1 m/s, both in transit). The guard runs
-//! after the planner's step, outside its 100 000-instruction budget; the self-test's world is
-//! charted, so neither this nor the head-on hypothesis is in its measured whole period
-//! (433 400 at most). Their worst case, all 32 table obstacles sonar contacts seen once and
-//! near, is not measured: by its loops (two "alone" checks over 32 obstacles and 32 map cells
-//! each) it is some 150 000 instructions more, an estimate, in a 100 ms period.
+//! after the planner's step, outside its 100 000-instruction budget. Its worst case for this
+//! and the head-on hypothesis, every table slot a contact seen once ahead and alone, is a
+//! phase of `cargo selftest` (a VideoRay at cruise among 32 of them, 4.7 m apart): the whole
+//! period is at most 512 800 instructions with the evidence map empty (the nearest contact, 3 m
+//! ahead, in close quarters) and 734 560 with its 32 cells, which every "alone" test reads;
+//! about 4 ms of the 100 ms period at the STM32G431's 170 MHz.
 //!
 //! **Slow tracks.** A sonar track whose sightings a sweep apart put it on the move at 0.3–0.5
 //! m/s stays still in the table until a third sighting lands where that velocity says (a
@@ -211,10 +212,12 @@
 //! every [`SAMPLE_M`] along the segment for the table's still obstacles near enough to matter,
 //! and one closest-approach per mover ([`TRACK_STEPS`] of them for a slow-turning craft);
 //! once a period, a distance per map cell for each still track seen again within reach
-//! (at most 32 × 32). The worst case is a slow-turning craft in traffic closing from all round, which searches
-//! every heading twice for a clear motion and once more for the least bad: `cargo selftest`'s
-//! flat-fish in traffic, whole period at most 430 880 instructions (393 280 without the least
-//! bad, when that was measured), the planner's step 88 400.
+//! (at most 32 × 32); for each contact seen once ahead, two "alone" tests over the table and
+//! the map's cells. The worst cases: a slow-turning craft in traffic closing from all round,
+//! which searches every heading twice for a clear motion and once more for the least bad
+//! (`cargo selftest`'s flat-fish in traffic, whole period at most 430 880 instructions, the
+//! planner's step 88 400), and a vehicle among contacts seen once ("Close quarters" above:
+//! 734 560).
 
 use super::tracks::Tracks;
 use crate::math::{cos, max, min, sin, wrap_angle, Vec2};
