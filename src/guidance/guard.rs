@@ -72,7 +72,9 @@
 //! perception, crossing seed 22; crossing seeds 0–49 at 1 m/s, contacts 6 → 4, successes
 //! 44 → 46; with its sonar and recipe, crossing and head-on seeds 0–99: 182 → 181 of 200,
 //! contacts 3 → 2; at 0.75 m/s, seeds 34–133: 175 → 177, 11 → 10). Head-on, stopping and
-//! going on keep the same distance, and it stops. Anything slower than [`STILL_MPS`] is judged
+//! going on keep the same distance, and it stops. Judging such a craft's course over 15 s
+//! rather than 10 (from 0.75 m/s it brakes for 7.5 s): at 0.75 m/s, seeds 0–33, contacts
+//! 3 → 7, successes 359 → 355 of 408; not kept. Anything slower than [`STILL_MPS`] is judged
 //! still, not a mover: a stopped vehicle the host reports drifts at a centimetre a second, and
 //! weighed as a mover among the others, the least bad way out of a mate closing from astern
 //! ran a flat-fish into another mate stopped ahead (formation worlds).
@@ -98,7 +100,11 @@
 //! Collisions at Sea*, 1972), judged without knowing the other's course; the rule's "both
 //! alter to starboard" was tried too (a contact dead ahead must pass to port) and made
 //! navfn's head-on contacts 2 → 12 in 400 worlds: each vehicle's planner had already chosen
-//! a side.
+//! a side. Keeping to starboard of the track before anything is seen (each vehicle steering
+//! for a point 4 r₀ = 2 m to the right of its goal, less within 2σ_c of it, so that two on
+//! reciprocal tracks pass port to port unseen) was noise: crossing and head-on × 3
+//! strategies, seeds 200–399 × trials 0 and 1, contacts 6 → 5 (6 gone, 5 new) — the rocks
+//! they round put them back on each other's track.
 //!
 //! *Sized as a mover* means fitted as a circle, or as a bar that the tracker would let move
 //! and that is no longer than the vehicles the planner knows (`agent_radius_m`, the r₀ of
