@@ -30,7 +30,7 @@
 use vpf::field::Shape;
 use vpf::guidance::tracks::SONAR_ID_BASE;
 use vpf::guidance::Sighting;
-use vpf::link::{Message, NavRepr, Payload};
+use vpf::link::{ChartClearRepr, Message, NavRepr, Payload};
 use vpf::sonar::Scanline;
 use vpf::world::{Agent, Obstacle, Origin, MAX_AGENTS, MAX_MAP_CELLS, MAX_OBSTACLES};
 use vpf::{Mission, NavState, Params, Strategy, Vec2};
@@ -308,14 +308,20 @@ fn feed_ping360(idle: &mut BackgroundTask, x: &mut impl Exchange, ping: u32, st:
     }
 }
 
-/// Switches the planner's parameters by a `Params` message, as a host would.
-fn set_strategy(idle: &mut BackgroundTask, x: &mut impl Exchange, p: Params) {
-    let mut frame = [0u8; PARAMS_FRAME];
-    if let Ok(n) = Message::Params(p).emit_frame(0, &mut frame) {
+/// Feeds `m` to the background as the host's link would, framed in `N` bytes (the message's
+/// own size: the test's buffers hold only what they carry).
+fn send<const N: usize>(idle: &mut BackgroundTask, x: &mut impl Exchange, m: Message<'_>) {
+    let mut frame = [0u8; N];
+    if let Ok(n) = m.emit_frame(0, &mut frame) {
         if let Some(f) = frame.get(..n) {
             idle.feed(f, x);
         }
     }
+}
+
+/// Switches the planner's parameters by a `Params` message, as a host would.
+fn set_strategy(idle: &mut BackgroundTask, x: &mut impl Exchange, p: Params) {
+    send::<PARAMS_FRAME>(idle, x, Message::Params(p));
 }
 
 /// `periods` periods of sonar flood: scanline messages on the control link, or with `sonar`
@@ -408,12 +414,7 @@ fn send_nav(idle: &mut BackgroundTask, x: &mut impl Exchange) {
         },
         body: None,
     };
-    let mut frame = [0u8; 64];
-    if let Ok(n) = Message::Nav(nav).emit_frame(0, &mut frame) {
-        if let Some(f) = frame.get(..n) {
-            idle.feed(f, x);
-        }
-    }
+    send::<64>(idle, x, Message::Nav(nav));
 }
 
 /// The same navigation as [`send_nav`], as an autopilot's ATTITUDE and LOCAL_POSITION_NED on
@@ -489,12 +490,7 @@ fn load_world(idle: &mut BackgroundTask, x: &mut impl Exchange, w: Phase) {
             attraction: 5.0,
         }),
     };
-    let mut frame = [0u8; 128];
-    if let Ok(n) = Message::Mission(mission).emit_frame(0, &mut frame) {
-        if let Some(f) = frame.get(..n) {
-            idle.feed(f, x);
-        }
-    }
+    send::<128>(idle, x, Message::Mission(mission));
     let now = x.now_ms();
     let obstacles = (0..MAX_OBSTACLES).filter_map(|i| obstacle(i, now, w).map(Sighting::Obstacle));
     let agents = (0..MAX_AGENTS).filter_map(|i| {
@@ -531,13 +527,7 @@ fn contacts(idle: &mut BackgroundTask, x: &mut impl Exchange, params: Params) ->
             ..params
         },
     );
-    let clear = Message::ChartClear(vpf::link::ChartClearRepr::All);
-    let mut frame = [0u8; 32];
-    if let Ok(n) = clear.emit_frame(0, &mut frame) {
-        if let Some(f) = frame.get(..n) {
-            idle.feed(f, x);
-        }
-    }
+    send::<32>(idle, x, Message::ChartClear(ChartClearRepr::All));
     load_world(idle, x, Phase::Contacts);
     // Rows across the bow 4.7 m apart, from 3 m out, as many as fit within 55° of it.
     let rows = (0..8u32).flat_map(|row| {
@@ -564,16 +554,8 @@ fn contacts(idle: &mut BackgroundTask, x: &mut impl Exchange, params: Params) ->
     let _ = quiet(idle, x, WARMUP_PERIODS);
     let s = quiet(idle, x, PERIODS);
     let mut line = Line::new();
-    line.push(b"selftest: vpf, sonar contacts seen once ahead periods ");
-    line.num(u64::from(s.periods));
-    line.push(b", step cost max ");
-    line.num(u64::from(s.max_cost));
-    line.push(b" mean ");
-    line.num(s.sum_cost / u64::from(s.periods.max(1)));
-    line.push(b" instructions, whole period max ");
-    line.num(u64::from(s.max_period));
-    line.push(b", overruns ");
-    line.num(u64::from(s.overruns));
+    line.push(b"selftest: vpf, sonar contacts seen once ahead");
+    push_costs(&mut line, &s);
     line.push(b", least contacts ");
     line.num(u64::from(s.least_fill.contacts));
     line.push(b" of ");
@@ -592,14 +574,8 @@ fn contacts(idle: &mut BackgroundTask, x: &mut impl Exchange, params: Params) ->
 /// worlds get the table: the tracker numbers its tracks from its base, and nothing else had
 /// been tracked.
 fn remove_boot_contacts(idle: &mut BackgroundTask, x: &mut impl Exchange) {
-    let mut frame = [0u8; 32];
     for id in (0..MAX_OBSTACLES as u16).map(|k| k.saturating_add(SONAR_ID_BASE)) {
-        let clear = Message::ChartClear(vpf::link::ChartClearRepr::One(id));
-        if let Ok(n) = clear.emit_frame(0, &mut frame) {
-            if let Some(f) = frame.get(..n) {
-                idle.feed(f, x);
-            }
-        }
+        send::<32>(idle, x, Message::ChartClear(ChartClearRepr::One(id)));
         // One request a period: the control queue is short.
         next_period(idle, x);
     }
@@ -668,6 +644,21 @@ fn next_period(idle: &mut BackgroundTask, x: &mut impl Exchange) {
     }
 }
 
+/// The periods `s` counts and their costs: the planner's step (max and mean), the whole
+/// period, overruns.
+fn push_costs(line: &mut Line, s: &Stats) {
+    line.push(b" periods ");
+    line.num(u64::from(s.periods));
+    line.push(b", step cost max ");
+    line.num(u64::from(s.max_cost));
+    line.push(b" mean ");
+    line.num(s.sum_cost / u64::from(s.periods.max(1)));
+    line.push(b" instructions, whole period max ");
+    line.num(u64::from(s.max_period));
+    line.push(b", overruns ");
+    line.num(u64::from(s.overruns));
+}
+
 /// Prints one strategy's lines; true if it met the budget at full tables (`ghosts`: the
 /// depth the ghost goal-point stack was loaded to, 0 for a strategy without them).
 fn report(strategy: Strategy, w: Phase, flood: &Flood, x: &mut impl Exchange, ghosts: u8) -> bool {
@@ -682,19 +673,9 @@ fn report(strategy: Strategy, w: Phase, flood: &Flood, x: &mut impl Exchange, gh
         });
     };
     let s = x.take_stats();
-    let mean = s.sum_cost / u64::from(s.periods.max(1));
     let mut line = Line::new();
     name(&mut line);
-    line.push(b" periods ");
-    line.num(u64::from(s.periods));
-    line.push(b", step cost max ");
-    line.num(u64::from(s.max_cost));
-    line.push(b" mean ");
-    line.num(mean);
-    line.push(b" instructions, whole period max ");
-    line.num(u64::from(s.max_period));
-    line.push(b", overruns ");
-    line.num(u64::from(s.overruns));
+    push_costs(&mut line, &s);
     line.push(b", scanlines extracted ");
     line.num(u64::from(flood.scanlines));
     line.push(b" (background per scanline max ");
