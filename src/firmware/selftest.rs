@@ -514,8 +514,8 @@ fn load_world(idle: &mut BackgroundTask, x: &mut impl Exchange, w: Phase) {
 /// ahead) is also near enough for "Close quarters"; with it full, every "alone" test reads
 /// its cells too, and the nearest, inside the flood's ring of echoes, is structure.
 /// Navigation only, no scanlines: a sighting would take a contact's slot or see it again.
-/// True if no period overran,
-/// every step was within [`STEP_BUDGET`] and every contact stayed one seen once.
+/// True if no period overran, every step was within [`STEP_BUDGET`] and every contact stayed
+/// one seen once.
 #[inline(never)]
 fn contacts(idle: &mut BackgroundTask, x: &mut impl Exchange, params: Params) -> bool {
     use vpf::sonar::{Feature, FeatureKind};
