@@ -122,12 +122,17 @@ impl Fill {
     /// The fill of `runtime`'s tables now.
     pub fn of(runtime: &vpf::guidance::Periodic) -> Fill {
         let world = runtime.world();
-        let obstacles = world.obstacles().iter().filter(|o| !world.left_to_map(o));
-        let contacts = (world.obstacles().iter())
-            .filter(|o| o.origin == vpf::Origin::Sonar && o.velocity == vpf::Vec2::ZERO);
+        // One pass over the table, every period.
+        let (obstacles, contacts) = world.obstacles().iter().fold((0u8, 0u8), |(n, c), o| {
+            let contact = o.origin == vpf::Origin::Sonar && o.velocity == vpf::Vec2::ZERO;
+            (
+                n.saturating_add(u8::from(!world.left_to_map(o))),
+                c.saturating_add(u8::from(contact)),
+            )
+        });
         Fill {
-            obstacles: obstacles.count() as u8,
-            contacts: contacts.count() as u8,
+            obstacles,
+            contacts,
             agents: world.agents().len() as u8,
             map_cells: world.map_cells().len() as u8,
             ghosts: runtime.planner().ghosts().len() as u8,
