@@ -122,7 +122,15 @@
 //! into while the guard turned from a hypothetical one. The hypothesis also for a track seen
 //! twice whose velocity no third sighting has confirmed: 77. Half the cruise speed while a
 //! contact of unknown motion is within 20 m ahead (COLREG rule 6, safe speed): 74 — a slower
-//! vehicle stays longer in the crossing traffic's way.
+//! vehicle stays longer in the crossing traffic's way. The same hypothesis for a blob of
+//! believed map cells (within 1 m) that stands alone ahead, for another vehicle whose weak
+//! echoes reach only the evidence map (VPF head-on seed 248, trial 1: each took the other for
+//! cells of a rock 6 m ahead and neither turned): crossing and head-on × 3 strategies, seeds
+//! 200–399, contacts 2 → 5 at trial 0 and 4 → 3 at trial 1 — the new ones pairs that never
+//! believed each other at all; not kept. Without a floor at the stopping distance it also
+//! swerved vehicles onto speckle cells about the head, which held them "inside an obstacle"
+//! for good (10 of 400 VPF runs), until `crate::sonar::EvidenceMap::nearest` passed over a
+//! cell under the vehicle's centre.
 //!
 //! **Close quarters.** Two VideoRays that meet head-on see each other late: a 0.4 m hull is
 //! narrower than the gap between the 3° beams of a 3.6° step, so beyond about 5 m it is one
@@ -154,8 +162,8 @@
 //! after the planner's step, outside its 100 000-instruction budget. Its worst case for this
 //! and the head-on hypothesis, every table slot a contact seen once ahead and alone, is a
 //! phase of `cargo selftest` (a VideoRay at cruise among 32 of them, 4.7 m apart): the whole
-//! period is at most 512 800 instructions with the evidence map empty (the nearest contact, 3 m
-//! ahead, in close quarters) and 734 560 with its 32 cells, which every "alone" test reads;
+//! period is at most 512 760 instructions with the evidence map empty (the nearest contact, 3 m
+//! ahead, in close quarters) and 732 760 with its 32 cells, which every "alone" test reads;
 //! about 4 ms of the 100 ms period at the STM32G431's 170 MHz.
 //!
 //! **Slow tracks.** A sonar track whose sightings a sweep apart put it on the move at 0.3–0.5
@@ -221,9 +229,9 @@
 //! (at most 32 × 32); for each contact seen once ahead, two "alone" tests over the table and
 //! the map's cells. The worst cases: a slow-turning craft in traffic closing from all round,
 //! which searches every heading twice for a clear motion and once more for the least bad
-//! (`cargo selftest`'s flat-fish in traffic, whole period at most 430 880 instructions, the
-//! planner's step 88 400), and a vehicle among contacts seen once ("Close quarters" above:
-//! 734 560).
+//! (`cargo selftest`'s flat-fish in traffic, whole period at most 428 120 instructions, the
+//! planner's step 88 160), and a vehicle among contacts seen once ("Close quarters" above:
+//! 732 760).
 
 use super::tracks::Tracks;
 use crate::math::{cos, max, min, sin, wrap_angle, Vec2};

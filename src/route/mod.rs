@@ -23,6 +23,13 @@
 //!    see in a straight line (`aim`);
 //! 4. publishes a [`Route`] through a lock-free [`RouteSlot`].
 //!
+//! *Tried and not kept:* keeping the last detour's goal-point while it leads off more than 60°
+//! from the new one, is still in sight and its way is at most a quarter (and 4 cells) longer —
+//! two nearly equal ways round a rock swap places as the map fills in, and a flat-fish sent one
+//! way and then the other turns on the spot for minutes (bench clutter seed 10). Flat-fish with
+//! its recipe, seeds 0–33: successes 333 → 324 of 408 (20 gained, 29 lost), contacts 0 → 0;
+//! the turning back and forth is the field's and the guard's as much as the route's.
+//!
 //! The periodic task then gives the planner `aim` as its goal-point while the route is fresh
 //! and for its own goal (the goal itself when it is in plain sight); arrival is still judged at
 //! the goal (`crate::planner::Planner::set_route`), and VPF cruises to a routed goal-point

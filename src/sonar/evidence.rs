@@ -540,7 +540,10 @@ impl EvidenceMap {
     /// `hull_m` of `p` is passed over: the vehicle's own hull is water, so an echo there is
     /// false (speckle near the head), and a cell within the sonar's blanking range is never
     /// looked through again to be cleared — believed, it held a flat-fish (2.25 m hull)
-    /// "inside an obstacle" 27 m from anything, for the rest of a bench run.
+    /// "inside an obstacle" 27 m from anything, for the rest of a bench run. So is a cell
+    /// whose disc (of half a cell) holds `p` itself, whatever the hull: no surface is under
+    /// the vehicle's centre, and a VideoRay (0.5 m) that came to rest 0.24 m from a speckle
+    /// cell's centre, not wholly within its hull, was held "inside" it for good.
     ///
     /// Why per sector and not simply the K nearest: between two piers, in a channel or in a
     /// corner, the nearest wall alone has more than K cells within reach, and the K nearest
@@ -573,14 +576,16 @@ impl EvidenceMap {
             cj.saturating_sub(r).max(w.y0),
             cj.saturating_add(r).min(w.y0 + MASK),
         );
-        // Cells that may lie wholly within the hull: at most this many cells off (squared).
+        // Cells that may lie wholly within the hull, or hold `p`: at most this many cells off
+        // (squared).
         let half_diagonal = core::f32::consts::FRAC_1_SQRT_2 * cell;
         let inside = if hull_m > half_diagonal {
             min(hull_m / cell, MAX_REACH_CELLS as f32) as i32 + 1
         } else {
-            -1
+            1
         };
-        let inside2 = if inside < 0 { -1 } else { inside * inside };
+        let inside2 = inside * inside + 1;
+        let under = |d: f32| d + half_diagonal <= hull_m || d <= 0.5 * cell;
         // Per sector: squared cell distance and the cell (d2 = i32::MAX: none yet).
         let mut best = [(i32::MAX, 0i32, 0i32); SECTORS];
         for j in j0..=j1 {
@@ -590,7 +595,7 @@ impl EvidenceMap {
                 if d2 > r2 || self.value(i, j) < self.cfg.occupied {
                     continue;
                 }
-                if d2 <= inside2 && (self.center_of(i, j) - p).norm() + half_diagonal <= hull_m {
+                if d2 <= inside2 && under((self.center_of(i, j) - p).norm()) {
                     continue;
                 }
                 if let Some(b) = best.get_mut(sector(di, dj)) {
@@ -932,6 +937,15 @@ mod tests {
         // A 2.25 m hull holds the cell at 0.36 m wholly; the one at 2.6 m reaches out of it.
         m.nearest(Vec2::ZERO, 6.0, 2.25, &mut near);
         assert_eq!(near.len(), 1);
+        // A 0.5 m hull holds neither wholly: both count ...
+        m.nearest(Vec2::ZERO, 6.0, 0.5, &mut near);
+        assert_eq!(near.len(), 2);
+        // ... until the vehicle stands within the first one's disc (0.07 m from its centre).
+        m.nearest(Vec2::new(0.2, 0.2), 6.0, 0.5, &mut near);
+        assert_eq!(near.len(), 1);
+        m.nearest(Vec2::new(0.2, 0.2), 6.0, 0.0, &mut near);
+        assert_eq!(near.len(), 1, "whatever the hull");
+        m.nearest(Vec2::ZERO, 6.0, 2.25, &mut near);
         assert!(
             (near[0].center - Vec2::new(0.25, 2.75)).norm() < 1e-6,
             "{near:?}"
