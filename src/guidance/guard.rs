@@ -125,9 +125,13 @@
 //! vehicle stays longer in the crossing traffic's way. The same hypothesis for a blob of
 //! believed map cells (within 1 m) that stands alone ahead, for another vehicle whose weak
 //! echoes reach only the evidence map (VPF head-on seed 248, trial 1: each took the other for
-//! cells of a rock 6 m ahead and neither turned): crossing and head-on × 3 strategies, seeds
-//! 200–399, contacts 2 → 5 at trial 0 and 4 → 3 at trial 1 — the new ones pairs that never
-//! believed each other at all; not kept. Without a floor at the stopping distance it also
+//! cells of a rock 6 m ahead and neither turned; so did head-on 445 of seeds 400–599): a
+//! mover on the reciprocal or meeting course, beyond the stopping distance, at most two a
+//! period. Crossing and head-on × 3 strategies: seeds 200–399, contacts 2 → 5 at trial 0 and
+//! 4 → 3 at trial 1 (the new ones pairs that never believed each other at all); seeds
+//! 400–599, 3 → 1 and 8 → 7 — head-on 9 → 1, but crossing 2 → 7 (a mover's own cells met on a
+//! course it is not on). Not kept; a blob a mover's track could explain, carried on its
+//! velocity, is the next thing to leave out. Without a floor at the stopping distance it also
 //! swerved vehicles onto speckle cells about the head, which held them "inside an obstacle"
 //! for good (10 of 400 VPF runs), until `crate::sonar::EvidenceMap::nearest` passed over a
 //! cell under the vehicle's centre.
