@@ -129,12 +129,11 @@
 //! mover on the reciprocal or meeting course, beyond the stopping distance, at most two a
 //! period. Crossing and head-on × 3 strategies: seeds 200–399, contacts 2 → 5 at trial 0 and
 //! 4 → 3 at trial 1 (the new ones pairs that never believed each other at all); seeds
-//! 400–599, 3 → 1 and 8 → 7 — head-on 9 → 1, but crossing 2 → 7 (a mover's own cells met on a
-//! course it is not on). Not kept; a blob a mover's track could explain, carried on its
-//! velocity, is the next thing to leave out. Without a floor at the stopping distance it also
-//! swerved vehicles onto speckle cells about the head, which held them "inside an obstacle"
-//! for good (10 of 400 VPF runs), until `crate::sonar::EvidenceMap::nearest` passed over a
-//! cell under the vehicle's centre.
+//! 400–599, 3 → 1 and 8 → 7 — head-on 9 → 1, but crossing 2 → 7, and leaving out a blob on a
+//! tracked mover's wake (the way it came over the horizon) changed none of those. Not kept.
+//! Without a floor at the stopping distance it also swerved vehicles onto speckle cells about
+//! the head, which held them "inside an obstacle" for good (10 of 400 VPF runs), until
+//! `crate::sonar::EvidenceMap::nearest` passed over a cell under the vehicle's centre.
 //!
 //! **Close quarters.** Two VideoRays that meet head-on see each other late: a 0.4 m hull is
 //! narrower than the gap between the 3° beams of a 3.6° step, so beyond about 5 m it is one
