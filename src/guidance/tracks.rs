@@ -147,6 +147,29 @@
 //! Crossing and head-on worlds × 3 strategies, seeds 0–199: contacts 19 → 17, none new;
 //! successes 1 154 → 1 157; clutter and boxes × 3, 1 149 → 1 143 of 1 200, 1 → 1 contact.
 //!
+//! *Faint pairs, tried and not kept.* What is left of the head-on contacts is the other
+//! VideoRay never seen on two beams, nor strongly on one. The eight of the bench's second
+//! trial (`--trial 1`, seeds 200–599 × 3 strategies), re-flown with the extractor's echoes
+//! logged: in each, at least one of the two had seen the other on one beam a sweep (3.2 s)
+//! apart, at 18 → 12 → 6 m, means 110–212, 6–7 s before they met — and each of those beams
+//! was dropped as a lone echo, no brighter than a spurious target. Built: every other one-beam
+//! echo left the extractor as a *faint* sighting (none within 2 m of a believed map cell or
+//! obstacle, none within 4 m of the head); two faint sightings 1.5–7 s apart, 0.3–1.5 m/s,
+//! whose course came within 3 m of this vehicle (or of its course) within 15 s, while it was
+//! under way, opened a mover of 0.3 m with their velocity, and its later faint sightings
+//! updated it. It caught those eight (re-flown, all eight passed 2.7–7.4 m apart), but the
+//! simulated sonar's spurious echoes (3 % of pings, at any range) pair too:
+//! a phantom mover every 20–50 s under way. Crossing and head-on × 3 strategies, seeds
+//! 200–399 (`hil bench-diff` against today): multipoint 398 → 400, contacts 2 → 0; VPF 400 →
+//! 398, contacts 0 → 2 (crossing); navfn 400 → 386, contacts 0 → 2 (a navfn pair made 49
+//! phantoms in 900 s of head-on 213 and wandered). A first build that kept sightings near the
+//! head, and let any small rated track take a faint one as its next look: navfn 354, VPF 397
+//! (3 crossing contacts). A pair needs a third sighting to be worth believing, and with two
+//! VideoRays closing at 2 m/s a third comes at 4–6 m, where the two-beam rule already sees
+//! the other. Nor did a shorter `revisit_ms` help (1 600 ms, half the bench's 3.2 s sweep,
+//! instead of 4 000): on the same worlds VPF 400 → 399 (a new head-on contact), navfn 400 →
+//! 399, multipoint unchanged.
+//!
 //! **Structure does not move.** A feature longer than `max_mover_half_m` (an elongated fit of
 //! a wall or a pier) is never given a velocity: running along a channel, each sweep fits the
 //! wall abeam of the vehicle, and a track that follows those fits "moves" with the vehicle. In
