@@ -30,6 +30,14 @@
 //! its recipe, seeds 0–33: successes 333 → 324 of 408 (20 gained, 29 lost), contacts 0 → 0;
 //! the turning back and forth is the field's and the guard's as much as the route's.
 //!
+//! *Tried and not kept:* taking in only believed map cells with a believed neighbour. One
+//! spurious cell in the middle of a 5 m channel closes it on 2 m cells, and the route says
+//! `Blocked` at the mouth or a bend (bench channel 433, VideoRay: one false cell 2.2 m from
+//! each wall; the vehicle turned back and forth for 400 s). Without lone cells: VPF, all
+//! families, seeds 400–599, successes 2 386 → 2 387 (channels 433, 419 and 479 gained, 468
+//! and 501 lost), but head-on contacts 0 → 4: another VideoRay is one lone cell of the map,
+//! and the route then led straight at it.
+//!
 //! The periodic task then gives the planner `aim` as its goal-point while the route is fresh
 //! and for its own goal (the goal itself when it is in plain sight); arrival is still judged at
 //! the goal (`crate::planner::Planner::set_route`), and VPF cruises to a routed goal-point
