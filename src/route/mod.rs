@@ -38,6 +38,13 @@
 //! and 501 lost), but head-on contacts 0 → 4: another VideoRay is one lone cell of the map,
 //! and the route then led straight at it.
 //!
+//! *Tried and not kept:* the first pass's keep-off grown with the hull, so a flat-fish
+//! (2.6 m in its recipe) keeps as much water beyond its hull as a VideoRay (3.5 m), 4 cells of
+//! 2 m: with its recipe, all families, seeds 0–33, successes 333 → 274 of 408 (formations,
+//! traps, wall gaps and serpentines went round by long ways and timed out). Nor less: 1 cell,
+//! 333 → 304 with 4 contacts (box and clutter fields, where it stopped in gaps its guard would
+//! not let it through). The keep-off stays 4 m whatever the hull.
+//!
 //! The periodic task then gives the planner `aim` as its goal-point while the route is fresh
 //! and for its own goal (the goal itself when it is in plain sight); arrival is still judged at
 //! the goal (`crate::planner::Planner::set_route`), and VPF cruises to a routed goal-point
