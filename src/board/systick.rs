@@ -2,7 +2,7 @@
 //! (or every `1/k` of one, for periods longer than its 24 bits reach), so the schedule is
 //! absolute — period `n` starts at `n × T` whatever the tasks cost — and cannot drift.
 
-use core::num::NonZeroU64;
+use core::num::NonZeroU32;
 
 use cortex_m::peripheral::syst::SystClkSource;
 use cortex_m::peripheral::{SCB, SYST};
@@ -24,13 +24,19 @@ impl PeriodTimer {
     /// milliseconds at 25 or 180 MHz, so the schedule does not drift). Returns `k`, the
     /// interrupts per period.
     pub fn start(&mut self, period_ms: u32) -> u32 {
-        let ticks = u64::from(self.hz) * u64::from(period_ms.max(1)) / 1000;
+        // hz · period / 1000 in 32 bits (a 64-bit division would link compiler_builtins'
+        // 1 KiB divider): exact, and saturating only past 4.29e9 ticks (the planner's period
+        // is at most 1 s).
+        let p = period_ms.max(1);
+        let ticks = (self.hz / 1000)
+            .saturating_mul(p)
+            .saturating_add((self.hz % 1000).saturating_mul(p) / 1000);
         let min_k = ticks.div_ceil(1 << 24).max(1);
-        let k = (min_k..min_k + 64)
-            .filter_map(NonZeroU64::new)
+        let k = (min_k..min_k.saturating_add(64))
+            .filter_map(NonZeroU32::new)
             .find(|&k| ticks % k == 0)
-            .map_or(min_k, NonZeroU64::get);
-        let reload = (ticks / k.max(1)).clamp(2, 1 << 24) as u32 - 1;
+            .map_or(min_k, NonZeroU32::get);
+        let reload = (ticks / k.max(1)).clamp(2, 1 << 24) - 1;
         let s = &mut self.syst;
         s.disable_counter();
         s.set_clock_source(SystClkSource::Core);
@@ -38,7 +44,7 @@ impl PeriodTimer {
         s.clear_current();
         s.enable_interrupt();
         s.enable_counter();
-        k as u32
+        k
     }
 
     /// Lockstep: the timer stops raising periods; periods then run only when the background

@@ -546,6 +546,7 @@ fn contacts(idle: &mut BackgroundTask, x: &mut impl Exchange, params: Params) ->
             time_ms: x.now_ms(),
             beams: 2,
             runs_on: false,
+            faint: false,
         };
         while !idle.push_sighting(Sighting::Feature(f)) {
             next_period(idle, x);

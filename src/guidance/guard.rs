@@ -165,8 +165,8 @@
 //! after the planner's step, outside its 100 000-instruction budget. Its worst case for this
 //! and the head-on hypothesis, every table slot a contact seen once ahead and alone, is a
 //! phase of `cargo selftest` (a VideoRay at cruise among 32 of them, 4.7 m apart): the whole
-//! period is at most 512 760 instructions with the evidence map empty (the nearest contact, 3 m
-//! ahead, in close quarters) and 732 760 with its 32 cells, which every "alone" test reads;
+//! period is at most 512 680 instructions with the evidence map empty (the nearest contact, 3 m
+//! ahead, in close quarters) and 722 920 with its 32 cells, which every "alone" test reads;
 //! about 4 ms of the 100 ms period at the STM32G431's 170 MHz.
 //!
 //! **Slow tracks.** A sonar track whose sightings a sweep apart put it on the move at 0.3–0.5
@@ -232,9 +232,9 @@
 //! (at most 32 × 32); for each contact seen once ahead, two "alone" tests over the table and
 //! the map's cells. The worst cases: a slow-turning craft in traffic closing from all round,
 //! which searches every heading twice for a clear motion and once more for the least bad
-//! (`cargo selftest`'s flat-fish in traffic, whole period at most 428 120 instructions, the
-//! planner's step 88 160), and a vehicle among contacts seen once ("Close quarters" above:
-//! 732 760).
+//! (`cargo selftest`'s flat-fish in traffic, whole period at most 417 880 instructions, the
+//! planner's step 88 360), and a vehicle among contacts seen once ("Close quarters" above:
+//! 722 920).
 
 use super::tracks::Tracks;
 use crate::math::{cos, max, min, sin, wrap_angle, Vec2};
@@ -1594,6 +1594,7 @@ mod tests {
                 time_ms: 9000 * k as u64,
                 beams: 6,
                 runs_on: false,
+                faint: false,
             };
             let cfg = crate::guidance::TrackConfig::default();
             tracks.admit(&cfg, 2.5, &mut w, &f, Vec2::ZERO);
@@ -1655,6 +1656,7 @@ mod tests {
             time_ms,
             beams: 2,
             runs_on: false,
+            faint: false,
         }
     }
 

@@ -306,9 +306,13 @@ pub fn waypoint(
             if i.y.abs() > 1_800_000_000 {
                 return Err(MavMissionResult::MAV_MISSION_INVALID_PARAM6_Y);
             }
-            // Differences taken in integers, so f32 (the M4F's FPU) only scales them.
-            let dlon = (i64::from(i.y) - i64::from(lon0) + 1_800_000_000).rem_euclid(3_600_000_000)
-                - 1_800_000_000;
+            // Differences taken in integers, so f32 (the M4F's FPU) only scales them; the
+            // longitude's wrapped into −180° ..= 180° by a turn either way (no 64-bit division).
+            let dlon = match i64::from(i.y) - i64::from(lon0) {
+                d if d >= 1_800_000_000 => d - 3_600_000_000,
+                d if d < -1_800_000_000 => d + 3_600_000_000,
+                d => d,
+            };
             let dlat = i64::from(i.x) - i64::from(lat0);
             let lat0_rad = (lat0 as f32 * 1e-7).to_radians();
             let north = dlat as f32 * METRES_PER_E7_DEGREE;
@@ -356,8 +360,8 @@ pub struct MavOutbound {
     cfg: MavConfig,
     seq: u8,
     last_mode: Option<Mode>,
-    heartbeat_s: Option<u64>,
-    obstacles_at: Option<u64>,
+    heartbeat_s: Option<u32>,
+    obstacles_at: Option<u32>,
     upload: Option<Uploading>,
     /// Frames the transmit queue had no room for.
     pub frames_dropped: u32,
@@ -399,8 +403,11 @@ impl MavOutbound {
             let (severity, text) = describe(cmd.mode);
             self.status(severity, text, tx);
         }
-        if self.heartbeat_s != Some(now_ms / 1000) {
-            self.heartbeat_s = Some(now_ms / 1000);
+        // In 32 bits: a 64-bit division would link the 1 KiB of compiler_builtins' u64 divider
+        // into the image, and the count wraps only every 49 days (one early beat).
+        let ms = now_ms as u32;
+        if self.heartbeat_s != Some(ms / 1000) {
+            self.heartbeat_s = Some(ms / 1000);
             let hb = HEARTBEAT_DATA {
                 custom_mode: 0,
                 mavtype: MavType::MAV_TYPE_ONBOARD_CONTROLLER,
@@ -411,8 +418,8 @@ impl MavOutbound {
             };
             self.send(&hb, &[], tx);
         }
-        if self.obstacles_at != Some(now_ms / 500) {
-            self.obstacles_at = Some(now_ms / 500);
+        if self.obstacles_at != Some(ms / 500) {
+            self.obstacles_at = Some(ms / 500);
             if let Some(n) = periodic.nav() {
                 self.obstacle_distance(now_ms, periodic.world(), &n, tx);
             }

@@ -32,6 +32,7 @@
 
 pub mod background;
 pub mod failsafe;
+pub mod faint;
 pub mod guard;
 pub mod mavlink;
 pub mod one_thread;

@@ -594,6 +594,12 @@ impl Periodic {
 
     /// Takes up to [`SIGHTINGS_PER_PERIOD`] queued sightings into the tables.
     fn take_sightings(&mut self, inputs: &mut impl PeriodicInputs, vehicle: Vec2) {
+        // A slow-turning craft opens no faint pairs (`crate::guidance::faint`, "Spurious
+        // pairs"): taken for still, it is never under way.
+        let slow_turning = self.planner.params().turn_rate_rps > 0.0;
+        let velocity = self.nav.map_or(Vec2::ZERO, |n| n.nav.velocity);
+        self.tracks
+            .own_velocity(if slow_turning { Vec2::ZERO } else { velocity });
         for _ in 0..SIGHTINGS_PER_PERIOD {
             let Some(s) = inputs.sighting() else { break };
             self.admit(s, vehicle);

@@ -133,8 +133,9 @@
 //! two beams at 26 m, and a sweep later, at 8 m, on one beam only (a return of 210,
 //! saturating), so each took the other for a still rock and both turned the same way round
 //! it (generated head-on seed 93). The extractor lets such a strong single beam out as a
-//! *glimpse* ([`crate::sonar::GLIMPSE_INTENSITY`]: one beam, confidence 0), which never opens a
-//! track — one beam cannot tell a small target from a spurious one — but is the second look
+//! *glimpse* ([`crate::sonar::GLIMPSE_INTENSITY`]: one beam, confidence 0), which alone never
+//! opens a track — one beam cannot tell a small target from a spurious one (but see "Faint
+//! pairs") — and is the second look
 //! at a compact track seen once: taken when it lies on nothing believed (a rock's edge on one
 //! beam is that rock), a sweep or more after the sighting, within that track's unrated gate
 //! and no other's. One beam in two tracks' gates is held, not guessed, until the head has
@@ -147,28 +148,35 @@
 //! Crossing and head-on worlds × 3 strategies, seeds 0–199: contacts 19 → 17, none new;
 //! successes 1 154 → 1 157; clutter and boxes × 3, 1 149 → 1 143 of 1 200, 1 → 1 contact.
 //!
-//! *Faint pairs, tried and not kept.* What is left of the head-on contacts is the other
-//! VideoRay never seen on two beams, nor strongly on one. The eight of the bench's second
-//! trial (`--trial 1`, seeds 200–599 × 3 strategies), re-flown with the extractor's echoes
-//! logged: in each, at least one of the two had seen the other on one beam a sweep (3.2 s)
-//! apart, at 18 → 12 → 6 m, means 110–212, 6–7 s before they met — and each of those beams
-//! was dropped as a lone echo, no brighter than a spurious target. Built: every other one-beam
-//! echo left the extractor as a *faint* sighting (none within 2 m of a believed map cell or
-//! obstacle, none within 4 m of the head); two faint sightings 1.5–7 s apart, 0.3–1.5 m/s,
-//! whose course came within 3 m of this vehicle (or of its course) within 15 s, while it was
-//! under way, opened a mover of 0.3 m with their velocity, and its later faint sightings
-//! updated it. It caught those eight (re-flown, all eight passed 2.7–7.4 m apart), but the
-//! simulated sonar's spurious echoes (3 % of pings, at any range) pair too:
-//! a phantom mover every 20–50 s under way. Crossing and head-on × 3 strategies, seeds
-//! 200–399 (`hil bench-diff` against today): multipoint 398 → 400, contacts 2 → 0; VPF 400 →
-//! 398, contacts 0 → 2 (crossing); navfn 400 → 386, contacts 0 → 2 (a navfn pair made 49
-//! phantoms in 900 s of head-on 213 and wandered). A first build that kept sightings near the
-//! head, and let any small rated track take a faint one as its next look: navfn 354, VPF 397
-//! (3 crossing contacts). A pair needs a third sighting to be worth believing, and with two
-//! VideoRays closing at 2 m/s a third comes at 4–6 m, where the two-beam rule already sees
-//! the other. Nor did a shorter `revisit_ms` help (1 600 ms, half the bench's 3.2 s sweep,
-//! instead of 4 000): on the same worlds VPF 400 → 399 (a new head-on contact), navfn 400 →
-//! 399, multipoint unchanged.
+//! **Faint pairs.** What was left of the head-on contacts was the other VideoRay never seen on
+//! two beams, nor strongly on one: in each of the eight of the bench's second trial
+//! (`--trial 1`, seeds 200–599 × 3 strategies), re-flown with the extractor's echoes logged,
+//! at least one of the two had seen the other on one beam a sweep (3.2 s) apart, at 18 → 12 →
+//! 6 m, 6–7 s before they met, and each beam was dropped as a lone echo. Such a beam now
+//! leaves the extractor as a *faint* sighting (`crate::sonar::Feature::faint`, a mean of at
+//! least `crate::sonar::FAINT_INTENSITY`); two a sweep or two apart, at a vehicle's speed, on
+//! a collision course, open a mover of [`FAINT_RADIUS_M`] with their velocity
+//! ([`super::faint`]), and it takes its later faint sightings as its next looks (only a track
+//! a pair opened does: a crossing mover's faint fragments moved its rated track off course).
+//! A glimpse that is no track's second look may pair too (head-on 551: the first sighting was
+//! a glimpse). It goes when nothing has borne it out for two sweeps (`Tracks::lapse`), and a
+//! slow-turning craft opens none ([`super::faint`], "Spurious pairs"). `hil bench-diff`
+//! against the code before: crossing and head-on × 3 strategies, seeds 200–399, contacts
+//! 2 → 2 (multipoint head-on 292 and 381 gone; multipoint 384 and navfn 247 new, pairs that
+//! saw each other first at 2 m, with no pair formed), successes 1 198 → 1 198; seeds
+//! 400–599 at `--trial 1`, contacts 8 → 1 (seven gone, none new: VPF head-on 403 is left),
+//! successes 1 190 → 1 199. VPF, all families, seeds 0–199: 2 398 → 2 395 (4 lost, 1
+//! gained), no contact either way. Multipoint and navfn, all families, seeds 0–199: 2 376 →
+//! 2 377 and 2 233 → 2 226 (16 and 21 gained, 15 and 28 lost), contacts 1 → 2 and 1 → 0
+//! (two head-on gone; a multipoint head-on and a crossing mover new), median time ÷ reference
+//! 1.55 → 1.63 and 1.75 → 1.82: the phantoms that remain cost time. The flat-fish with its
+//! recipe, seeds 0–33: unchanged, run for run.
+//! Built first without the floor on the mean, the simulated sonar's spurious echoes paired
+//! too, a phantom mover every 20–50 s under way: seeds 200–399, multipoint 398 → 400 (contacts
+//! 2 → 0), but VPF 400 → 398 (0 → 2) and navfn 400 → 386 (0 → 2; a navfn pair made 49 phantoms
+//! in 900 s of head-on 213 and wandered). *Tried and not kept:* a shorter `revisit_ms`
+//! (1 600 ms, half the bench's 3.2 s sweep, instead of 4 000): on the same worlds VPF 400 → 399
+//! (a new head-on contact), navfn 400 → 399, multipoint unchanged.
 //!
 //! **Structure does not move.** A feature longer than `max_mover_half_m` (an elongated fit of
 //! a wall or a pier) is never given a velocity: running along a channel, each sweep fits the
@@ -191,12 +199,14 @@
 //! room; if it ever did, the obstacle is kept without a velocity.
 //!
 //! Features below the confidence floor are dropped (one beam of speckle or a false target
-//! cannot be told from a small object; see the sonar module), but for the glimpses above. When the table is full, the sensed
+//! cannot be told from a small object; see the sonar module), but for the glimpses and faint
+//! pairs above. When the table is full, the sensed
 //! obstacle farthest from the vehicle is evicted if the newcomer is nearer
 //! ([`World::upsert_obstacle_or_evict`]); otherwise the newcomer is dropped.
 
 use heapless::Vec;
 
+use super::faint::FaintPairs;
 use crate::math::{min, Vec2};
 use crate::sonar::Feature;
 use crate::world::{Obstacle, Origin, World, MAX_OBJECT_SPEED, MAX_OBSTACLES};
@@ -236,6 +246,10 @@ const HASTY_DM: u8 = 5;
 /// (another VideoRay's first fit was 0.77 m). A rock or a box is on several, and a glimpse
 /// near one seen once is more likely speckle or another object than its motion.
 const GLIMPSED_DM: u8 = 10;
+
+/// Radius of a mover opened by a faint pair, m: a VideoRay's hull, about what one beam of it
+/// fits.
+const FAINT_RADIUS_M: f32 = 0.3;
 
 /// Longest time a track is extrapolated over, s (beyond it the gate stops growing).
 const MAX_GAP_S: f32 = 10.0;
@@ -331,12 +345,14 @@ pub struct Track {
     /// Centre at the first sighting, m.
     pub first: Vec2,
     /// Consecutive sightings since the velocity was set that fell where it predicted.
-    pub steady: u16,
+    pub steady: u8,
     /// Its velocity has been estimated (two sightings far enough apart in time).
     pub rated: bool,
     /// The largest radius a sighting of it has had, decimetres rounded up (saturating at
     /// 25.5 m; one byte, so the table does not grow): see [`Tracks::extent`].
     pub largest_dm: u8,
+    /// Opened by a faint pair ([`super::faint`]): its later faint sightings are its next looks.
+    pub faint: bool,
 }
 
 impl Track {
@@ -416,7 +432,7 @@ impl Track {
         } else {
             cfg.min_steady
         };
-        let confirmed = self.hits >= cfg.min_hits && self.steady >= steady;
+        let confirmed = self.hits >= cfg.min_hits && u16::from(self.steady) >= steady;
         let travelled = (self.center - self.first).norm() >= crate::math::max(radius, 1.0);
         if confirmed && travelled && speed2 >= cfg.min_speed_mps * cfg.min_speed_mps {
             self.velocity
@@ -424,6 +440,30 @@ impl Track {
             Vec2::ZERO
         }
     }
+}
+
+/// Whether `center` lies within `within` of an obstacle believed: one beam there is that
+/// obstacle's face.
+#[inline(never)]
+fn on_believed(world: &World, center: Vec2, within: f32) -> bool {
+    world
+        .obstacles()
+        .iter()
+        .any(|o| o.shape.signed_distance(center) <= within)
+}
+
+/// A sonar obstacle: `shape` with repulsion `a_plus`, seen at `time_ms`, moving at `velocity`.
+/// (This and the other `#[inline(never)]` helpers here have several callers: inlined, they cost
+/// the NUCLEO image flash it does not have: 652 bytes of its 128 KiB are left.)
+#[inline(never)]
+fn sensed(
+    id: u16,
+    shape: crate::field::Shape,
+    a_plus: f32,
+    time_ms: u64,
+    velocity: Vec2,
+) -> Result<Obstacle, crate::world::ObjectError> {
+    Obstacle::new(id, shape, a_plus, Origin::Sonar, time_ms).and_then(|o| o.moving(velocity))
 }
 
 /// `r` in decimetres, rounded up, within one byte (`as` saturates: NaN and negatives give 0,
@@ -439,6 +479,10 @@ pub struct Tracks {
     tracks: Vec<Track, MAX_TRACKS>,
     /// A glimpse in two tracks' gates (centre, time), until a later sighting settles which.
     held: Option<(Vec2, u64)>,
+    /// Faint sightings waiting for a second (module notes, "Faint pairs").
+    faint: FaintPairs,
+    /// This vehicle's velocity over ground, m/s (`Tracks::own_velocity`).
+    own_velocity: Vec2,
 }
 
 /// Which track a glimpse is the second look at.
@@ -455,6 +499,8 @@ impl Default for Tracks {
             next_id: SONAR_ID_BASE,
             tracks: Vec::new(),
             held: None,
+            faint: FaintPairs::new(),
+            own_velocity: Vec2::ZERO,
         }
     }
 }
@@ -594,11 +640,13 @@ impl Tracks {
     /// A glimpse `f` (one beam, confidence 0: [`crate::sonar::GLIMPSE_INTENSITY`]) as the
     /// second look at the one compact track seen once, a sweep or more ago, whose gate it
     /// falls in — if it lies on nothing else believed (a rock's edge on one beam is that rock).
-    /// In two tracks' gates it is held until the sweep has looked at them again; with none it
-    /// is dropped: it never opens a track (module notes, "Glimpses").
+    /// In two tracks' gates it is held until the sweep has looked at them again; in none it
+    /// goes on as a faint sighting, which opens a track only as one of a pair (module notes,
+    /// "Glimpses" and "Faint pairs").
     fn glimpse(
         &mut self,
         cfg: &TrackConfig,
+        a_plus: f32,
         world: &mut World,
         f: &Feature,
         vehicle: Vec2,
@@ -614,7 +662,68 @@ impl Tracks {
                 self.held = Some((f.center, f.time_ms));
                 Admission::LowConfidence
             }
-            Glimpsed::None => Admission::LowConfidence,
+            Glimpsed::None => self.faint_pair(cfg, a_plus, world, f, vehicle),
+        }
+    }
+
+    /// Removes the movers faint pairs opened that nothing has borne out for
+    /// [`super::faint::PAIR_MAX_S`] (a sweep or two) by `now_ms`: a spurious pair's phantom,
+    /// left the 30 s of a sensed obstacle, held a VideoRay "inside" it where it had last been
+    /// while a crossing mover ran into the vehicle (crossing 337).
+    fn lapse(&mut self, world: &mut World, now_ms: u64) {
+        let life_ms = (super::faint::PAIR_MAX_S * 1000.0) as u64;
+        let stale = |t: &Track| t.faint && now_ms > t.time_ms.saturating_add(life_ms);
+        for t in self.tracks.iter().filter(|t| stale(t)) {
+            world.remove_obstacle(t.id);
+        }
+        self.tracks.retain(|t| !stale(t));
+    }
+
+    /// This vehicle's velocity over ground, for judging faint pairs ([`Tracks::admit`]; with
+    /// a NaN, none forms).
+    pub fn own_velocity(&mut self, v: Vec2) {
+        self.own_velocity = v;
+    }
+
+    /// A one-beam sighting `f` that is no track's (module notes, "Faint pairs"): with an
+    /// earlier one a new mover on a collision course; else kept for a later one to pair with.
+    fn faint_pair(
+        &mut self,
+        cfg: &TrackConfig,
+        a_plus: f32,
+        world: &mut World,
+        f: &Feature,
+        vehicle: Vec2,
+    ) -> Admission {
+        if f.runs_on || on_believed(world, f.center, crate::sonar::FAINT_ALONE_M) {
+            return Admission::LowConfidence;
+        }
+        let Some(pair) = self
+            .faint
+            .sighting(f.center, f.time_ms, vehicle, self.own_velocity)
+        else {
+            return Admission::LowConfidence;
+        };
+        let cap = min(cfg.max_speed_mps, MAX_OBJECT_SPEED);
+        let track = Track {
+            id: self.next_id,
+            center: f.center,
+            velocity: pair.velocity.bounded(cap),
+            time_ms: f.time_ms,
+            hits: 2,
+            first: pair.first,
+            steady: 0,
+            rated: true,
+            largest_dm: decimetres(FAINT_RADIUS_M),
+            faint: true,
+        };
+        let Ok(shape) = crate::field::Shape::circle(f.center, FAINT_RADIUS_M) else {
+            return Admission::Invalid;
+        };
+        let velocity = track.reported_velocity(cfg, FAINT_RADIUS_M);
+        match sensed(track.id, shape, a_plus, f.time_ms, velocity) {
+            Ok(o) => self.open(world, o, track, vehicle),
+            Err(_) => Admission::Invalid,
         }
     }
 
@@ -630,15 +739,9 @@ impl Tracks {
         let mut candidates = self.tracks.iter().enumerate().filter(|(_, t)| gated(t));
         let (first, second) = (candidates.next(), candidates.next());
         // One beam says little of what it saw: on something believed it is that thing's face.
-        let on_believed = || {
-            world
-                .obstacles()
-                .iter()
-                .any(|o| o.shape.signed_distance(center) <= cfg.gate_m)
-        };
         match (first, second) {
             (None, _) => Glimpsed::None,
-            _ if on_believed() => Glimpsed::None,
+            _ if on_believed(world, center, cfg.gate_m) => Glimpsed::None,
             (Some((i, _)), None) => Glimpsed::One(i),
             (Some(_), Some(_)) => Glimpsed::Many,
         }
@@ -646,6 +749,7 @@ impl Tracks {
 
     /// Track `i` takes the sighting at (`center`, `time_ms`) as its second look: a glimpse
     /// (its shape unknown: the track's is kept), or another track's jump (`shape`).
+    #[inline(never)]
     fn take_second_look(
         &mut self,
         cfg: &TrackConfig,
@@ -666,14 +770,9 @@ impl Tracks {
         }
         let shape = shape.unwrap_or(o.shape);
         let radius = shape.bounding_radius();
-        let moved = Obstacle::new(
-            t.id,
-            shape.translated(t.center - shape.center()),
-            o.a_plus(),
-            Origin::Sonar,
-            time_ms,
-        )
-        .and_then(|m| m.moving(t.reported_velocity(cfg, radius)));
+        let velocity = t.reported_velocity(cfg, radius);
+        let at = shape.translated(t.center - shape.center());
+        let moved = sensed(t.id, at, o.a_plus(), time_ms, velocity);
         match moved.map(|m| world.upsert_obstacle_or_evict(m, vehicle)) {
             Ok(Ok(_)) => Admission::Updated(t.id),
             Ok(Err(_)) => Admission::TableFull,
@@ -712,11 +811,12 @@ impl Tracks {
         f: &Feature,
         vehicle: Vec2,
     ) -> Admission {
+        self.lapse(world, f.time_ms);
         // NaN confidence fails the comparison and is dropped too.
         let confident = f.confidence >= cfg.min_confidence;
-        if !confident {
+        if !confident && !f.faint {
             return if f.beams == 1 {
-                self.glimpse(cfg, world, f, vehicle)
+                self.glimpse(cfg, a_plus, world, f, vehicle)
             } else {
                 Admission::LowConfidence
             };
@@ -735,7 +835,9 @@ impl Tracks {
             };
         self.tracks
             .retain(|t| world.obstacles().iter().any(|o| o.id == t.id));
-        self.hand_back(cfg, world, f, vehicle);
+        if !f.faint {
+            self.hand_back(cfg, world, f, vehicle);
+        }
 
         // The nearest track whose predicted centre gates the feature.
         let mut best: Option<(usize, f32)> = None;
@@ -767,6 +869,15 @@ impl Tracks {
                 best = Some((i, d));
             }
         }
+        if f.faint {
+            // Only a mover a faint pair opened takes a faint sighting as its next look.
+            return match best.filter(|(i, _)| self.tracks.get(*i).is_some_and(|t| t.faint)) {
+                Some((i, _)) => {
+                    self.take_second_look(cfg, world, i, (f.center, f.time_ms, None), vehicle)
+                }
+                None => self.faint_pair(cfg, a_plus, world, f, vehicle),
+            };
+        }
         let (id, track) = match best.and_then(|(i, _)| self.tracks.get_mut(i)) {
             Some(t) => {
                 t.update(cfg, f.center, f.time_ms);
@@ -784,42 +895,55 @@ impl Tracks {
         };
         // The track's centre: with the default α = 1, where the sonar saw it last.
         let center = track.map_or(f.center, |t| t.center);
-        let o = Obstacle::new(
+        let o = sensed(
             id,
             shape.translated(center - f.center),
             a_plus,
-            Origin::Sonar,
             f.time_ms,
-        )
-        .and_then(|o| o.moving(velocity));
+            velocity,
+        );
         let Ok(o) = o else {
             return Admission::Invalid;
         };
-        let admitted = match world.upsert_obstacle_or_evict(o, vehicle) {
-            Ok(_) if fresh => {
+        let admitted = if fresh {
+            let track = Track {
+                id,
+                center: f.center,
+                velocity: Vec2::ZERO,
+                time_ms: f.time_ms,
+                hits: 1,
+                first: f.center,
+                steady: 0,
+                rated: false,
+                largest_dm: if structure { 0 } else { decimetres(f.radius) },
+                faint: false,
+            };
+            self.open(world, o, track, vehicle)
+        } else {
+            match world.upsert_obstacle_or_evict(o, vehicle) {
+                Ok(_) => Admission::Updated(id),
+                Err(_) => Admission::TableFull,
+            }
+        };
+        self.settle_held(cfg, world, f.time_ms, vehicle);
+        admitted
+    }
+
+    /// Puts the new obstacle `o` into the table with its `track`, which takes the next id.
+    #[inline(never)]
+    fn open(&mut self, world: &mut World, o: Obstacle, track: Track, vehicle: Vec2) -> Admission {
+        match world.upsert_obstacle_or_evict(o, vehicle) {
+            Ok(_) => {
                 self.next_id = self.next_id.checked_add(1).unwrap_or(SONAR_ID_BASE);
                 // Drop the track of an obstacle this one evicted; then there is room, since
                 // every track's obstacle is in the table.
                 self.tracks
                     .retain(|t| world.obstacles().iter().any(|o| o.id == t.id));
-                let _ = self.tracks.push(Track {
-                    id,
-                    center: f.center,
-                    velocity: Vec2::ZERO,
-                    time_ms: f.time_ms,
-                    hits: 1,
-                    first: f.center,
-                    steady: 0,
-                    rated: false,
-                    largest_dm: if structure { 0 } else { decimetres(f.radius) },
-                });
-                Admission::Added(id)
+                let _ = self.tracks.push(track);
+                Admission::Added(track.id)
             }
-            Ok(_) => Admission::Updated(id),
             Err(_) => Admission::TableFull,
-        };
-        self.settle_held(cfg, world, f.time_ms, vehicle);
-        admitted
+        }
     }
 }
 
@@ -837,6 +961,7 @@ mod tests {
             time_ms: 1000,
             beams: 6,
             runs_on: false,
+            faint: false,
         }
     }
 
@@ -1085,6 +1210,7 @@ mod tests {
             time_ms: t_ms,
             beams: 20,
             runs_on: false,
+            faint: false,
         }
     }
 
@@ -1456,5 +1582,68 @@ mod tests {
         // Held no longer than `revisit_ms`: then it is dropped, and nothing moves.
         let (vehicle, rock) = fly(15_000);
         assert_eq!((vehicle, rock), (Vec2::ZERO, Vec2::ZERO));
+    }
+
+    fn faint(x: f32, y: f32, t_ms: u64) -> Feature {
+        Feature {
+            faint: true,
+            ..glimpse(x, y, t_ms)
+        }
+    }
+
+    #[test]
+    fn two_faint_sightings_on_a_collision_course_open_a_mover_and_one_alone_nothing() {
+        // Another VideoRay coming head-on at 1 m/s, on one weak beam a sweep (module notes,
+        // "Faint pairs"); this vehicle comes at it at 1 m/s too.
+        let (mut w, mut t, cfg) = (World::new(), Tracks::default(), TrackConfig::default());
+        t.own_velocity(Vec2::new(1.0, 0.0));
+        let first = faint(15.0, 0.0, 1000);
+        assert_eq!(
+            t.admit(&cfg, 2.5, &mut w, &first, Vec2::ZERO),
+            Admission::LowConfidence
+        );
+        assert!(w.obstacles().is_empty(), "one faint sighting is nothing");
+        let own = Vec2::new(3.2, 0.0);
+        let second = faint(11.8, 0.0, 4200);
+        let id = match t.admit(&cfg, 2.5, &mut w, &second, own) {
+            Admission::Added(id) => id,
+            other => panic!("{other:?}"),
+        };
+        let velocity = |w: &World| {
+            w.obstacles()
+                .iter()
+                .find(|o| o.id == id)
+                .map(|o| o.velocity)
+        };
+        assert!(velocity(&w).is_some_and(|v| (v - Vec2::new(-1.0, 0.0)).norm() < 0.01));
+        // Its next look, faint too, updates it.
+        let third = faint(8.8, 0.1, 7400);
+        let own = Vec2::new(6.4, 0.0);
+        assert_eq!(
+            t.admit(&cfg, 2.5, &mut w, &third, own),
+            Admission::Updated(id)
+        );
+        assert_eq!(w.obstacles().len(), 1);
+        // Borne out by nothing for two sweeps more, it goes (a rock's sighting comes then).
+        let rock = at(feature(-30.0, 0.0, 1.0, 0.9), 7400 + 7001);
+        t.admit(&cfg, 2.5, &mut w, &rock, own);
+        assert!(w.obstacles().iter().all(|o| o.id != id));
+        assert!(t.tracks().iter().all(|k| k.id != id));
+        // A faint sighting by what is believed is its edge: it is kept for no pair.
+        let (mut w, mut t) = (World::new(), Tracks::default());
+        t.own_velocity(Vec2::new(1.0, 0.0));
+        let rock = at(feature(12.0, 0.0, 1.0, 0.9), 0);
+        assert_eq!(
+            t.admit(&cfg, 2.5, &mut w, &rock, Vec2::ZERO),
+            Admission::Added(SONAR_ID_BASE)
+        );
+        for (x, t_ms) in [(10.5, 1000), (7.5, 4200)] {
+            let f = faint(x, 0.0, t_ms);
+            assert_eq!(
+                t.admit(&cfg, 2.5, &mut w, &f, Vec2::ZERO),
+                Admission::LowConfidence
+            );
+        }
+        assert_eq!(w.obstacles().len(), 1);
     }
 }

@@ -16,7 +16,8 @@
 //! A closed cluster leaves as a [`Feature`] if it has `min_beams` hits and `min_confidence`,
 //! or as a *glimpse* if it is one beam of a strong echo ([`GLIMPSE_INTENSITY`]) or one beam
 //! the neighbouring beam returned a weaker echo beside (*seconded*: not one ping, so not a
-//! spurious target).
+//! spurious target); any other beam of one hit at least [`FAINT_INTENSITY`] leaves as a
+//! *faint* sighting, for the tracker's pairs.
 
 use crate::math::{cos, sin, wrap_angle, Vec2};
 
@@ -41,6 +42,14 @@ use super::{
 /// `EvidenceMap::believe`): head-on seed 111 saw the other vehicle so a sweep after its
 /// first sighting, a hit of mean 182 and a 114 beside it.
 pub const GLIMPSE_INTENSITY: f32 = 200.0;
+
+/// Mean intensity from which any other one-beam echo leaves as a *faint* sighting
+/// ([`Feature::faint`]), which the tracker believes only as one of two on a collision course
+/// (`crate::guidance::faint`): another VideoRay at 10–18 m returned 131–212 on its one beam,
+/// most above this; the simulated spurious targets return at most 176 (0.4–0.8 of a surface
+/// echo's strength, spread evenly: a floor of 150 leaves about a third of them). Without the
+/// floor, pairs of them made a phantom mover every 20–50 s under way.
+pub const FAINT_INTENSITY: f32 = 150.0;
 
 /// Whether bit `k` of a per-echo mask is set (none beyond the eighth).
 fn flagged(mask: u8, k: usize) -> bool {
@@ -346,16 +355,27 @@ impl Extractor {
         let mut accepted = 0;
         table.close_where(close, |c| {
             let hits = c.moments.hits();
-            let glimpse =
-                hits == 1 && (c.seconded || c.moments.mean_intensity() >= GLIMPSE_INTENSITY);
-            let feature = (hits >= u32::from(cfg.min_beams) || glimpse)
+            let single = hits == 1;
+            let mean = c.moments.mean_intensity();
+            let glimpse = single && (c.seconded || mean >= GLIMPSE_INTENSITY);
+            let faint = single && !glimpse && mean >= FAINT_INTENSITY;
+            // A one-beam echo not a glimpse but bright enough leaves as a faint sighting.
+            let feature = (hits >= u32::from(cfg.min_beams) || glimpse || faint)
                 .then(|| c.moments.fit(c.spanned(), c.time_ms, cfg))
                 .flatten()
-                .filter(|f| f.confidence >= cfg.min_confidence || glimpse);
+                .filter(|f| f.confidence >= cfg.min_confidence || glimpse || faint)
+                .map(|mut f| {
+                    f.faint = faint && f.confidence < cfg.min_confidence;
+                    f
+                });
             match feature {
                 Some(f) if out(f) => {
-                    counters.features = counters.features.saturating_add(1);
-                    accepted += 1;
+                    if f.faint {
+                        counters.faint = counters.faint.saturating_add(1);
+                    } else {
+                        counters.features = counters.features.saturating_add(1);
+                        accepted += 1;
+                    }
                 }
                 Some(_) => counters.sink_full = counters.sink_full.saturating_add(1),
                 None => counters.clusters_discarded = counters.clusters_discarded.saturating_add(1),
@@ -673,8 +693,9 @@ mod tests {
     #[test]
     fn a_strong_echo_on_one_beam_leaves_as_a_glimpse() {
         // Another VideoRay at 8 m on one ping (head-on seed 93: a return of 210, saturating):
-        // a glimpse, of one beam and confidence 0, for the tracker. A weaker one-ping echo (a
-        // spurious target) leaves nothing.
+        // a glimpse, of one beam and confidence 0, for the tracker. A weaker one-ping echo
+        // leaves as a faint sighting (it may be a spurious target: `Feature::faint`), and a
+        // weaker one still leaves nothing.
         let fly = |level: u8| {
             let mut bins = [0u8; 300];
             bins[80..83].fill(level);
@@ -691,9 +712,15 @@ mod tests {
         };
         let strong = fly(200);
         assert_eq!(strong.len(), 1, "{strong:?}");
-        assert!(strong.iter().all(|f| f.beams == 1 && f.confidence == 0.0));
+        assert!(strong
+            .iter()
+            .all(|f| f.beams == 1 && f.confidence == 0.0 && !f.faint));
         assert!(strong.iter().all(|f| (f.center.norm() - 8.0).abs() < 0.5));
-        assert!(fly(120).is_empty());
+        // At 8 m (gain 1.32): a raw 120 is 158, a raw 100 is 132.
+        let faint = fly(120);
+        assert_eq!(faint.len(), 1, "{faint:?}");
+        assert!(faint.iter().all(|f| f.beams == 1 && f.faint));
+        assert!(fly(100).is_empty());
     }
 
     #[test]
@@ -717,10 +744,12 @@ mod tests {
         for lines in [[0, 120, 80, 0, 0], [0, 80, 120, 0, 0]] {
             let found = fly(&lines);
             assert_eq!(found.len(), 1, "{lines:?}: {found:?}");
-            assert!(found.iter().all(|f| f.beams == 1 && f.confidence == 0.0));
+            assert!(found
+                .iter()
+                .all(|f| f.beams == 1 && f.confidence == 0.0 && !f.faint));
         }
-        // The weak echo a beam further off seconds nothing.
-        assert!(fly(&[0, 120, 0, 80, 0]).is_empty());
+        // The weak echo a beam further off seconds nothing: the hit is only faint.
+        assert!(fly(&[0, 120, 0, 80, 0]).iter().all(|f| f.faint));
     }
 
     #[test]
@@ -913,7 +942,8 @@ mod tests {
         );
         assert!(found.iter().all(|f| f.beams <= 3), "{found:?}");
         assert!(ex.counters().echoes > 300, "the speckle should make runs");
-        // Realistic speckle (0.5 %) with the default configuration: nothing leaves at all.
+        // Realistic speckle (0.5 %) with the default configuration: nothing leaves but faint
+        // sightings, which alone open nothing (`crate::guidance::faint`).
         let mut ex = Extractor::new(ExtractorConfig::default()).unwrap();
         let mut sonar = Sonar::new(43, 30, 5);
         let found = sweep(
@@ -927,7 +957,8 @@ mod tests {
             },
         );
         assert!(found.is_empty(), "{found:?}");
-        assert!(ex.counters().clusters_discarded > 0 || ex.counters().echoes == 0);
+        let c = ex.counters();
+        assert!(c.clusters_discarded.saturating_add(c.faint) > 0 || c.echoes == 0);
     }
 
     #[test]

@@ -229,6 +229,7 @@ impl Moments {
             time_ms,
             beams: u16::try_from(self.n).unwrap_or(u16::MAX),
             runs_on: false,
+            faint: false,
         })
     }
 }

@@ -55,8 +55,10 @@
 //!    18: the movers' one-beam fragments opened tracks, and sightings seconds apart gave
 //!    velocities far off; opening new tracks only, never updating one, 31. The converse is
 //!    kept: a strong single beam leaves as a *glimpse* ([`GLIMPSE_INTENSITY`]: one
-//!    beam, confidence 0) that never opens a track and only gives a track seen once its
-//!    second look (`crate::guidance::tracks`, "Glimpses").
+//!    beam, confidence 0) that alone never opens a track and gives a track seen once its
+//!    second look (`crate::guidance::tracks`, "Glimpses"); it, and any other beam of one hit
+//!    at least [`FAINT_INTENSITY`] (a *faint* sighting), the tracker believes as a new target
+//!    only as one of two a sweep apart on a collision course (`crate::guidance::faint`).
 //!
 //! **Vehicles it is told about.** An echo on a vehicle the host reports (`Contacts` of kind
 //! vehicle: a formation's mates) is that vehicle, not structure: it leaves no feature and no
@@ -108,7 +110,7 @@ pub use detect::Echo;
 pub use evidence::{
     Beam, EvidenceConfig, EvidenceError, EvidenceMap, Near, Window, MAP_SIDE, MAX_REACH_CELLS,
 };
-pub use extractor::{Extractor, GLIMPSE_INTENSITY};
+pub use extractor::{Extractor, FAINT_INTENSITY, GLIMPSE_INTENSITY};
 pub use known::{KnownVehicles, ECHO_MARGIN_M, MAX_AGE_MS, MAX_KNOWN};
 pub use lookout::{Lookout, LOOK_SECTORS};
 pub use wakes::{Wakes, MAX_WAKES};
@@ -364,7 +366,15 @@ pub struct Feature {
     /// `Extractor::push_scanline_mapped`, [`EvidenceMap::runs_on`]): a fragment of a wall, a
     /// pier or a cluster of rocks, which the tracker never gives a velocity.
     pub runs_on: bool,
+    /// One beam of an echo too weak to be a glimpse: alone it may be a spurious target, so the
+    /// tracker takes it only as one of a pair on a collision course
+    /// (`crate::guidance::faint`).
+    pub faint: bool,
 }
+
+/// A faint sighting ([`Feature::faint`]) within this of an obstacle believed, m, is that
+/// obstacle's edge on one beam: the tracker pairs it with nothing (`crate::guidance::faint`).
+pub const FAINT_ALONE_M: f32 = 2.0;
 
 impl Feature {
     /// The planner's shape for this feature (a circle or a rectangle); feed it to
@@ -401,6 +411,8 @@ pub struct Counters {
     /// Clusters closed without a feature: too few beams, too little confidence, or a
     /// degenerate fit.
     pub clusters_discarded: u32,
+    /// One-beam echoes let out as faint sightings ([`Feature::faint`]).
+    pub faint: u32,
     /// Sweep breaks (direction reversal, bearing jump, time gap, pose jump) that closed every
     /// open cluster.
     pub sweep_breaks: u32,
@@ -578,6 +590,7 @@ mod tests {
             time_ms: 10,
             beams: 7,
             runs_on: false,
+            faint: false,
         };
         let s = c.to_shape().unwrap();
         assert!((s.signed_distance(Vec2::new(3.0, 0.0)) - 2.5).abs() < 1e-5);
