@@ -74,7 +74,14 @@
 //! contacts 3 → 2; at 0.75 m/s, seeds 34–133: 175 → 177, 11 → 10). Head-on, stopping and
 //! going on keep the same distance, and it stops. Judging such a craft's course over 15 s
 //! rather than 10 (from 0.75 m/s it brakes for 7.5 s): at 0.75 m/s, seeds 0–33, contacts
-//! 3 → 7, successes 359 → 355 of 408; not kept. Anything slower than [`STILL_MPS`] is judged
+//! 3 → 7, successes 359 → 355 of 408; not kept. Nor a wider berth from movers for such a
+//! craft (the hull grown by 1, 2 or 3 m in the closest-approach test; tried 2026-12-05): at
+//! 0.75 m/s, crossing and head-on seeds 0–99, contacts 19 → 9, 8, 8 and successes 173 → 186,
+//! 186, 187 of 200; but all families, seeds 0–33, 359 → 357 (1 m) and 353 (2 m) of 408, with
+//! contacts 3 → 4 and 3 (the head-on hypothesis's phantoms and formation mates held at the
+//! berth too), and with the recipe (0.567 m/s, 2 m) 333 → 321, no contact either way. For
+//! the sonar's tracked movers alone, not the hypotheses, slow tracks or other vehicles:
+//! crossing and head-on, 19 → 14. Anything slower than [`STILL_MPS`] is judged
 //! still, not a mover: a stopped vehicle the host reports drifts at a centimetre a second, and
 //! weighed as a mover among the others, the least bad way out of a mate closing from astern
 //! ran a flat-fish into another mate stopped ahead (formation worlds).
@@ -232,7 +239,7 @@
 //! (at most 32 × 32); for each contact seen once ahead, two "alone" tests over the table and
 //! the map's cells. The worst cases: a slow-turning craft in traffic closing from all round,
 //! which searches every heading twice for a clear motion and once more for the least bad
-//! (`cargo selftest`'s flat-fish in traffic, whole period at most 417 920 instructions, the
+//! (`cargo selftest`'s flat-fish in traffic, whole period at most 418 040 instructions, the
 //! planner's step 88 360), and a vehicle among contacts seen once ("Close quarters" above:
 //! 722 920).
 
