@@ -78,8 +78,8 @@
 //! craft (the hull grown by 1, 2 or 3 m in the closest-approach test; tried 2026-12-05): at
 //! 0.75 m/s, crossing and head-on seeds 0–99, contacts 19 → 9, 8, 8 and successes 173 → 186,
 //! 186, 187 of 200; but all families, seeds 0–33, 359 → 357 (1 m) and 353 (2 m) of 408, with
-//! contacts 3 → 4 and 3 (the head-on hypothesis's phantoms and formation mates held at the
-//! berth too), and with the recipe (0.567 m/s, 2 m) 333 → 321, no contact either way. For
+//! contacts 3 → 4 and 3 (formations and still worlds lost: the head-on hypothesis's
+//! contacts and the mates are held at the berth too), and with the recipe (0.567 m/s, 2 m) 333 → 321, no contact either way. For
 //! the sonar's tracked movers alone, not the hypotheses, slow tracks or other vehicles:
 //! crossing and head-on, 19 → 14. Anything slower than [`STILL_MPS`] is judged
 //! still, not a mover: a stopped vehicle the host reports drifts at a centimetre a second, and
