@@ -445,6 +445,16 @@ impl Track {
         self.hits = self.hits.saturating_add(1);
     }
 
+    /// Whether it is a mover coming towards the vehicle at `vehicle`, borne out [`BORNE_OUT`]
+    /// times in a row: what structure running on from it does not make still (module notes,
+    /// "Structure does not move").
+    fn closing(&self, vehicle: Vec2) -> bool {
+        self.steady >= BORNE_OUT
+            && (vehicle - self.center)
+                .normalized(1e-3)
+                .is_some_and(|u| u.dot(self.velocity) >= TENTATIVE_MPS)
+    }
+
     /// The largest radius its sightings have had, m ([`Tracks::extent`]).
     fn extent_m(&self) -> f32 {
         f32::from(self.largest_dm) * 0.1
@@ -712,16 +722,6 @@ impl Tracks {
         self.own_velocity = v;
     }
 
-    /// Whether track `t` is a mover coming towards the vehicle at `vehicle`, borne out
-    /// [`BORNE_OUT`] times in a row: what structure running on from it does not make still
-    /// (module notes, "Structure does not move").
-    fn closing(&self, t: &Track, vehicle: Vec2) -> bool {
-        t.steady >= BORNE_OUT
-            && (vehicle - t.center)
-                .normalized(1e-3)
-                .is_some_and(|u| u.dot(t.velocity) >= TENTATIVE_MPS)
-    }
-
     /// A one-beam sighting `f` that is no track's (module notes, "Faint pairs"): with an
     /// earlier one a new mover on a collision course; else kept for a later one to pair with.
     fn faint_pair(
@@ -929,7 +929,7 @@ impl Tracks {
         };
         let fresh = track.is_none();
         let velocity = match track {
-            Some(t) if !long && (!f.runs_on || self.closing(&t, vehicle)) => {
+            Some(t) if !long && (!f.runs_on || t.closing(vehicle)) => {
                 t.reported_velocity(cfg, f.radius)
             }
             _ => Vec2::ZERO,
