@@ -590,13 +590,9 @@ impl Planner {
             velocity: cx.nav.velocity,
             heading: cx.nav.heading,
         };
-        // At rest ê₁ is the heading. A force more than 90° off it then goes wholly to braking
-        // (001 §3.1's split), v̄ points astern, and a craft that turns slowly chases a command
-        // that stays 180° behind its bow: a flat-fish in clutter turned so for 110 s (bench
-        // clutter 6, its recipe). Plain bounding at rest for such a craft freed it, but over
-        // the flat-fish's seeds 0–101 (`cargo hil bench --models flatfish --params
-        // hil/recipes/flatfish.toml --first-seed F --seeds 34`) 998 → 986 of 1 224 succeeded:
-        // more often the turn on the spot astern was the way out. Not kept.
+        // At rest ê₁ is the heading: a craft that turns slowly, with the force astern, may spin
+        // on the spot after it; plain bounding at rest measured worse (README, "plain bounding
+        // for a stopped slow-turning craft").
         let e1 = Some(measured.e1());
         let f_bar = bound::bound(f, prm.f_max, e1, prm.bounding);
         let v_c = (f_bar + m.integrator.force) * (0.5 * prm.period_s) + m.integrator.velocity;
