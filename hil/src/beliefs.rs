@@ -158,7 +158,12 @@ fn belief(fw: &OneThreadRuntime, at_s: f64, radius_m: f32) -> Belief {
         now_ms: fw.now_ms(),
         pose,
         obstacles: p.world().obstacles().to_vec(),
-        sightings: p.tracks().tracks().iter().map(|t| (t.id, t.hits)).collect(),
+        sightings: p
+            .tracks()
+            .tracks()
+            .iter()
+            .map(|t| (t.id, u16::from(t.hits)))
+            .collect(),
         tentative: (p.world().obstacles().iter())
             .filter_map(|o| Some((o.id, p.tracks().tentative(o.id)?)))
             .collect(),

@@ -182,8 +182,9 @@
 //! flat-fish closing head-on at about 0.5 m/s each, each believing the other still, each
 //! stopped a braking distance short of where it believed the other to be, and met (head-on
 //! seed 11). The guard meets such a track on that velocity too ([`Tracks::tentative`]); the
-//! planner's field still takes it for still. Both changes together, flat-fish, seeds 0–135
-//! (1 632 runs): with its recipe contacts 7 → 5 and successes 1 161 → 1 164; at 0.75 m/s
+//! planner's field still takes it for still. For a track once a mover coming on that a miss
+//! has made still, from 0.2 m/s rather than 0.3 (`crate::guidance::tracks`, "Once a mover").
+//! Both changes together, flat-fish, seeds 0–135 (1 632 runs): with its recipe contacts 7 → 5 and successes 1 161 → 1 164; at 0.75 m/s
 //! contacts 21 → 13 (head-on 8 → 3). Once the third sighting is overdue — the track unseen
 //! for a sweep ([`CPA_HORIZON_S`]) — the velocity was a rock's wander and is not met: a rock
 //! fragment seen twice 28 s before, carried 3.4 m along its wander, turned a VideoRay away
