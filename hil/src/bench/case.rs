@@ -29,7 +29,8 @@ pub const FEASIBLE_MARGIN_M: f64 = 0.5;
 pub const CRUISE_MPS: f64 = 1.0;
 
 /// The sonar head's set-up a bench flies: its range (also the contacts' range with perfect
-/// perception) and step. [`Default`]: the scenario schema's (`scenario::Sonar`).
+/// perception) and step. [`Default`]: the scenario schema's (`scenario::Sonar`), which is
+/// what a VideoRay carries ([`Head::carried_by`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Head {
     /// Range, m.
@@ -39,6 +40,25 @@ pub struct Head {
 }
 
 impl Head {
+    /// The flat-fish's sonar range, m: farther than the 20 m default, which is less than its
+    /// 22 m turning radius at cruise — at 20 m it commits to a turn before it can see the way
+    /// round (`hil/recipes/README.md`, "A longer look"). A Ping360 reaches 50 m; at 40 m
+    /// its sweep takes 5.8 s instead of 3.2 s, which the bench's simulated head flies too.
+    pub const FLATFISH_RANGE_M: f64 = 40.0;
+
+    /// The set-up `model` carries unless the bench is told another: the default for the
+    /// VideoRay, [`Head::FLATFISH_RANGE_M`] for the flat-fish.
+    pub fn carried_by(model: ModelKind) -> Head {
+        let d = Head::default();
+        match model {
+            ModelKind::FlatFish => Head {
+                range_m: Head::FLATFISH_RANGE_M,
+                ..d
+            },
+            ModelKind::VideoRay | ModelKind::Kinematic => d,
+        }
+    }
+
     /// `sonar 20 m, 3.6° steps`: how the tables name it.
     pub fn name(&self) -> String {
         format!("sonar {} m, {}° steps", self.range_m, round3(self.step_deg))

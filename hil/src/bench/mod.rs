@@ -63,8 +63,10 @@ pub struct Options {
     pub first_seed: u64,
     /// The sea's draw (`Case::sim_seed`; 0: each world's own seed).
     pub trial: u64,
-    /// The sonar's set-up.
-    pub head: Head,
+    /// The sonar's range for every model, m (`None`: each model's own, [`Head::carried_by`]).
+    pub sonar_range_m: Option<f64>,
+    /// The sonar head's step, degrees.
+    pub sonar_step_deg: f64,
     /// Strategies.
     pub strategies: Vec<Strategy>,
     /// Models.
@@ -81,6 +83,33 @@ pub struct Options {
     pub quiet: bool,
 }
 
+impl Options {
+    /// The sonar set-up `model` flies with: its own ([`Head::carried_by`]) but for the range
+    /// if one was given.
+    pub fn head(&self, model: ModelKind) -> Head {
+        Head {
+            range_m: self
+                .sonar_range_m
+                .unwrap_or(Head::carried_by(model).range_m),
+            step_deg: self.sonar_step_deg,
+        }
+    }
+
+    /// The set-ups flown, as the tables name them: one, or each model's
+    /// (`flatfish: sonar 40 m, 3.6° steps`).
+    fn heads(&self) -> String {
+        let heads: Vec<Head> = self.models.iter().map(|&m| self.head(m)).collect();
+        if heads.windows(2).all(|w| w[0] == w[1]) {
+            heads.first().map_or_else(String::new, Head::name)
+        } else {
+            let each = self.models.iter().zip(&heads);
+            each.map(|(m, h)| format!("{}: {}", m.name(), h.name()))
+                .collect::<Vec<_>>()
+                .join("; ")
+        }
+    }
+}
+
 impl Default for Options {
     fn default() -> Self {
         Options {
@@ -88,7 +117,8 @@ impl Default for Options {
             seeds: 17,
             first_seed: 0,
             trial: 0,
-            head: Head::default(),
+            sonar_range_m: None,
+            sonar_step_deg: Head::default().step_deg,
             strategies: vec![Strategy::Vpf],
             models: vec![ModelKind::VideoRay],
             sensing: vec![Sensing::Sonar],
@@ -127,7 +157,8 @@ pub struct Args {
     /// how many outcomes chance alone turns over, the floor a change must beat
     #[arg(long, value_name = "K", value_parser = clap::value_parser!(u64).range(0..=1_000_000))]
     trial: Option<u64>,
-    /// the sonar's range, m (default 20; with contacts, the range they are given within)
+    /// the sonar's range for every model, m (default: each model's own, 20 for the VideoRay and
+    /// 40 for the flat-fish; with contacts, the range they are given within)
     #[arg(long, value_name = "M", value_parser = sonar_range)]
     sonar_range: Option<f64>,
     /// the sonar head's step, degrees (default 3.6: a 360° sweep in 3.2 s at 20 m); 1.8 at
@@ -174,10 +205,8 @@ impl From<Args> for Options {
             seeds: a.seeds.unwrap_or(d.seeds),
             first_seed: a.first_seed.unwrap_or(d.first_seed),
             trial: a.trial.unwrap_or(d.trial),
-            head: Head {
-                range_m: a.sonar_range.unwrap_or(d.head.range_m),
-                step_deg: a.sonar_step.unwrap_or(d.head.step_deg),
-            },
+            sonar_range_m: a.sonar_range.or(d.sonar_range_m),
+            sonar_step_deg: a.sonar_step.unwrap_or(d.sonar_step_deg),
             strategies: or(a.strategies, d.strategies),
             models: or(a.models, d.models),
             sensing: or(a.sensing, d.sensing),
@@ -261,7 +290,7 @@ pub fn cases(o: &Options) -> Vec<Case> {
                             model,
                             sensing,
                             trial: o.trial,
-                            head: o.head,
+                            head: o.head(model),
                         });
                     }
                 }
@@ -299,7 +328,7 @@ pub fn bench(o: &Options) -> Result<(PathBuf, report::Report), Error> {
     std::fs::create_dir_all(&dir).map_err(Error::io("cannot create", &dir))?;
     // The head's set-up is part of what was flown; trial 0 adds nothing more.
     let trial = o.trial.to_le_bytes();
-    let head = o.head.name();
+    let head = o.heads();
     let mut parts: Vec<&[u8]> = vec![FORMAT.as_bytes(), recipe_text.as_bytes(), head.as_bytes()];
     if o.trial != 0 {
         parts.push(&trial);
@@ -385,7 +414,7 @@ pub fn bench(o: &Options) -> Result<(PathBuf, report::Report), Error> {
     rows.sort_by_key(|r| order.get(&r.id).copied().unwrap_or(usize::MAX));
     rows.dedup_by(|a, b| a.id == b.id);
     let mut rep = report::Report::of(&rows, &params.unwrap_or_default(), o.params.as_deref());
-    rep.params.push_str(&format!("; {}", o.head.name()));
+    rep.params.push_str(&format!("; {}", o.heads()));
     if o.trial != 0 {
         rep.params.push_str(&format!(", trial {}", o.trial));
     }
@@ -395,7 +424,10 @@ pub fn bench(o: &Options) -> Result<(PathBuf, report::Report), Error> {
     let json = serde_json::json!({
         "format": FORMAT,
         "trial": o.trial,
-        "sonar": { "range_m": o.head.range_m, "step_deg": o.head.step_deg },
+        "sonar": o.models.iter().map(|&m| {
+            let h = o.head(m);
+            serde_json::json!({ "model": m.name(), "range_m": h.range_m, "step_deg": h.step_deg })
+        }).collect::<Vec<_>>(),
         "summary": rep.json(),
         "runs": rows
     });
@@ -465,12 +497,32 @@ mod tests {
         let d = crate::scenario::Sonar::default();
         assert!(cases(&o).iter().all(|c| c.head.range_m == d.range_m
             && (c.head.step_deg.to_radians() - d.step).abs() < 1e-12));
-        let o = parse(&["--sonar-range", "30", "--sonar-step", "1.8"]).unwrap();
+        // The flat-fish carries its own range; a range named is every model's.
+        let o = parse(&["--models", "videoray,flatfish"]).unwrap();
+        assert!(cases(&o).iter().all(|c| c.head.range_m
+            == match c.model {
+                ModelKind::FlatFish => Head::FLATFISH_RANGE_M,
+                _ => d.range_m,
+            }));
+        assert_eq!(
+            o.heads(),
+            "videoray: sonar 20 m, 3.6° steps; flatfish: sonar 40 m, 3.6° steps"
+        );
+        let o = parse(&[
+            "--models",
+            "videoray,flatfish",
+            "--sonar-range",
+            "30",
+            "--sonar-step",
+            "1.8",
+        ])
+        .unwrap();
         assert!(cases(&o).iter().all(|c| c.head
             == Head {
                 range_m: 30.0,
                 step_deg: 1.8
             }));
+        assert_eq!(o.heads(), "sonar 30 m, 1.8° steps");
         for bad in [
             ["--sonar-range", "0.1"],
             ["--sonar-step", "20"],
