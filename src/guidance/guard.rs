@@ -21,7 +21,7 @@
 //! **The verdict**, in order:
 //! 1. the vehicle's present motion (its measured velocity, within its braking distance) is
 //!    blocked → **stop**: v_set = 0, the planner's heading kept (the vehicle turns while it
-//!    brakes);
+//!    brakes; a slow-turning craft creeping slower than [`STILL_MPS`] is at rest here);
 //! 2. the commanded motion is clear → the command goes out unchanged;
 //! 3. a heading within ±`max_turn_rad` of the commanded one, tried nearest first in steps of
 //!    `turn_step_rad`, is clear at the commanded speed → **turn** to it;
@@ -984,7 +984,13 @@ pub fn check(
     };
     // 1. Where the vehicle is going now, within its braking distance (a slow-turning craft
     //    turning towards the commanded heading as it brakes).
-    if let Some(u) = nav.velocity.normalized(1e-3) {
+    //    A slow-turning craft creeping slower than `STILL_MPS` is at rest here: its drag
+    //    takes the last centimetres per second off over tens of seconds, and it waited them
+    //    out on a heading its braking path found blocked instead of turning (step 5): boxes
+    //    seed 102, 19 s pointing at a box 3 m ahead. Flat-fish with its recipe, seeds 0–33,
+    //    358 → 366 of 408; held out, 102–169, 694 → 712 of 816, contacts 2 → 1.
+    let creeping = helm.turns_slowly() && still(nav.velocity);
+    if let Some(u) = nav.velocity.normalized(1e-3).filter(|_| !creeping) {
         let braking = speed * speed / (2.0 * prm.brake()) + cfg.margin_m;
         let blocked = if helm.turns_slowly() {
             let path = arc(
@@ -2019,6 +2025,30 @@ mod tests {
             1.0,
         );
         assert_eq!(out.psi_set, 0.0);
+    }
+
+    #[test]
+    fn a_slow_turning_craft_creeping_on_is_at_rest_to_the_guard() {
+        // The flat-fish with a wall 2.35 m ahead of its centre, within its hull and margin:
+        // going straight on at all is blocked. Its drag takes tens of seconds over the last
+        // centimetres per second, and braking on the planner's heading it waited them out.
+        let prm = flatfish();
+        let mut w = World::new();
+        w.set_map((-20..=4).map(|k| Vec2::new(2.6, k as f32 * 0.5)), 0.25);
+        let mut c = cmd(0.0, 0.5);
+        c.target = Vec2::new(10.0, 8.0);
+        let g = GuardConfig::default();
+        let at = |u: f32| {
+            let nav = nav(Vec2::new(u, 0.0));
+            let (out, v) = check(&g, &prm, 0, &nav, &w, &Tracks::default(), None, c, 1.0);
+            assert_eq!((v, out.v_set), (Verdict::Stopped, 0.0), "at {u} m/s");
+            out.psi_set
+        };
+        let turn = at(0.0);
+        assert!(turn > 0.5, "turns to {}°", turn.to_degrees());
+        // Creeping at 2 cm/s it turns as at rest; at 0.2 m/s it brakes on the planner's heading.
+        assert_eq!(at(0.02), turn);
+        assert_eq!(at(0.2), 0.0);
     }
 
     #[test]
