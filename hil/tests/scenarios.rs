@@ -483,6 +483,18 @@ fn the_base_scenario_is_valid_and_defaults_apply() {
 }
 
 #[test]
+fn a_flat_fish_carries_its_sonar_at_40_m_unless_told_otherwise() {
+    let flatfish = BASE.replace("\"kinematic\"", "\"flat-fish\"");
+    let range = |text: &str| scenario::parse(text, "f.toml").unwrap().sonar.range_m;
+    assert_eq!(range(&flatfish), scenario::Sonar::FLATFISH_RANGE_M);
+    assert_eq!(range(&format!("{flatfish}[sonar]\nrange_m = 30.0\n")), 30.0);
+    // Another model in the water: the default head for all of them.
+    let other = "[[vehicle]]\nname = \"b\"\nmodel = \"videoray\"\nstart = [0.0, 5.0]\n\
+                 goal = [10.0, 5.0]\n";
+    assert_eq!(range(&format!("{flatfish}{other}")), 20.0);
+}
+
+#[test]
 fn every_section_is_read_with_units_converted() {
     let text = with(
         r#"heading_deg = 90.0

@@ -40,22 +40,13 @@ pub struct Head {
 }
 
 impl Head {
-    /// The flat-fish's sonar range, m: farther than the 20 m default, which is less than its
-    /// 22 m turning radius at cruise — at 20 m it commits to a turn before it can see the way
-    /// round (`hil/recipes/README.md`, "A longer look"). A Ping360 reaches 50 m; at 40 m
-    /// its sweep takes 5.8 s instead of 3.2 s, which the bench's simulated head flies too.
-    pub const FLATFISH_RANGE_M: f64 = 40.0;
-
-    /// The set-up `model` carries unless the bench is told another: the default for the
-    /// VideoRay, [`Head::FLATFISH_RANGE_M`] for the flat-fish.
+    /// The set-up `model` carries unless the bench is told another: the default's step, and
+    /// the range a scenario gives it (`scenario::Sonar::range_carried_by`: 40 m for the
+    /// flat-fish, whose simulated head then sweeps in 5.8 s).
     pub fn carried_by(model: ModelKind) -> Head {
-        let d = Head::default();
-        match model {
-            ModelKind::FlatFish => Head {
-                range_m: Head::FLATFISH_RANGE_M,
-                ..d
-            },
-            ModelKind::VideoRay | ModelKind::Kinematic => d,
+        Head {
+            range_m: crate::scenario::Sonar::range_carried_by(model),
+            ..Head::default()
         }
     }
 

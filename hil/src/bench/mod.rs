@@ -501,7 +501,7 @@ mod tests {
         let o = parse(&["--models", "videoray,flatfish"]).unwrap();
         assert!(cases(&o).iter().all(|c| c.head.range_m
             == match c.model {
-                ModelKind::FlatFish => Head::FLATFISH_RANGE_M,
+                ModelKind::FlatFish => crate::scenario::Sonar::FLATFISH_RANGE_M,
                 _ => d.range_m,
             }));
         assert_eq!(

@@ -4,12 +4,14 @@
 use toml::Spanned;
 use vpf::field::Shape;
 
-use super::file::{CurrentFile, FaultsFile, NavigationFile, Opt, ScenarioFile, SonarFile};
+use super::file::{
+    CurrentFile, FaultsFile, NavigationFile, Opt, ScenarioFile, SonarFile, VehicleFile,
+};
 use super::values::{int_within, Num, Table};
 use super::{
-    obstacle, planner, vehicle, At, Current, Faults, Navigation, RunMode, Scenario, ScenarioError,
-    Sonar, SonarInterface, SonarMode, Vehicle, MAX_DURATION_S, MAX_NAME_CHARS, MAX_OBSTACLES,
-    MAX_VEHICLES, OBSTACLE_FACTOR,
+    obstacle, planner, vehicle, At, Current, Faults, ModelKind, Navigation, RunMode, Scenario,
+    ScenarioError, Sonar, SonarInterface, SonarMode, Vehicle, MAX_DURATION_S, MAX_NAME_CHARS,
+    MAX_OBSTACLES, MAX_VEHICLES, OBSTACLE_FACTOR,
 };
 
 pub(super) fn build(root: &At<'_>, f: &ScenarioFile) -> Result<Scenario, ScenarioError> {
@@ -47,7 +49,22 @@ pub(super) fn build(root: &At<'_>, f: &ScenarioFile) -> Result<Scenario, Scenari
     };
 
     let params = planner::planner(root, &f.planner, dt_s, &dt.span())?;
-    let sonar = sonar(root, &f.sonar)?;
+    // The head its vehicles carry, unless `range_m` says otherwise: a flat-fish's when every
+    // vehicle is one (a name not known here is refused with its vehicle below).
+    let vehicle_tables = f.vehicle.as_ref().map_or(&[][..], |v| &v.get_ref().0[..]);
+    let flatfish = |t: &Spanned<Table<VehicleFile>>| {
+        let name = t.get_ref().model.as_ref();
+        let known = vehicle::MODELS
+            .iter()
+            .find(|(n, _)| name.is_some_and(|m| m.get_ref() == n));
+        known.is_some_and(|&(_, m)| m == ModelKind::FlatFish)
+    };
+    let range_m = if !vehicle_tables.is_empty() && vehicle_tables.iter().all(flatfish) {
+        Sonar::FLATFISH_RANGE_M
+    } else {
+        Sonar::default().range_m
+    };
+    let sonar = sonar(root, &f.sonar, range_m)?;
     let navigation = navigation(root, &f.navigation, dt_s)?;
     let current = current(root, &f.current)?;
     let faults = faults(root, &f.faults)?;
@@ -72,7 +89,7 @@ pub(super) fn build(root: &At<'_>, f: &ScenarioFile) -> Result<Scenario, Scenari
         shapes.push(s);
     }
 
-    let tables = f.vehicle.as_ref().map_or(&[][..], |v| &v.get_ref().0[..]);
+    let tables = vehicle_tables;
     if tables.is_empty() {
         let span = f.vehicle.as_ref().map_or(root.span.clone(), |v| v.span());
         return Err(root.fail(
@@ -154,8 +171,11 @@ fn or(
 
 // --- [sonar], [navigation], [current], [faults] ----------------------------------------------
 
-fn sonar(root: &At<'_>, t: &Opt<Table<SonarFile>>) -> Result<Sonar, ScenarioError> {
-    let d = Sonar::default();
+fn sonar(root: &At<'_>, t: &Opt<Table<SonarFile>>, range_m: f64) -> Result<Sonar, ScenarioError> {
+    let d = Sonar {
+        range_m,
+        ..Sonar::default()
+    };
     let Some(t) = t else {
         return Ok(d);
     };

@@ -20,6 +20,15 @@ pub(super) struct World<'w> {
     pub(super) earlier: &'w [Vehicle],
 }
 
+/// The models' names in a scenario file.
+pub(super) const MODELS: [(&str, ModelKind); 5] = [
+    ("kinematic", ModelKind::Kinematic),
+    ("videoray", ModelKind::VideoRay),
+    ("flatfish", ModelKind::FlatFish),
+    ("flat-fish", ModelKind::FlatFish),
+    ("flat_fish", ModelKind::FlatFish),
+];
+
 pub(super) fn vehicle(
     at: &At<'_>,
     f: &VehicleFile,
@@ -37,18 +46,7 @@ pub(super) fn vehicle(
             ),
         ));
     }
-    let model = at.choose(
-        "model",
-        at.req("model", &f.model)?,
-        &[
-            ("kinematic", ModelKind::Kinematic),
-            ("videoray", ModelKind::VideoRay),
-            ("flatfish", ModelKind::FlatFish),
-            ("flat-fish", ModelKind::FlatFish),
-            ("flat_fish", ModelKind::FlatFish),
-        ],
-        "model",
-    )?;
+    let model = at.choose("model", at.req("model", &f.model)?, &MODELS, "model")?;
     let start_v = at.req("start", &f.start)?;
     let start = at.position("start", start_v)?;
     let heading = at.degrees("heading_deg", &f.heading_deg)?;
