@@ -72,7 +72,15 @@
 //! perception, crossing seed 22; crossing seeds 0–49 at 1 m/s, contacts 6 → 4, successes
 //! 44 → 46; with its sonar and recipe, crossing and head-on seeds 0–99: 182 → 181 of 200,
 //! contacts 3 → 2; at 0.75 m/s, seeds 34–133: 175 → 177, 11 → 10). Head-on, stopping and
-//! going on keep the same distance, and it stops. Judging such a craft's course over 15 s
+//! going on keep the same distance, and it stops. Such motions are judged at the present
+//! speed plus one period at F_max, so a craft at rest has none: a flat-fish stopped to turn
+//! round a rock sat 12 s in the way of a mover it had tracked for 15 s (crossing seed 114).
+//! *Tried and not kept:* judging them at its cruise along its course, which gathers way at
+//! F_max (with its recipe, seeds 0–33, 34–101 and 102–169: 366 → 363, 714 → 715 and
+//! 712 → 715 of 408, 816 and 816; contacts 0 → 0, 1 → 1 and 1 → 0 — the one it was built
+//! for); a craft at rest then also went at a mover meeting it head-on, turning 30° off it,
+//! to pass a little wider. A clear way out alone at cruise, the least bad as before, left
+//! crossing 114 as it was. Judging such a craft's course over 15 s
 //! rather than 10 (from 0.75 m/s it brakes for 7.5 s): at 0.75 m/s, seeds 0–33, contacts
 //! 3 → 7, successes 359 → 355 of 408; not kept. Nor a wider berth from movers for such a
 //! craft (the hull grown by 1, 2 or 3 m in the closest-approach test; tried 2026-12-05): at
