@@ -996,7 +996,8 @@ pub fn check(
     //    takes the last centimetres per second off over tens of seconds, and it waited them
     //    out on a heading its braking path found blocked instead of turning (step 5): boxes
     //    seed 102, 19 s pointing at a box 3 m ahead. Flat-fish with its recipe, seeds 0–33,
-    //    358 → 366 of 408; held out, 102–169, 694 → 712 of 816, contacts 2 → 1.
+    //    358 → 366 of 408; 34–101 (not looked at), 705 → 714 of 816, contacts 2 → 1;
+    //    102–169, 694 → 712, 2 → 1.
     let creeping = helm.turns_slowly() && still(nav.velocity);
     if let Some(u) = nav.velocity.normalized(1e-3).filter(|_| !creeping) {
         let braking = speed * speed / (2.0 * prm.brake()) + cfg.margin_m;
