@@ -32,10 +32,11 @@ pub const MAX_DATA: usize = MAX_BLOCK - PARITY;
 /// x⁸ + x⁴ + x³ + x² + 1, the field's primitive polynomial.
 const PRIMITIVE: u16 = 0x11D;
 
-/// Powers and logarithms of α. `exp` repeats after 255 entries (α²⁵⁵ = 1), so that a sum of
-/// two logarithms indexes it without a reduction.
+/// Powers and logarithms of α. Powers repeat after 255 (α²⁵⁵ = 1): one period is kept, and a
+/// sum of logarithms is reduced modulo 255 (a table twice as long, read without the reduction,
+/// cost 257 bytes of flash).
 struct Tables {
-    exp: [u8; 512],
+    exp: [u8; 255],
     log: [u8; 256],
 }
 
@@ -44,14 +45,13 @@ struct Tables {
 #[allow(clippy::indexing_slicing)]
 const fn tables() -> Tables {
     let mut t = Tables {
-        exp: [0; 512],
+        exp: [0; 255],
         log: [0; 256],
     };
     let mut x: u16 = 1;
     let mut i = 0;
     while i < 255 {
         t.exp[i] = x as u8;
-        t.exp[i + 255] = x as u8;
         t.log[x as usize] = i as u8;
         x <<= 1;
         if x & 0x100 != 0 {
@@ -59,17 +59,14 @@ const fn tables() -> Tables {
         }
         i += 1;
     }
-    // 510 and 511 are never reached by a sum of two logarithms (≤ 254 + 254).
-    t.exp[510] = t.exp[0];
-    t.exp[511] = t.exp[1];
     t
 }
 
 static GF: Tables = tables();
 
-/// αⁱ for i < 512 (every sum of two logarithms; 0 beyond, never reached).
+/// αⁱ.
 fn exp(i: usize) -> u8 {
-    GF.exp.get(i).copied().unwrap_or(0)
+    GF.exp.get(i % 255).copied().unwrap_or(0)
 }
 
 /// log_α(a) for a ≠ 0 (0 for a = 0, which callers test first).
@@ -119,7 +116,7 @@ const fn generator() -> [u8; PARITY] {
             let prod = if g[k] == 0 {
                 0
             } else {
-                t.exp[t.log[g[k] as usize] as usize + t.log[root as usize] as usize]
+                t.exp[(t.log[g[k] as usize] as usize + t.log[root as usize] as usize) % 255]
             };
             g[k] = g[k - 1] ^ prod;
             k -= 1;
@@ -127,7 +124,7 @@ const fn generator() -> [u8; PARITY] {
         g[0] = if g[0] == 0 {
             0
         } else {
-            t.exp[t.log[g[0] as usize] as usize + t.log[root as usize] as usize]
+            t.exp[(t.log[g[0] as usize] as usize + t.log[root as usize] as usize) % 255]
         };
         i += 1;
     }
@@ -171,17 +168,11 @@ pub fn parity(data: impl IntoIterator<Item = u8>) -> [u8; PARITY] {
         if feedback == 0 {
             continue;
         }
-        // αᶠ⁺ᵍ for f = log(feedback) ≤ 254 and every g: the 256 powers from αᶠ on.
-        let Some(row) = GF
-            .exp
-            .get(log(feedback)..)
-            .and_then(|r| r.first_chunk::<256>())
-        else {
-            continue;
-        };
+        // αᶠ⁺ᵍ for f = log(feedback) and every g.
+        let f = log(feedback);
         let mut next = reg.to_le_bytes();
         for (n, &g) in next.iter_mut().zip(GENERATOR_LOGS.iter()) {
-            *n ^= row.get(usize::from(g)).copied().unwrap_or(0);
+            *n ^= exp(f + usize::from(g));
         }
         reg = u128::from_le_bytes(next);
     }
@@ -205,7 +196,7 @@ const fn feedback_rows() -> [u128; 256] {
         let mut row = 0u128;
         let mut k = 0;
         while k < PARITY {
-            row |= (t.exp[log_f + GENERATOR_LOGS[k] as usize] as u128) << (8 * k);
+            row |= (t.exp[(log_f + GENERATOR_LOGS[k] as usize) % 255] as u128) << (8 * k);
             k += 1;
         }
         rows[f] = row;
