@@ -77,7 +77,8 @@ pub struct Belief {
     /// with no velocity yet: the guard's head-on hypothesis may apply).
     pub sightings: Vec<(u16, u16)>,
     /// The slow velocity each still sonar track's sightings suggest but no third has borne out
-    /// yet (`Tracks::tentative`: the guard may meet it on it), by obstacle id.
+    /// yet (`Tracks::tentative`: the guard may meet it on it), by obstacle id. A track that has
+    /// drifted is listed as if it stood alone, which the guard also asks of it.
     pub tentative: Vec<(u16, Vec2)>,
     /// The other vehicles it knew of.
     pub agents: Vec<Agent>,
@@ -165,7 +166,7 @@ fn belief(fw: &OneThreadRuntime, at_s: f64, radius_m: f32) -> Belief {
             .map(|t| (t.id, u16::from(t.hits)))
             .collect(),
         tentative: (p.world().obstacles().iter())
-            .filter_map(|o| Some((o.id, p.tracks().tentative(o.id)?)))
+            .filter_map(|o| Some((o.id, p.tracks().tentative(o.id, || true)?)))
             .collect(),
         agents: p.world().agents().to_vec(),
         cells: pose.map_or(Vec::new(), |(h, _)| believed_cells(fw, h, radius_m)),

@@ -80,7 +80,12 @@
 //! 712 → 715 of 408, 816 and 816; contacts 0 → 0, 1 → 1 and 1 → 0 — the one it was built
 //! for); a craft at rest then also went at a mover meeting it head-on, turning 30° off it,
 //! to pass a little wider. A clear way out alone at cruise, the least bad as before, left
-//! crossing 114 as it was. Judging such a craft's course over 15 s
+//! crossing 114 as it was. Nor judging where it stops over the quarter turn it needs to get
+//! out of the way (34 s), against the sonar's tracks crossing its course (tried 2026-12-06):
+//! a flat-fish that had stopped in a slow mover's way at `--trial 1` (crossing 16) went on
+//! instead, but so did one meeting another flat-fish at 90° in a head-on world, which it
+//! crossed in front of (head-on 123); crossing and head-on, seeds 0–169 at trials 0 and 1,
+//! contacts 12 → 12. Judging such a craft's course over 15 s
 //! rather than 10 (from 0.75 m/s it brakes for 7.5 s): at 0.75 m/s, seeds 0–33, contacts
 //! 3 → 7, successes 359 → 355 of 408; not kept. Nor a wider berth from movers for such a
 //! craft (the hull grown by 1, 2 or 3 m in the closest-approach test; tried 2026-12-05): at
@@ -180,8 +185,8 @@
 //! after the planner's step, outside its 100 000-instruction budget. Its worst case for this
 //! and the head-on hypothesis, every table slot a contact seen once ahead and alone, is a
 //! phase of `cargo selftest` (a VideoRay at cruise among 32 of them, 4.7 m apart): the whole
-//! period is at most 512 680 instructions with the evidence map empty (the nearest contact, 3 m
-//! ahead, in close quarters) and 722 920 with its 32 cells, which every "alone" test reads;
+//! period is at most 514 760 instructions with the evidence map empty (the nearest contact, 3 m
+//! ahead, in close quarters) and 724 720 with its 32 cells, which every "alone" test reads;
 //! about 4 ms of the 100 ms period at the STM32G431's 170 MHz.
 //!
 //! **Slow tracks.** A sonar track whose sightings a sweep apart put it on the move at 0.3–0.5
@@ -204,6 +209,14 @@
 //! every tentative track, fresh or not, on seeds 0–199 × 3 its median interventions per run
 //! rose by a quarter (rocks' wandering fits) and the shipped waypoint mission above missed a
 //! waypoint.
+//!
+//! A craft that turns slowly also meets on that velocity a track that has drifted far from its
+//! first sighting at a slow filter speed, borne out or not, when it stands alone ([`alone`]:
+//! nothing else believed within [`HEAD_ON_ALONE_M`], as the head-on hypothesis asks of a
+//! vehicle; `crate::guidance::tracks`, "Drifting"). A VideoRay steps out of a slow mover's way
+//! once a sighting bears it out; and a rock whose track a mover had handed over is far from
+//! that track's first sighting: met as drifting, it turned a VideoRay into the way of a
+//! 1 m/s mover behind it (crossing 851 at `--trial 1`).
 //!
 //! **Unmapped tracks.** While an evidence map is in use, still sonar tracks are left to it
 //! ([`World::left_to_map`]): its cells, not the fits, are what the field and the guard meet. A
@@ -250,7 +263,7 @@
 //! which searches every heading twice for a clear motion and once more for the least bad
 //! (`cargo selftest`'s flat-fish in traffic, whole period at most 418 040 instructions, the
 //! planner's step 88 360), and a vehicle among contacts seen once ("Close quarters" above:
-//! 722 920).
+//! 724 720).
 
 use super::tracks::Tracks;
 use crate::math::{cos, max, min, sin, wrap_angle, Vec2};
@@ -597,6 +610,29 @@ impl Believed<'_> {
     }
 }
 
+/// Whether obstacle `o` (of extent `extent`, m) stands alone: nothing else believed within
+/// `room` m of it. A fragment of structure (a pier's end, a rock's far face, a wall's run)
+/// lies against other believed obstacles or cells; a vehicle or a drifting object in open
+/// water stands alone. `r_map`: the evidence map's cell half-diagonal, m.
+fn alone(world: &World, o: &crate::world::Obstacle, extent: f32, room: f32, r_map: f32) -> bool {
+    let c = o.shape.center();
+    let apart = extent + room;
+    world
+        .obstacles()
+        .iter()
+        .filter(|q| q.id != o.id)
+        // The bounding circle first: no nearer than the shape, and cheaper.
+        .all(|q| {
+            (q.shape.center() - c).norm() - q.shape.bounding_radius() > apart
+                || q.shape.signed_distance(c) > apart
+        })
+        // Its own echoes are believed cells within a cell of its extent.
+        && world.map_cells().iter().all(|&m| {
+            let d = (m - c).norm() - extent;
+            d <= 2.0 * r_map || d > room + r_map
+        })
+}
+
 /// How far a close contact seen `age_s` s ago may have come at `mps` m/s, m (module notes,
 /// "Close quarters").
 fn drifted(mps: f32, age_s: f32) -> f32 {
@@ -870,25 +906,7 @@ pub fn check(
             .normalized(1e-3)
             .is_some_and(|u| u.dot(bow) >= cos(HEAD_ON_CONE_RAD));
         let extent = extent(o);
-        // A fragment of structure (a pier's end, a rock's far face) lies against other
-        // believed obstacles; a vehicle in open water stands alone.
-        let alone = |room: f32| {
-            let apart = extent + room;
-            world
-                .obstacles()
-                .iter()
-                .filter(|q| q.id != o.id)
-                // The bounding circle first: no nearer than the shape, and cheaper.
-                .all(|q| {
-                    (q.shape.center() - c).norm() - q.shape.bounding_radius() > apart
-                        || q.shape.signed_distance(c) > apart
-                })
-                // Its own echoes are believed cells within a cell of its extent; a wall's run on.
-                && world.map_cells().iter().all(|&m| {
-                    let d = (m - c).norm() - extent;
-                    d <= 2.0 * r_map || d > room + r_map
-                })
-        };
+        let alone = |room: f32| alone(world, o, extent, room, r_map);
         // A vehicle's echo is fitted as a circle, or as a bar no longer than the vehicles the
         // planner knows (another flat-fish as one 3.6 m long); a wall's run as a longer bar.
         let compact = || match o.shape {
@@ -926,12 +944,14 @@ pub fn check(
     // overdue: unseen for a sweep, it was a rock's wander. Rated tracks only, never the
     // head-on hypothesis's: room for every obstacle, never full.
     let overdue_ms = (CPA_HORIZON_S * 1000.0) as u64;
+    let slow_turning = prm.turn_rate_rps > 0.0;
     let slow_tracks = world
         .obstacles()
         .iter()
         .filter(|o| o.velocity == Vec2::ZERO && now_ms.saturating_sub(o.seen_ms) <= overdue_ms);
     for o in slow_tracks {
-        if let Some(v) = tracks.tentative(o.id) {
+        let drifts = || slow_turning && alone(world, o, extent(o), HEAD_ON_ALONE_M, r_map);
+        if let Some(v) = tracks.tentative(o.id, drifts) {
             let _ = movers.push(Mover {
                 center: o.shape.center() + v * age(o.seen_ms),
                 velocity: v,
@@ -1935,7 +1955,7 @@ mod tests {
         );
         let o = w.obstacles()[0];
         assert_eq!(o.velocity, Vec2::ZERO, "not yet given a velocity");
-        let v = tracks.tentative(o.id).unwrap();
+        let v = tracks.tentative(o.id, || true).unwrap();
         assert!((v - Vec2::new(0.0, -0.4)).norm() < 0.05, "{v:?}");
         let go = cmd(0.0, 0.5);
         let (out, verdict) = check(&g, &flatfish, 10_000, &moving, &w, &tracks, None, go, 0.567);
