@@ -78,7 +78,7 @@ pub struct Belief {
     pub sightings: Vec<(u16, u16)>,
     /// The slow velocity each still sonar track's sightings suggest but no third has borne out
     /// yet (`Tracks::tentative`: the guard may meet it on it), by obstacle id. A track that has
-    /// drifted is listed as if it stood alone, which the guard also asks of it.
+    /// drifted is listed as if it stood alone, as a slow-turning craft's guard would meet it.
     pub tentative: Vec<(u16, Vec2)>,
     /// The other vehicles it knew of.
     pub agents: Vec<Agent>,
