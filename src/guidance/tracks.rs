@@ -131,8 +131,9 @@
 //! periods there, and lost two of 34 channels). Flat-fish with its recipe, crossing and head-on,
 //! contacts: seeds 0–101 at `--trial 1`, 5 → 4; 102–169, 5 → 4; 170–237, 4 → 1; 170–237 at
 //! `--trial 2`, 2 → 2; seeds 0–169 at trial 0, 2 → 2: 18 → 13 (6 gone, 1 new), successes
-//! 926 → 931 of 952; all families at trial 0, seeds 0–169, 1 792 → 1 792. The VideoRay's
-//! guard does not ask it (`crate::guidance::guard`, "Slow tracks").
+//! 926 → 931 of 952; all families, seeds 0–169, at trial 0 1 792 → 1 792 (contacts 2 → 2),
+//! at trial 1 1 779 → 1 781 (10 → 8). The VideoRay's guard does not ask it
+//! (`crate::guidance::guard`, "Slow tracks").
 //!
 //! *Movers passing a rock, tried and not kept.* A mover passing a rock is one blob with it for
 //! a sweep or two: its fit is pulled off its course (1.8 m, for one at 0.45 m/s borne out three
