@@ -303,7 +303,10 @@ impl World {
             .max_by(|a, b| dist(a).total_cmp(&dist(b)));
         match farthest {
             Some(slot) if dist(slot) > new_d => {
-                let old = core::mem::replace(slot, o);
+                let mut old = o;
+                // A swap, not `mem::replace`: the latter's copy into an aliased slot links
+                // compiler_builtins' 1.5 KB `memmove` into the image.
+                core::mem::swap(slot, &mut old);
                 // upsert_obstacle counted a rejection that became an eviction.
                 self.counters.rejected_full = self.counters.rejected_full.saturating_sub(1);
                 self.counters.evicted = self.counters.evicted.saturating_add(1);
@@ -316,7 +319,7 @@ impl World {
     /// Removes the obstacle with `id`, returning it.
     pub fn remove_obstacle(&mut self, id: u16) -> Option<Obstacle> {
         let i = self.obstacles.iter().position(|x| x.id == id)?;
-        Some(self.obstacles.swap_remove(i))
+        swap_remove(&mut self.obstacles, i)
     }
 
     /// Removes every charted obstacle (sensed ones stay).
@@ -339,7 +342,7 @@ impl World {
     /// Removes the agent with `id`.
     pub fn remove_agent(&mut self, id: u16) -> Option<Agent> {
         let i = self.agents.iter().position(|x| x.id == id)?;
-        Some(self.agents.swap_remove(i))
+        swap_remove(&mut self.agents, i)
     }
 
     /// Drops sensed obstacles and agents last seen more than `max_age_ms` before `now_ms`.
@@ -434,6 +437,20 @@ pub fn nearest_cell(centers: &[Vec2], x: Vec2) -> Option<(Vec2, f32)> {
     best.map(|(c, d2)| (c, crate::math::sqrt(d2)))
 }
 
+/// `Vec::swap_remove` by a swap with the last element and a pop. heapless moves the last
+/// element with `ptr::copy`, which links compiler_builtins' 1.5 KB `memmove` into the image.
+/// `None` when `i` is out of range.
+pub fn swap_remove<T, const N: usize>(v: &mut Vec<T, N>, i: usize) -> Option<T> {
+    let last = v.len().checked_sub(1)?;
+    let (head, tail) = v.split_at_mut(last);
+    if let (Some(a), Some(b)) = (head.get_mut(i), tail.first_mut()) {
+        core::mem::swap(a, b);
+    } else if i != last {
+        return None;
+    }
+    v.pop()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -441,6 +458,20 @@ mod tests {
     fn circle(id: u16, x: f32, origin: Origin) -> Obstacle {
         let s = Shape::circle(Vec2::new(x, 0.0), 1.0).unwrap();
         Obstacle::new(id, s, 2.5, origin, 0).unwrap()
+    }
+
+    #[test]
+    fn swap_remove_moves_the_last_into_the_gap_and_refuses_out_of_range() {
+        let mut v: Vec<u8, 4> = Vec::from_slice(&[1, 2, 3, 4]).unwrap();
+        assert_eq!(swap_remove(&mut v, 1), Some(2));
+        assert_eq!(v.as_slice(), &[1, 4, 3]);
+        assert_eq!(swap_remove(&mut v, 2), Some(3));
+        assert_eq!(v.as_slice(), &[1, 4]);
+        assert_eq!(swap_remove(&mut v, 2), None);
+        assert_eq!(v.as_slice(), &[1, 4]);
+        assert_eq!(swap_remove(&mut v, 0), Some(1));
+        assert_eq!(swap_remove(&mut v, 0), Some(4));
+        assert_eq!(swap_remove(&mut v, 0), None);
     }
 
     #[test]

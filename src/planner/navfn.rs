@@ -339,7 +339,7 @@ impl SphereWorld {
             let Ok(merged) = self.sphere(mc, mr) else {
                 break;
             };
-            self.spheres.swap_remove(i);
+            crate::world::swap_remove(&mut self.spheres, i);
             c = merged;
         }
         self.spheres.push(c).map_err(|_| NavfnError::Full)?;
