@@ -102,7 +102,18 @@
 //! crossed in front of (head-on 123); crossing and head-on, seeds 0–169 at trials 0 and 1,
 //! contacts 12 → 12. Judging such a craft's course over 15 s
 //! rather than 10 (from 0.75 m/s it brakes for 7.5 s): at 0.75 m/s, seeds 0–33, contacts
-//! 3 → 7, successes 359 → 355 of 408; not kept. Nor a wider berth from movers for such a
+//! 3 → 7, successes 359 → 355 of 408; not kept for the sonar's tracks, whose velocities are
+//! a few fits old and wander (over 15 s, with its recipe at `--trial 1`, box fields lost 8 of
+//! 170 to phantom movers met too early; contacts 7 → 8). But against a
+//! mover whose velocity is measured — a contact the host reports — it is judged over
+//! [`SURE_HORIZON_S`] = 15 s: with perfect perception (`hil bench --models flatfish --params
+//! hil/recipes/flatfish.toml --sensing contacts --families crossing,head_on,formation
+//! --seeds 204`) the flat-fish ran into 34 of 204 crossing movers (up to 1 m/s, against its
+//! 0.65): it stopped or turned 10 s before one arrived and coasted into its way (crossing 20:
+//! 0.97 m/s from its starboard quarter); over 15 s, 2 (successes 577 → 609 of 612). Not for
+//! the other vehicles the host reports: formation mates steer with it, and over 15 s their
+//! present velocity put two formations into contact (170 → 167 of 170 at trial 1). With its
+//! own sonar nothing changes, run for run. Not kept either: a wider berth from movers for such a
 //! craft (the hull grown by 1, 2 or 3 m in the closest-approach test; tried 2026-12-05): at
 //! 0.75 m/s, crossing and head-on seeds 0–99, contacts 19 → 9, 8, 8 and successes 173 → 186,
 //! 186, 187 of 200; but all families, seeds 0–33, 359 → 357 (1 m) and 353 (2 m) of 408, with
@@ -200,8 +211,8 @@
 //! after the planner's step, outside its 100 000-instruction budget. Its worst case for this
 //! and the head-on hypothesis, every table slot a contact seen once ahead and alone, is a
 //! phase of `cargo selftest` (a VideoRay at cruise among 32 of them, 4.7 m apart): the whole
-//! period is at most 514 760 instructions with the evidence map empty (the nearest contact, 3 m
-//! ahead, in close quarters) and 724 720 with its 32 cells, which every "alone" test reads;
+//! period is at most 515 360 instructions with the evidence map empty (the nearest contact, 3 m
+//! ahead, in close quarters) and 734 840 with its 32 cells, which every "alone" test reads;
 //! about 4 ms of the 100 ms period at the STM32G431's 170 MHz.
 //!
 //! **Slow tracks.** A sonar track whose sightings a sweep apart put it on the move at 0.3–0.5
@@ -276,9 +287,9 @@
 //! (at most 32 × 32); for each contact seen once ahead, two "alone" tests over the table and
 //! the map's cells. The worst cases: a slow-turning craft in traffic closing from all round,
 //! which searches every heading twice for a clear motion and once more for the least bad
-//! (`cargo selftest`'s flat-fish in traffic, whole period at most 418 040 instructions, the
+//! (`cargo selftest`'s flat-fish in traffic, whole period at most 435 840 instructions, the
 //! planner's step 88 360), and a vehicle among contacts seen once ("Close quarters" above:
-//! 724 720).
+//! 734 840).
 
 use super::tracks::Tracks;
 use crate::math::{cos, max, min, sin, wrap_angle, Vec2};
@@ -303,6 +314,10 @@ pub const SAMPLE_M: f32 = 0.25;
 /// How long a motion is held when it is judged against movers, s: about a sonar sweep (9 s for
 /// a Micron at 30 m), the longest a mover goes unseen.
 pub const CPA_HORIZON_S: f32 = 10.0;
+/// How long a slow-turning craft's course is judged against a mover whose velocity is measured
+/// (a contact or vehicle the host reports), s: from its cruise it takes 6–7 s to stop, and the
+/// mover goes on meanwhile (module notes, "Movers"). Against a sonar track, [`CPA_HORIZON_S`].
+pub const SURE_HORIZON_S: f32 = 15.0;
 /// Bearings off the bow within which a contact seen once may be a vehicle meeting this one
 /// head-on (module notes), rad.
 pub const HEAD_ON_CONE_RAD: f32 = crate::math::PI / 3.0;
@@ -317,9 +332,10 @@ pub const CLOSE_DRIFT: f32 = 0.5;
 /// looks again (`TrackConfig::revisit_ms`), when a vehicle that close would be seen (the
 /// simulated sonar makes another VideoRay within 3 m a contact on 19 sweeps in 20).
 pub const CLOSE_DRIFT_S: f32 = 4.0;
-/// Steps of the course a slow-turning craft is predicted on over [`CPA_HORIZON_S`] when it is
-/// judged against movers (one a second).
-pub const TRACK_STEPS: usize = 10;
+/// Steps of the course a slow-turning craft is predicted on over [`SURE_HORIZON_S`] when it is
+/// judged against movers (one a second; a sonar track is met over the first
+/// [`CPA_HORIZON_S`] of them).
+pub const TRACK_STEPS: usize = 15;
 /// How much farther from a mover than stopping keeps a motion must keep a slow-turning craft
 /// before it takes that motion when nothing is clear, m (module notes, "Movers").
 pub const GAIN_M: f32 = 0.5;
@@ -430,6 +446,10 @@ struct Believed<'a> {
     world: &'a World,
     /// The obstacles and vehicles with a velocity, at their positions now.
     movers: heapless::Vec<Mover, { MAX_OBSTACLES + MAX_AGENTS }>,
+    /// The first `sure` of them have a measured velocity — contacts the host reports — not
+    /// one inferred from the sonar's fits ([`SURE_HORIZON_S`]; a count, not a flag per mover:
+    /// 160 bytes less stack).
+    sure: usize,
     /// The map cells that a segment of the longest length tried can reach: bit i for
     /// `world.map_cells()[i]` (a mask, not a copy: the guard's frame is the deepest of the
     /// periodic task's, `cargo selftest`'s stack high-water).
@@ -596,32 +616,42 @@ impl Believed<'_> {
     }
 
     /// [`Believed::mover_margin`] for a craft that follows `track` (positions at
-    /// [`TRACK_STEPS`] equal steps over [`CPA_HORIZON_S`]) rather than holding one velocity:
+    /// [`TRACK_STEPS`] equal steps over [`SURE_HORIZON_S`]) rather than holding one velocity:
     /// within each step both it and the mover move straight, so the closest approach of that
-    /// step is the distance from the origin to the segment their offsets trace.
+    /// step is the distance from the origin to the segment their offsets trace. A sonar
+    /// track is met over the first [`CPA_HORIZON_S`] only.
     fn mover_margin_along(&self, track: &[Vec2; TRACK_STEPS + 1]) -> f32 {
-        let dt = CPA_HORIZON_S / TRACK_STEPS as f32;
+        let dt = SURE_HORIZON_S / TRACK_STEPS as f32;
         let p = track[0];
-        self.movers.iter().fold(f32::INFINITY, |worst, m| {
-            let at = |k: usize, x: Vec2| m.center + m.velocity * (k as f32 * dt) - x;
-            let closest = track
-                .windows(2)
-                .enumerate()
-                .fold(f32::INFINITY, |c, (k, w)| match w {
-                    [a, b] => {
-                        let (d0, d1) = (at(k, *a), at(k + 1, *b));
-                        let len = (d1 - d0).norm();
-                        let d = match (d1 - d0).normalized(1e-6) {
-                            Some(u) => to_segment(Vec2::ZERO, d0, u, len),
-                            None => d0.norm(),
-                        };
-                        min(c, d)
-                    }
-                    _ => c,
-                })
-                - m.radius;
-            min(worst, self.clear_of(m, p, closest))
-        })
+        self.movers
+            .iter()
+            .enumerate()
+            .fold(f32::INFINITY, |worst, (i, m)| {
+                let at = |k: usize, x: Vec2| m.center + m.velocity * (k as f32 * dt) - x;
+                let horizon = if i < self.sure {
+                    SURE_HORIZON_S
+                } else {
+                    CPA_HORIZON_S
+                };
+                let closest = track
+                    .windows(2)
+                    .take((horizon / dt) as usize)
+                    .enumerate()
+                    .fold(f32::INFINITY, |c, (k, w)| match w {
+                        [a, b] => {
+                            let (d0, d1) = (at(k, *a), at(k + 1, *b));
+                            let len = (d1 - d0).norm();
+                            let d = match (d1 - d0).normalized(1e-6) {
+                                Some(u) => to_segment(Vec2::ZERO, d0, u, len),
+                                None => d0.norm(),
+                            };
+                            min(c, d)
+                        }
+                        _ => c,
+                    })
+                    - m.radius;
+                min(worst, self.clear_of(m, p, closest))
+            })
     }
 }
 
@@ -742,14 +772,14 @@ impl Helm<'_> {
         )
     }
 
-    /// Where a slow-turning craft is over [`CPA_HORIZON_S`] under the command (`psi`, `v`):
+    /// Where a slow-turning craft is over [`SURE_HORIZON_S`] under the command (`psi`, `v`):
     /// its heading turns towards `psi` at its rate, its speed goes from the present one
     /// towards `v` at F_max or its braking; [`TRACK_STEPS`] + 1 positions, now first.
     fn course(&self, psi: f32, v: f32) -> [Vec2; TRACK_STEPS + 1] {
         let prm = self.prm;
         let turn = wrap_angle(psi - self.heading);
         let rate = prm.turn_rate_rps;
-        let dt = CPA_HORIZON_S / TRACK_STEPS as f32;
+        let dt = SURE_HORIZON_S / TRACK_STEPS as f32;
         let change = v - self.speed;
         let mut pts = [self.p; TRACK_STEPS + 1];
         let mut at = self.p;
@@ -896,7 +926,13 @@ pub fn check(
         }
     };
     let mut movers = heapless::Vec::new();
-    for o in world.obstacles().iter().filter(|o| !still(o.velocity)) {
+    // The host's contacts first (their velocity is measured: `Believed::sure`), then the
+    // sonar's tracks.
+    let moving = |sure: bool| {
+        (world.obstacles().iter())
+            .filter(move |o| !still(o.velocity) && (o.origin != Origin::Sonar) == sure)
+    };
+    for o in moving(true).chain(moving(false)) {
         // Room for every obstacle and agent: never full.
         let _ = movers.push(Mover {
             center: o.shape.center() + o.velocity * age(o.seen_ms),
@@ -904,6 +940,7 @@ pub fn check(
             radius: extent(o),
         });
     }
+    let sure = moving(true).count();
     // Head-on: a contact seen once ahead may be another vehicle coming this way, which the
     // sonar sees again only a sweep later, too late at twice the cruise speed: it is met on
     // the course that meets ours, or on the reciprocal one if none does.
@@ -989,6 +1026,7 @@ pub fn check(
     let b = Believed {
         world,
         movers,
+        sure,
         cells,
         unmapped,
         close,
@@ -2105,6 +2143,47 @@ mod tests {
         assert_eq!(verdict(0.0), Verdict::Clear);
         assert_eq!(verdict(0.07), Verdict::Clear, "skidding away from it");
         assert_ne!(verdict(-0.07), Verdict::Clear);
+    }
+
+    #[test]
+    fn a_slow_turning_craft_meets_a_reported_mover_over_a_longer_horizon_than_a_sonar_track() {
+        // The flat-fish heads east at 0.65 m/s; a mover crossing north at 1 m/s reaches its
+        // track 13.5 s from now, just where it will be. Within 10 s they stay 3.8 m apart, more
+        // than hull and mover; a contact the host reports is judged over 15 s, a sonar track
+        // (whose velocity is a few fits old) over 10.
+        let prm = Params {
+            v_max: 0.65,
+            ..flatfish()
+        };
+        let g = GuardConfig::default();
+        let verdict = |origin: Origin| {
+            let mut w = World::new();
+            let o = Obstacle::new(
+                1,
+                Shape::circle(Vec2::new(8.8, -13.5), 1.0).unwrap(),
+                2.5,
+                origin,
+                0,
+            )
+            .and_then(|o| o.moving(Vec2::new(0.0, 1.0)))
+            .unwrap();
+            w.upsert_obstacle(o).unwrap();
+            let nav = nav(Vec2::new(0.65, 0.0));
+            check(
+                &g,
+                &prm,
+                0,
+                &nav,
+                &w,
+                &Tracks::default(),
+                None,
+                cmd(0.0, 0.65),
+                1.0,
+            )
+            .1
+        };
+        assert_eq!(verdict(Origin::Sonar), Verdict::Clear);
+        assert_ne!(verdict(Origin::Sensed), Verdict::Clear);
     }
 
     #[test]
