@@ -113,7 +113,9 @@
 //! 0.97 m/s from its starboard quarter); over 15 s, 2 (successes 577 → 609 of 612). Not for
 //! the other vehicles the host reports: formation mates steer with it, and over 15 s their
 //! present velocity put two formations into contact (170 → 167 of 170 at trial 1). With its
-//! own sonar nothing changes, run for run. Not kept either: a wider berth from movers for such a
+//! own sonar nothing changes, run for run. Nor does it meet a sonar track borne out twice at
+//! 0.5 m/s or more over 15 s (crossing, head-on and formation at `--trial 1`, seeds 0–169:
+//! contacts 6 → 8). Not kept either: a wider berth from movers for such a
 //! craft (the hull grown by 1, 2 or 3 m in the closest-approach test; tried 2026-12-05): at
 //! 0.75 m/s, crossing and head-on seeds 0–99, contacts 19 → 9, 8, 8 and successes 173 → 186,
 //! 186, 187 of 200; but all families, seeds 0–33, 359 → 357 (1 m) and 353 (2 m) of 408, with
