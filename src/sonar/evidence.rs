@@ -478,6 +478,10 @@ impl EvidenceMap {
             // Half-cell steps visit every cell the ray crosses (corners aside); each cell once.
             let step = 0.5 * cfg.cell_m;
             let n = min(free_to / step, 4.0 * MAP_SIDE as f32) as u32;
+            // Silence clears from the blanking distance out. Tried and not kept: clearing
+            // nothing within 2 m on silence, for another VideoRay inside the blanking distance,
+            // which shadows the cell it was last seen as (VPF head-on 1154): crossing and
+            // head-on, seeds 1000–1199, contacts 3 → 2 with 3 gone and 2 new.
             let first = libm::ceilf(beam.blank_m.max(0.0) / step) as u32;
             let mut last = None;
             for k in first..=n {
