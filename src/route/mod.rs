@@ -45,6 +45,14 @@
 //! 333 → 304 with 4 contacts (box and clutter fields, where it stopped in gaps its guard would
 //! not let it through). The keep-off stays 4 m whatever the hull.
 //!
+//! *Tried and not kept:* a large craft whose hull's passes find only a way longer than
+//! [`acceptable`] of the straight line also trying the bare pass, and taking it when its way is
+//! much shorter: on 2 m cells a 6.1 m gap between two rocks is two free cells, which the
+//! flat-fish's hull pass (growth 1) closes, and the craft toured 150 m round the field (bench
+//! clutter 11 at `--trial 1`). With its recipe, seeds 0–33 at `--trial 1`: 363 → 354, contacts
+//! 2 → 3 — it was then sent at gaps it cannot pass, and its guard stopped it there. What
+//! closes such gaps is the grid's quantisation (up to a cell lost on each side), not the hull.
+//!
 //! The periodic task then gives the planner `aim` as its goal-point while the route is fresh
 //! and for its own goal (the goal itself when it is in plain sight); arrival is still judged at
 //! the goal (`crate::planner::Planner::set_route`), and VPF cruises to a routed goal-point
