@@ -1307,18 +1307,13 @@ mod tests {
 
     /// The verdict on `c` for a vehicle at rest at the origin at time 0, without tracks.
     fn at_rest(g: &GuardConfig, p: &Params, w: &World, c: Command) -> Verdict {
-        check(
-            g,
-            p,
-            0,
-            &nav(Vec2::ZERO),
-            w,
-            &Tracks::default(),
-            None,
-            c,
-            1.0,
-        )
-        .1
+        under_way(g, p, w, Vec2::ZERO, c)
+    }
+
+    /// The verdict on `c` for a vehicle at the origin heading east with velocity `v`, at
+    /// time 0, without tracks.
+    fn under_way(g: &GuardConfig, p: &Params, w: &World, v: Vec2, c: Command) -> Verdict {
+        check(g, p, 0, &nav(v), w, &Tracks::default(), None, c, 1.0).1
     }
 
     fn nav(v: Vec2) -> NavState {
@@ -2127,21 +2122,7 @@ mod tests {
         let y = -(prm.agent_radius_m + 0.3);
         w.set_map((-4..=40).map(|k| Vec2::new(k as f32 * 0.5, y)), 0.25);
         let g = GuardConfig::default();
-        let verdict = |sway: f32| {
-            let nav = nav(Vec2::new(0.5, sway));
-            check(
-                &g,
-                &prm,
-                0,
-                &nav,
-                &w,
-                &Tracks::default(),
-                None,
-                cmd(0.0, 0.5),
-                1.0,
-            )
-            .1
-        };
+        let verdict = |sway: f32| under_way(&g, &prm, &w, Vec2::new(0.5, sway), cmd(0.0, 0.5));
         assert_eq!(verdict(0.0), Verdict::Clear);
         assert_eq!(verdict(0.07), Verdict::Clear, "skidding away from it");
         assert_ne!(verdict(-0.07), Verdict::Clear);
@@ -2170,19 +2151,7 @@ mod tests {
             .and_then(|o| o.moving(Vec2::new(0.0, 1.0)))
             .unwrap();
             w.upsert_obstacle(o).unwrap();
-            let nav = nav(Vec2::new(0.65, 0.0));
-            check(
-                &g,
-                &prm,
-                0,
-                &nav,
-                &w,
-                &Tracks::default(),
-                None,
-                cmd(0.0, 0.65),
-                1.0,
-            )
-            .1
+            under_way(&g, &prm, &w, Vec2::new(0.65, 0.0), cmd(0.0, 0.65))
         };
         assert_eq!(verdict(Origin::Sonar), Verdict::Clear);
         assert_ne!(verdict(Origin::Sensed), Verdict::Clear);
