@@ -224,7 +224,11 @@ impl Planner {
 
         // What holds a stalled vehicle (escape.rs): is there a way down without the virtual
         // leader, or without the other vehicles too? "A way down" is a descent stronger than
-        // what friction balances at the stall speed.
+        // what friction balances at the stall speed. *Tried and not kept:* a stall with a way
+        // down and no other vehicle in the table taken as the static field's, for a ghost (it
+        // is then the guard that holds the vehicle): the flat-fish with its recipe, seeds
+        // 0–33, 358 → 310 of 408 — its guard holds it at every bend of a channel while it
+        // turns on the spot, and the ghosts led it off the way (channels 31 → 16).
         let cause = |target: Vec2| {
             let free = |f: Vec2| f.norm() > prm.mu * prm.stall_speed;
             if let Some((f, _)) = leader {

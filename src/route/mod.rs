@@ -53,6 +53,30 @@
 //! 2 → 3 — it was then sent at gaps it cannot pass, and its guard stopped it there. What
 //! closes such gaps is the grid's quantisation (up to a cell lost on each side), not the hull.
 //!
+//! *Tried and not kept:* the hull's pass judged at the evidence map's resolution where the
+//! map covers the window — a route cell closed when its centre is within the hull's radius
+//! (2.6 m; or that and a map cell's half-diagonal, as the guard counts) of a believed cell,
+//! rather than grown by whole cells. Whole cells close a gap or open a corner by up to a cell:
+//! the ends of a wall the flat-fish's sonar saw 7.4 m apart at 50° to the grid left no way
+//! through on 2 m cells, and the craft was sent round the wall's far end (bench wall gap 19).
+//! Sent through such gaps, it came at them at an angle it could not turn out of and its
+//! guard held it there: with its recipe, seeds 0–169, 1 783 → 1 788 of 2 040 (wall gaps
+//! 127 → 126, 10 gained and 11 lost), contacts 4 → 4; with the half-diagonal, seeds 0–67,
+//! 714 → 713.
+//!
+//! *Tried and not kept:* ways that turn. A craft that turns slowly pays for a turn in time,
+//! a radian as much as v_max / ψ̇ metres of way (14 m for the flat-fish with its recipe); when
+//! the way found turned it more than 90° (or 45°) off its heading, the way leaving the
+//! vehicle more than 60° off that one's bearing was spread too (the cells nearer than the
+//! aim in that sector closed), and the one whose length and turn cost less was taken — so
+//! that two nearly equal ways round a wall stop swapping as the map fills in (bench wall gap
+//! 19 and clutter 40 turned on the spot one way and then the other for a minute and more).
+//! Clutter gained every time (seeds 0–169 at trials 0 and 1, 103 → 111 and 97 → 105 of 170;
+//! seeds 170–237, 40 → 44 of 68), but harbours and head-on pairs gave it back: with its
+//! recipe, seeds 0–169, 1 783 → 1 802 of 2 040 at trial 0 (contacts 4 → 5), 1 783 → 1 784 at
+//! trial 1 (7 → 7); seeds 170–237, 719 → 720 of 816 (2 → 3); at 45°, seeds 0–169 at trial 0,
+//! 1 794 with 7 contacts. Not worth its 1.2 KiB of flash.
+//!
 //! The periodic task then gives the planner `aim` as its goal-point while the route is fresh
 //! and for its own goal (the goal itself when it is in plain sight); arrival is still judged at
 //! the goal (`crate::planner::Planner::set_route`), and VPF cruises to a routed goal-point
