@@ -75,7 +75,10 @@
 //! seeds 170–237, 40 → 44 of 68), but harbours and head-on pairs gave it back: with its
 //! recipe, seeds 0–169, 1 783 → 1 802 of 2 040 at trial 0 (contacts 4 → 5), 1 783 → 1 784 at
 //! trial 1 (7 → 7); seeds 170–237, 719 → 720 of 816 (2 → 3); at 45°, seeds 0–169 at trial 0,
-//! 1 794 with 7 contacts. Not worth its 1.2 KiB of flash.
+//! 1 794 with 7 contacts; only while the craft is at rest (under 0.2 m/s), 1 794 with 5.
+//! Turning on the spot, its heading sweeps through every bearing, and a way that lay ahead for
+//! a moment was taken: in head-on 7 it drove 4 m away from its goal round the other flat-fish
+//! that stood in its way, turned back and ran out of time. Not worth its 1.2 KiB of flash.
 //!
 //! The periodic task then gives the planner `aim` as its goal-point while the route is fresh
 //! and for its own goal (the goal itself when it is in plain sight); arrival is still judged at
