@@ -61,7 +61,7 @@
 //! through on 2 m cells, and the craft was sent round the wall's far end (bench wall gap 19).
 //! Sent through such gaps, it came at them at an angle it could not turn out of and its
 //! guard held it there: with its recipe, seeds 0–169, 1 783 → 1 788 of 2 040 (wall gaps
-//! 127 → 126, 10 gained and 11 lost), contacts 4 → 4; with the half-diagonal, seeds 0–67,
+//! 127 → 126, 9 gained and 10 lost), contacts 4 → 4; with the half-diagonal, seeds 0–67,
 //! 714 → 713.
 //!
 //! *Tried and not kept:* ways that turn. A craft that turns slowly pays for a turn in time,
