@@ -289,8 +289,8 @@
 //! (at most 32 × 32); for each contact seen once ahead, two "alone" tests over the table and
 //! the map's cells. The worst cases: a slow-turning craft in traffic closing from all round,
 //! which searches every heading twice for a clear motion and once more for the least bad
-//! (`cargo selftest`'s flat-fish in traffic, whole period at most 435 840 instructions, the
-//! planner's step 88 360), and a vehicle among contacts seen once ("Close quarters" above:
+//! (`cargo selftest`'s flat-fish in traffic, whole period at most 431 840 instructions, the
+//! planner's step 88 320), and a vehicle among contacts seen once ("Close quarters" above:
 //! 734 840).
 
 use super::tracks::Tracks;
@@ -472,7 +472,12 @@ struct Believed<'a> {
     /// Now, ms, and the speed the `close` contacts may have come at since their sighting, m/s.
     now_ms: u64,
     drift_mps: f32,
-    /// Clearance at the vehicle's position, m.
+    /// Clearance at the vehicle's position to what is believed still (map cells, still
+    /// obstacles and agents), m: the floor of [`Believed::blocked_still`]. Movers are not in
+    /// it — they are met on their closest approach, each with its own floor — and once were:
+    /// a wall's fragment the tracker had rated as a mover, sitting in the table 1.4 m from
+    /// the flat-fish where it was seen 20 s before, let the still check take the vehicle to
+    /// 1.4 m of a U-trap's arm, well inside its hull (generated U-trap 48).
     here: f32,
 }
 
@@ -661,7 +666,13 @@ impl Believed<'_> {
 /// `room` m of it. A fragment of structure (a pier's end, a rock's far face, a wall's run)
 /// lies against other believed obstacles or cells; a vehicle or a drifting object in open
 /// water stands alone. `r_map`: the evidence map's cell half-diagonal, m.
-fn alone(world: &World, o: &crate::world::Obstacle, extent: f32, room: f32, r_map: f32) -> bool {
+pub(crate) fn alone(
+    world: &World,
+    o: &crate::world::Obstacle,
+    extent: f32,
+    room: f32,
+    r_map: f32,
+) -> bool {
     let c = o.shape.center();
     let apart = extent + room;
     world
@@ -1037,15 +1048,20 @@ pub fn check(
         hull: prm.agent_radius_m + cfg.hull_margin(prm),
         agent_r: prm.agent_radius_m,
         r_map,
+        // Only what the still checks judge: a mover's shape in the table is where it was
+        // seen, not where it is (`Believed::here`).
         here: (world.obstacles().iter().enumerate())
-            .filter(|(i, _)| unmapped & bit(*i) != 0)
+            .filter(|(i, o)| {
+                still(o.velocity) && (!world.left_to_map(o) || unmapped & bit(*i) != 0)
+            })
             .map(|(_, o)| o.shape.signed_distance(p))
+            .chain(
+                (world.agents().iter().filter(|a| still(a.velocity)))
+                    .map(|a| (a.position - p).norm() - prm.agent_radius_m),
+            )
             .fold(
-                crate::math::min_num(
-                    world.clearance(p, prm.agent_radius_m),
-                    crate::world::nearest_cell(world.map_cells(), p)
-                        .map_or(f32::INFINITY, |(_, d)| d - r_map),
-                ),
+                crate::world::nearest_cell(world.map_cells(), p)
+                    .map_or(f32::INFINITY, |(_, d)| d - r_map),
                 crate::math::min_num,
             ),
     };
@@ -2219,5 +2235,28 @@ mod tests {
             .1,
             Verdict::Clear
         );
+    }
+
+    #[test]
+    fn a_movers_old_place_in_the_table_does_not_loosen_the_keep_off_from_a_wall() {
+        // A sonar track rated as moving away north, still in the table where it was seen, 0.2 m
+        // from the vehicle; a wall ahead that the motion would bring within the hull but not
+        // within 0.2 m. The mover is met on its closest approach; the wall by the hull.
+        let (g, p) = (GuardConfig::default(), Params::default());
+        let hull = p.agent_radius_m + g.hull_margin(&p);
+        let r_map = core::f32::consts::FRAC_1_SQRT_2 * 0.5;
+        let stop_at = reach(0.5, &p, &g);
+        let mut w = wall(stop_at + r_map + 0.5 * (hull + 0.2));
+        let old = Obstacle::new(
+            1,
+            Shape::circle(Vec2::new(-1.2, 0.0), 1.0).unwrap(),
+            2.5,
+            Origin::Sonar,
+            0,
+        )
+        .and_then(|o| o.moving(Vec2::new(0.0, 1.0)))
+        .unwrap();
+        w.upsert_obstacle(old).unwrap();
+        assert_ne!(at_rest(&g, &p, &w, cmd(0.0, 0.5)), Verdict::Clear);
     }
 }

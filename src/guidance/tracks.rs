@@ -290,6 +290,30 @@ const SURE_MPS: f32 = 0.5;
 /// not move").
 const BORNE_OUT: u8 = 2;
 
+/// A sonar track's speed within this of this vehicle's speed along the track's course, m/s,
+/// is a track that only keeps pace with the vehicle ([`paces`]).
+const PACE_MPS: f32 = 0.12;
+
+/// Whether a sonar track moving at `v` only keeps pace with this vehicle moving at `own`: its
+/// speed is within [`PACE_MPS`] of the vehicle's speed along its course. That is how the
+/// nearest stretch of a long wall "moves" as the vehicle runs along it: its echoes are strong
+/// only abeam, where the beams meet the wall square on, so each sweep fits a fragment a little
+/// farther on, and at the rate of the vehicle's own progress along the wall. Such a fragment
+/// rated as a mover hid its echoes from the map (`crate::sonar::wakes`) while it slid ahead of
+/// the vehicle, so the wall it slid along was never believed there, and the flat-fish met
+/// the corner of a channel's bend that only those echoes had shown (channel worlds 111, 185
+/// and 198 of `hil bench --models flatfish`: fragments "moving" at 0.58–0.70 m/s, within
+/// 0.1 m/s of the vehicle's speed along them). So a slow-turning craft has such a track's
+/// echoes painted when it lies against other believed structure (`periodic::hides_wake`). A
+/// real mover may keep pace too — one following the vehicle, or crossing at its speed times
+/// the cosine of the angle between the courses — but in open water it stands alone: painted
+/// there as well, a 0.36 m/s mover following the flat-fish became structure to the tracker in
+/// its own wake, and ran into the flat-fish when it stopped (crossing 236 at `--trial 1`).
+pub fn paces(v: Vec2, own: Vec2) -> bool {
+    let speed = v.norm();
+    speed > 0.0 && (own.dot(v) / speed - speed).abs() <= PACE_MPS
+}
+
 /// From this speed, m/s, a slow velocity not yet borne out is [`Tracks::tentative`]: the
 /// default `min_speed_mps`, below which a track is taken for still.
 const TENTATIVE_MPS: f32 = 0.3;
@@ -1055,6 +1079,22 @@ impl Tracks {
 mod tests {
     use super::*;
     use crate::sonar::FeatureKind;
+
+    #[test]
+    fn a_walls_fragment_keeps_pace_and_a_crossing_mover_does_not() {
+        // The vehicle runs at 0.65 m/s, 20° off a wall along +x: the wall's nearest stretch
+        // "moves" along it at 0.61 m/s (channel 185's fragments were within 0.1 m/s of it).
+        let own = Vec2::from_angle(0.35) * 0.65;
+        assert!(paces(Vec2::new(0.61, 0.0), own));
+        assert!(paces(Vec2::new(0.55, 0.0), own));
+        // Faster or slower than the vehicle's progress along it, across its track or against
+        // it: a mover.
+        assert!(!paces(Vec2::new(0.9, 0.0), own));
+        assert!(!paces(Vec2::new(0.4, 0.0), own));
+        assert!(!paces(Vec2::new(0.0, 0.6), own));
+        assert!(!paces(Vec2::new(-0.61, 0.0), own));
+        assert!(!paces(Vec2::ZERO, own));
+    }
 
     fn feature(x: f32, y: f32, r: f32, confidence: f32) -> Feature {
         Feature {

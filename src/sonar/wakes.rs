@@ -16,7 +16,10 @@
 //! An echo within a published mover's radius and [`super::ECHO_MARGIN_M`] adds no evidence,
 //! exactly as an echo of a vehicle the host reports (`super::known`): the beam's free water
 //! still ends there, and the extractor still makes it a feature (the tracker needs it). A
-//! mover's first sightings, before the tracker gives it a velocity, are painted as before.
+//! mover's first sightings, before the tracker gives it a velocity, are painted as before;
+//! so, for a craft that turns slowly, are the echoes of a sonar track that only keeps pace
+//! with it against other believed structure, as the nearest stretch of a wall seems to while
+//! the craft runs along it (`crate::guidance::tracks::paces`).
 //!
 //! **Contexts.** The periodic task is the only writer and the background (`observe`) the
 //! only reader. The slots are atomics written whole; a reader preempted mid-read may pair one
