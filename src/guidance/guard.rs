@@ -217,6 +217,17 @@
 //! ahead, in close quarters) and 734 840 with its 32 cells, which every "alone" test reads;
 //! about 4 ms of the 100 ms period at the STM32G431's 170 MHz.
 //!
+//! **Mates may stop.** A craft that turns slowly also judges the other vehicles the host
+//! reports where they are now, as if they stopped, besides on their closest approach: each
+//! has a guard of its own. In formation worlds a flat-fish with a mate closing from astern
+//! could not stop (it would be run into), so its way out went on towards a mate ahead that
+//! was moving off at 0.2 m/s — whose guard then stopped it, and the two met (formations 140
+//! and 209 of `hil bench --models flatfish --params hil/recipes/flatfish.toml`). With it,
+//! formations of seeds 0–237: 233 → 237 of 238 at trial 0, contacts 2 → 0; 238 → 238 at
+//! `--trial 1`, no contact either way. Not for a craft that turns at once, which stops
+//! within a metre: for the VideoRay (VPF, multipoint and navfn formations, seeds 0–199)
+//! multipoint lost 2 of 200, with no contact either way.
+//!
 //! **Slow tracks.** A sonar track whose sightings a sweep apart put it on the move at 0.3–0.5
 //! m/s stays still in the table until a third sighting lands where that velocity says (a
 //! rock's fits wander at such speeds: `crate::guidance::tracks`, "Slow movers"). Two
@@ -289,7 +300,7 @@
 //! (at most 32 × 32); for each contact seen once ahead, two "alone" tests over the table and
 //! the map's cells. The worst cases: a slow-turning craft in traffic closing from all round,
 //! which searches every heading twice for a clear motion and once more for the least bad
-//! (`cargo selftest`'s flat-fish in traffic, whole period at most 431 840 instructions, the
+//! (`cargo selftest`'s flat-fish in traffic, whole period at most 431 800 instructions, the
 //! planner's step 88 320), and a vehicle among contacts seen once ("Close quarters" above:
 //! 734 840).
 
@@ -472,6 +483,9 @@ struct Believed<'a> {
     /// Now, ms, and the speed the `close` contacts may have come at since their sighting, m/s.
     now_ms: u64,
     drift_mps: f32,
+    /// Whether other vehicles are judged where they are whatever their velocity (a craft that
+    /// turns slowly: module notes, "Mates may stop").
+    mates_stop: bool,
     /// Clearance at the vehicle's position to what is believed still (map cells, still
     /// obstacles and agents), m: the floor of [`Believed::blocked_still`]. Movers are not in
     /// it — they are met on their closest approach, each with its own floor — and once were:
@@ -537,7 +551,8 @@ impl Believed<'_> {
         {
             return true;
         }
-        if w.agents().iter().filter(|a| still(a.velocity)).any(|a| {
+        let judged = |a: &&crate::world::Agent| self.mates_stop || still(a.velocity);
+        if w.agents().iter().filter(judged).any(|a| {
             to_segment(a.position, p, u, len) - self.agent_r < floor && ahead(a.position, p, u)
         }) {
             return true;
@@ -1045,6 +1060,7 @@ pub fn check(
         close,
         now_ms,
         drift_mps,
+        mates_stop: slow_turning,
         hull: prm.agent_radius_m + cfg.hull_margin(prm),
         agent_r: prm.agent_radius_m,
         r_map,
@@ -1056,8 +1072,11 @@ pub fn check(
             })
             .map(|(_, o)| o.shape.signed_distance(p))
             .chain(
-                (world.agents().iter().filter(|a| still(a.velocity)))
-                    .map(|a| (a.position - p).norm() - prm.agent_radius_m),
+                (world
+                    .agents()
+                    .iter()
+                    .filter(|a| slow_turning || still(a.velocity)))
+                .map(|a| (a.position - p).norm() - prm.agent_radius_m),
             )
             .fold(
                 crate::world::nearest_cell(world.map_cells(), p)
@@ -2258,5 +2277,22 @@ mod tests {
         .unwrap();
         w.upsert_obstacle(old).unwrap();
         assert_ne!(at_rest(&g, &p, &w, cmd(0.0, 0.5)), Verdict::Clear);
+    }
+
+    #[test]
+    fn a_slow_turning_craft_judges_a_mate_ahead_where_it_is_as_well() {
+        // A mate 5.5 m ahead pulling away at 0.8 m/s: on its closest approach it is clear, but
+        // its guard may stop it, and the flat-fish could not stop short of it.
+        let g = GuardConfig::default();
+        let mut w = World::new();
+        let mate = crate::world::Agent::new(2, Vec2::new(5.5, 0.0), Vec2::new(0.8, 0.0), 0);
+        w.upsert_agent(mate.unwrap()).unwrap();
+        let verdict = |prm: &Params| under_way(&g, prm, &w, Vec2::new(0.567, 0.0), cmd(0.0, 0.567));
+        assert_ne!(verdict(&flatfish()), Verdict::Clear);
+        let turns_at_once = Params {
+            turn_rate_rps: 0.0,
+            ..flatfish()
+        };
+        assert_eq!(verdict(&turns_at_once), Verdict::Clear);
     }
 }
