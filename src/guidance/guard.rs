@@ -486,12 +486,13 @@ struct Believed<'a> {
     /// Whether other vehicles are judged where they are whatever their velocity (a craft that
     /// turns slowly: module notes, "Mates may stop").
     mates_stop: bool,
-    /// Clearance at the vehicle's position to what is believed still (map cells, still
-    /// obstacles and agents), m: the floor of [`Believed::blocked_still`]. Movers are not in
-    /// it — they are met on their closest approach, each with its own floor — and once were:
-    /// a wall's fragment the tracker had rated as a mover, sitting in the table 1.4 m from
-    /// the flat-fish where it was seen 20 s before, let the still check take the vehicle to
-    /// 1.4 m of a U-trap's arm, well inside its hull (generated U-trap 48).
+    /// Clearance at the vehicle's position to what the still check judges (map cells, still
+    /// obstacles, and the agents `mates_stop` says), m: the floor of
+    /// [`Believed::blocked_still`]. Movers are not in it — they are met on their closest
+    /// approach, each with its own floor — and once were: a wall's fragment the tracker had
+    /// rated as a mover, sitting in the table 1.4 m from the flat-fish where it was seen 20 s
+    /// before, let the still check take the vehicle to 1.4 m of a U-trap's arm, well inside
+    /// its hull (generated U-trap 48).
     here: f32,
 }
 
