@@ -37,6 +37,15 @@
 //! the flat-fish with its recipe, seeds 0–33, went 333 → 322 of 408 with pairs (27 lost, 16
 //! gained, no contact either way; its bench's other vehicles are flat-fish, on many beams).
 //!
+//! *Tried and not kept* (2026-12-06): a weaker later sighting. In VPF head-on seed 1154 one
+//! VideoRay saw the other on one beam at 16 m (a mean of about 160) and a sweep later at
+//! 9.7 m (121, under the floor); neither vehicle believed the other until 3 m apart, and
+//! they met. So the later of a pair was let be as weak as a mean of 110 (and was never kept
+//! to start one). Crossing and head-on × VPF, multipoint and navfn, 1 200 runs a bench:
+//! seeds 1000–1199, contacts 7 → 3; seeds 0–199, 1 → 3; seeds 1000–1199 at `--trial 1`,
+//! 1 → 3 — 9 → 9 in all, successes 3 591 → 3 590. The new contacts were vehicles neither
+//! believed at all, met on other paths: what it gains, chance takes back.
+//!
 //! None of the seeds has this; seed 000's vehicles perceive one another whole.
 //!
 //! **Capacity.** [`KEPT`] unpaired sightings, in a ring: a new one takes the oldest's place.
