@@ -313,6 +313,7 @@ impl BackgroundTask {
             background,
             queues,
             sonar,
+            router,
             ..
         } = self;
         let outbox = &mut sonar.outbox;
@@ -325,7 +326,15 @@ impl BackgroundTask {
             now,
             pose,
             &mut |f| outbox.send(f),
-            &mut |scan, pose| background.on_scanline(scan, pose, &mut outlet, Some(self.evidence)),
+            &mut |scan, pose| {
+                background.on_scanline(
+                    scan,
+                    pose,
+                    &mut outlet,
+                    Some(self.evidence),
+                    Some(&mut **router),
+                )
+            },
         );
         crate::board::active::kick_sonar_tx();
     }

@@ -121,13 +121,15 @@ impl Background {
     }
 
     /// A scanline from a sonar on its own port (the Ping360 driver), taken at `pose`: into the
-    /// extractor and the evidence map `map`, counted as a `Scanline` message's would be.
+    /// extractor, the evidence map `map` and the route layer `router`, as a `Scanline`
+    /// message's would be.
     pub fn on_scanline(
         &mut self,
         scan: &Scanline<'_>,
         pose: Option<Pose>,
         sink: &mut impl BackgroundOutputs,
         map: Option<&EvidenceMap>,
+        router: Option<&mut Router>,
     ) {
         scanline(
             &mut self.extractor,
@@ -137,6 +139,7 @@ impl Background {
             pose,
             sink,
             map,
+            router,
         );
     }
 
@@ -279,7 +282,9 @@ fn count_if(cond: bool, counter: &mut u32) {
 }
 
 /// A scanline into the extractor and the evidence map, at the vehicle pose `pose` (refused and
-/// counted without one: it cannot be placed in the world).
+/// counted without one: it cannot be placed in the world); its features into the route layer
+/// too, where the map does not reach (`crate::route`, "Beyond the map").
+#[allow(clippy::too_many_arguments)]
 fn scanline(
     extractor: &mut Extractor,
     last_bearing: &mut Option<f32>,
@@ -288,6 +293,7 @@ fn scanline(
     pose: Option<Pose>,
     sink: &mut impl BackgroundOutputs,
     map: Option<&EvidenceMap>,
+    mut router: Option<&mut Router>,
 ) {
     let Some(p) = pose else {
         count_if(true, &mut counters.scanlines_rejected);
@@ -297,6 +303,9 @@ fn scanline(
     let mut dropped = 0u32;
     let result = extractor.push_scanline_mapped(scan, p, map, &mut |f| {
         emitted = emitted.saturating_add(1);
+        if let (Some(r), Some(_)) = (router.as_deref_mut(), map) {
+            r.feature(&f);
+        }
         let ok = sink.sighting(Sighting::Feature(f));
         count_if(!ok, &mut dropped);
         ok
@@ -363,7 +372,16 @@ fn dispatch(
             navigation(n.nav, time_ms, pose, sink, map, router);
         }
         Message::Scanline(scan) => {
-            scanline(extractor, last_bearing, counters, &scan, *pose, sink, map);
+            scanline(
+                extractor,
+                last_bearing,
+                counters,
+                &scan,
+                *pose,
+                sink,
+                map,
+                router,
+            );
         }
         Message::Contacts(c) => {
             let time_ms = if lockstep { c.time_ms } else { now_ms };

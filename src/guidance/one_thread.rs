@@ -192,6 +192,7 @@ impl OneThreadRuntime {
             now_ms,
             ping360,
             ping360_out,
+            router,
             ..
         } = self;
         let Some(driver) = ping360.as_mut() else {
@@ -203,7 +204,7 @@ impl OneThreadRuntime {
             *now_ms,
             pose,
             &mut |f| ping360_out.extend_from_slice(f).is_ok(),
-            &mut |scan, pose| background.on_scanline(scan, pose, queues, Some(map)),
+            &mut |scan, pose| background.on_scanline(scan, pose, queues, Some(map), Some(router)),
         );
     }
 

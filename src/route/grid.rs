@@ -6,7 +6,9 @@
 //!   the map is the truth (cells it has cleared are cleared here too, so a mover's wake or a
 //!   false echo does not block a route for ever); outside it this layer remembers what the
 //!   sonar saw after the vehicle has left it behind — the wall of a trap, the far side of a
-//!   harbour.
+//!   harbour — and the sonar's features beyond the window's reach, until the window comes
+//!   over them ([`Grid::mark_sensed`]: inside the window [`Grid::absorb`] makes the map's
+//!   belief the layer's before every plan, so a feature counts only beyond it).
 //! - **known**: still contacts and charted obstacles, rasterised when they arrive; kept until
 //!   the window scrolls past them or the chart is cleared.
 //!
@@ -158,6 +160,15 @@ impl Grid {
     /// `shape` (so a shape thinner than a cell still blocks it). Cost: the cells of the shape's
     /// bounding square.
     pub fn mark(&mut self, shape: &Shape) {
+        self.mark_in(shape, false);
+    }
+
+    /// [`Grid::mark`] in the sensed layer.
+    pub fn mark_sensed(&mut self, shape: &Shape) {
+        self.mark_in(shape, true);
+    }
+
+    fn mark_in(&mut self, shape: &Shape, sensed: bool) {
         if !self.placed {
             return;
         }
@@ -171,7 +182,12 @@ impl Grid {
             for col in clip(i0, self.x0)..=clip(i1, self.x0) {
                 let x = self.center(col as usize, r as usize);
                 if shape.signed_distance(x) <= reach {
-                    if let Some(row) = self.known.get_mut(r as usize) {
+                    let layer = if sensed {
+                        &mut self.sensed
+                    } else {
+                        &mut self.known
+                    };
+                    if let Some(row) = layer.get_mut(r as usize) {
                         *row |= 1u64.checked_shl(col as u32).unwrap_or(0);
                     }
                 }
@@ -307,5 +323,28 @@ mod tests {
         }
         g.absorb(&map);
         assert!(!g.is_occupied((c, r)));
+    }
+
+    #[test]
+    fn a_feature_beyond_the_maps_window_blocks_until_the_map_looks_there() {
+        let map = EvidenceMap::empty();
+        map.follow(Vec2::ZERO);
+        let mut g = Grid::new(2.0);
+        g.follow(Vec2::ZERO);
+        let at = |x: f32| Vec2::new(x, 1.0);
+        let occupied = |g: &Grid, x: f32| g.is_occupied(g.cell_of(at(x)).unwrap());
+        let rock = |x: f32| Shape::circle(at(x), 0.5).unwrap();
+        // The map's window holds 16 m either side: a rock's fit 31 m off counts; one 9 m off
+        // is the map's to believe, and the map has seen nothing there.
+        g.mark_sensed(&rock(31.0));
+        g.mark_sensed(&rock(9.0));
+        g.absorb(&map);
+        assert!(occupied(&g, 31.0));
+        assert!(!occupied(&g, 9.0));
+        // The window comes over the first: the map's belief replaces the fit's.
+        map.follow(at(24.0));
+        g.follow(at(24.0));
+        g.absorb(&map);
+        assert!(!occupied(&g, 31.0));
     }
 }

@@ -8,7 +8,8 @@
 //! (slow, preemptible, never delaying the periodic task): once per `replan_ms` of navigation
 //! time it
 //! 1. moves its [`grid::Grid`] with the vehicle and takes in the evidence map (charted
-//!    obstacles and still contacts are marked as they arrive);
+//!    obstacles and still contacts are marked as they arrive, and the sonar's features where
+//!    the map does not reach: "Beyond the map", below);
 //! 2. spreads a [`wavefront::Wavefront`] from the goal (or the window cell nearest a goal
 //!    beyond the window) through free cells — first with the obstacles grown by 4 m, so
 //!    the route keeps its distance; if that finds no way, or only one much longer than the
@@ -22,6 +23,36 @@
 //! 3. walks down the wavefront from the vehicle and takes the farthest cell of the walk it can
 //!    see in a straight line (`aim`);
 //! 4. publishes a [`Route`] through a lock-free [`RouteSlot`].
+//!
+//! **Beyond the map.** The evidence map's window (64 cells of 0.5 m) reaches 12–20 m ahead
+//! of the vehicle; the sonar reaches farther (the flat-fish's 40 m). Its features out there
+//! reached the planner's obstacle table, but the route took in only the map (and the host's
+//! contacts and charts), so it planned as if the water beyond the window were open: a
+//! flat-fish was routed along a wall towards a gap the wall did not have, or at a rock it had
+//! seen six times from 19 m, until the window came over them 10 m off; by then the way round
+//! was a turn it could not make, its guard stopped it, and it turned on the spot (bench
+//! clutter 4: 45 s of one stop). Each feature that is a stretch of structure — a bar at
+//! least 5 m long ([`STRUCTURE_HALF_M`]) — is now marked in the grid's sensed layer
+//! ([`Router::feature`], [`Grid::mark_sensed`]); inside the window the map's belief replaces
+//! it before every plan ([`Grid::absorb`]), so it counts only where the map does not reach,
+//! and only until the window comes over it. Flat-fish with its recipe (`cargo hil bench
+//! --models flatfish --params hil/recipes/flatfish.toml --seeds 170 [--trial 1]`): trial 0,
+//! 1 783 → 1 832 of 2 040 (70 gained, 21 lost; wall gaps 124 → 154, U-traps and harbours
+//! +6 each), contacts 1 → 1; trial 1, 1 786 → 1 815 (wall gaps 126 → 148), contacts 6 → 6.
+//!
+//! *Not kept:* every feature of two beams or more, circles too (rocks, and movers). Flat-fish
+//! with its recipe, seeds 0–169: 1 783 → 1 849 of 2 040 — clutter 103 → 139 — but contacts
+//! 1 → 9, crossing movers and the other flat-fish head-on, which the route now went round
+//! where they had been, into their way. Leaving out the features on the movers the periodic
+//! task has published to the map (`crate::sonar::Wakes`) made it worse: 14 contacts.
+//!
+//! *Tried and not kept:* clearing those marks where a beam looks through them, so that a
+//! crossing mover's fits do not leave a trail beyond the window until the map comes. Cleared
+//! by every beam (to its nearest echo, or its range), wall gaps fell from 124 to 65 of 170:
+//! a wall at a grazing angle returns nothing, and the beams along it cleared it. Cleared only
+//! by a beam that met something farther on (an echo behind is proof of water in front),
+//! seeds 0–67 of wall gaps, clutter, channels and crossings gave 226 of 272 with 2 contacts,
+//! against 241 and 1 without clearing. A mover's trail out there is left to the map.
 //!
 //! *Tried and not kept:* keeping the last detour's goal-point while it leads off more than 60°
 //! from the new one, is still in sight and its way is at most a quarter (and 4 cells) longer —
@@ -99,7 +130,7 @@ pub use wavefront::Wavefront;
 use crate::field::Shape;
 use crate::math::Vec2;
 use crate::params::Params;
-use crate::sonar::EvidenceMap;
+use crate::sonar::{EvidenceMap, Feature, FeatureKind};
 use wavefront::Cell;
 
 /// Tuning of the route layer.
@@ -203,6 +234,10 @@ const MAX_LAYERS: u32 = (ROUTE_SIDE * ROUTE_SIDE / 2) as u32;
 const MAX_WALK: usize = 2 * ROUTE_SIDE;
 /// Contacts slower than this are marked as still structure, m/s.
 const STILL_SPEED: f32 = 0.1;
+/// A sonar feature counts in the route as structure when it is a bar at least twice this
+/// long, m: a wall's, a pier's or a box's side. A mover is fitted as a circle, or as a bar no
+/// longer than a vehicle (another flat-fish: 3.6 m); module notes, "Beyond the map".
+pub const STRUCTURE_HALF_M: f32 = 2.5;
 
 /// The background's route planner.
 #[derive(Clone, Debug)]
@@ -294,6 +329,20 @@ impl Router {
     pub fn obstacle(&mut self, shape: &Shape, velocity: Vec2) {
         if self.enabled() && velocity.norm2() <= STILL_SPEED * STILL_SPEED {
             self.grid.mark(shape);
+        }
+    }
+
+    /// A feature of the vehicle's own sonar, into the sensed layer if it is a stretch of
+    /// structure ([`STRUCTURE_HALF_M`]; module notes, "Beyond the map").
+    pub fn feature(&mut self, f: &Feature) {
+        let half = match f.kind {
+            FeatureKind::Rectangle { half, .. } => crate::math::max(half.x, half.y),
+            FeatureKind::Circle { .. } => 0.0,
+        };
+        if self.enabled() && !f.faint && half >= STRUCTURE_HALF_M {
+            if let Ok(shape) = f.to_shape() {
+                self.grid.mark_sensed(&shape);
+            }
         }
     }
 
@@ -681,6 +730,36 @@ mod tests {
         });
         off.set_goal(Some(Vec2::new(50.0, 0.0)));
         assert_eq!(off.on_nav(Vec2::ZERO, 0, None), None);
+    }
+
+    #[test]
+    fn a_sonar_feature_counts_as_structure_only_as_a_long_bar() {
+        let at = |x: f32| Vec2::new(x, 1.0);
+        let feature = |x: f32, kind: FeatureKind, faint: bool| Feature {
+            center: at(x),
+            radius: 3.0,
+            kind,
+            confidence: 0.5,
+            time_ms: 0,
+            beams: 6,
+            runs_on: false,
+            faint,
+        };
+        let bar = |half: f32| FeatureKind::Rectangle {
+            half: Vec2::new(half, 0.5),
+            angle: 0.0,
+        };
+        let mut r = Router::new(RouteConfig::default());
+        r.grid.follow(Vec2::ZERO);
+        r.feature(&feature(-30.0, bar(3.0), false));
+        r.feature(&feature(30.0, bar(1.8), false));
+        r.feature(&feature(40.0, FeatureKind::Circle { radius: 3.0 }, false));
+        r.feature(&feature(50.0, bar(3.0), true));
+        let occupied = |x: f32| r.grid.is_occupied(r.grid.cell_of(at(x)).unwrap());
+        assert!(occupied(-30.0), "a wall's stretch");
+        assert!(!occupied(30.0), "a bar as long as a vehicle");
+        assert!(!occupied(40.0), "a circle: a rock, or a mover");
+        assert!(!occupied(50.0), "a faint sighting");
     }
 
     #[test]
