@@ -282,8 +282,8 @@ fn count_if(cond: bool, counter: &mut u32) {
 }
 
 /// A scanline into the extractor and the evidence map, at the vehicle pose `pose` (refused and
-/// counted without one: it cannot be placed in the world); its features into the route layer
-/// too, where the map does not reach (`crate::route`, "Beyond the map").
+/// counted without one: it cannot be placed in the world); its stretches of structure into the
+/// route layer too, for where the map does not reach (`crate::route`, "Beyond the map").
 #[allow(clippy::too_many_arguments)]
 fn scanline(
     extractor: &mut Extractor,
