@@ -124,7 +124,16 @@
 //! For the sonar's tracked movers alone, not the hypotheses, slow tracks or other vehicles:
 //! crossing and head-on, 19 → 14. Nor 0.5 m (2026-12-06, the recipe's 0.65 m/s and its 40 m
 //! sonar): crossing, head-on and formation, seeds 0–169, successes 504 → 501 of 510,
-//! crossing contacts 1 → 3. Anything slower than [`STILL_MPS`] is judged
+//! crossing contacts 1 → 3. Nor going astern (tried 2026-12-06): a craft that stopping
+//! leaves in a rated mover's way, with no motion ahead clear, backing straight out at
+//! 0.3 m/s when that keeps clear of every mover and runs into nothing still (COLREG rule
+//! 8(e), "reversing her means of propulsion"; `v_c` may be negative, the `Command`'s `v_set`
+//! would need a new protocol version). It took the flat-fish out of a 0.54 m/s mover's way
+//! (crossing 154 at `--trial 1`); but the other flat-fish, rated a mover while it turned on
+//! the spot, made it back off in head-on worlds, and the two met later instead (head-on 9 and
+//! 24). Crossing, head-on and formation, seeds 0–169 at trials 0 and 1 and seeds 170–305:
+//! contacts 7 → 7, successes 1 405 → 1 405 of 1 428; NUCLEO flash +300 B. Anything slower
+//! than [`STILL_MPS`] is judged
 //! still, not a mover: a stopped vehicle the host reports drifts at a centimetre a second, and
 //! weighed as a mover among the others, the least bad way out of a mate closing from astern
 //! ran a flat-fish into another mate stopped ahead (formation worlds).
