@@ -56,6 +56,13 @@
 //! seeds 0–67 of wall gaps, clutter, channels and crossings gave 226 of 272 with 2 contacts,
 //! against 241 and 1 without clearing. A mover's trail out there is left to the map.
 //!
+//! *Tried and not kept* (2026-12-06): bringing the map out to the sonar instead, with 1 m
+//! cells (`crate::sonar::EvidenceConfig::cell_m`; a 64 m window). Flat-fish with its recipe,
+//! seeds 0–67: 735 → 742 of 816 (clutter 38 → 51 and boxes 44 → 53 of 68, but crossing
+//! 68 → 63, head-on 68 → 65, channels 66 → 60 and wall gaps 64 → 60), contacts 0 → 6, five
+//! of them a crossing mover running into a flat-fish its guard had stopped; with the guard's
+//! astern tried as well (`crate::guidance::guard`, "Movers"), 739 and 5.
+//!
 //! *Tried and not kept:* keeping the last detour's goal-point while it leads off more than 60°
 //! from the new one, is still in sight and its way is at most a quarter (and 4 cells) longer —
 //! two nearly equal ways round a rock swap places as the map fills in, and a flat-fish sent one
