@@ -45,7 +45,16 @@
 //! with its recipe, seeds 0–169: 1 783 → 1 849 of 2 040 — clutter 103 → 139 — but contacts
 //! 1 → 9, crossing movers and the other flat-fish head-on, which the route now went round
 //! where they had been, into their way. Leaving out the features on the movers the periodic
-//! task has published to the map (`crate::sonar::Wakes`) made it worse: 14 contacts.
+//! task has published to the map (`crate::sonar::Wakes`) made it worse: 14 contacts. Nor
+//! (2026-12-06) marking a compact feature only once a later pass of the head finds it where
+//! an earlier one saw it (within 1 m, 4–30 s before, in a ring of 24 sightings: 296 bytes of
+//! RAM, 32 of flash; a mover at 0.3 m/s goes 1.7 m in the flat-fish's 5.8 s sweep, and a
+//! logged crossing world marked 34 rocks and no mover). Clutter gained (seeds 0–169: 104 → 129
+//! at trial 0, 96 → 130 at trial 1; seeds 170–305, 89 → 107), and boxes; all families,
+//! 1 832 → 1 859, 1 815 → 1 846 and 1 452 → 1 482. But contacts rose 1 → 6, 6 → 11 and
+//! 0 → 9, all with crossing movers and the other flat-fish head-on: the route round the rocks
+//! it sees early changes where it meets the traffic, and that it meets it worse is measured,
+//! not understood.
 //!
 //! *Tried and not kept:* with every feature marked, clearing the marks where a beam looks
 //! through them, so that a crossing mover's fits do not leave a trail beyond the window until
