@@ -225,7 +225,7 @@
 //! and the head-on hypothesis, every table slot a contact seen once ahead and alone, is a
 //! phase of `cargo selftest` (a VideoRay at cruise among 32 of them, 4.7 m apart): the whole
 //! period is at most 497 840 instructions with the evidence map empty (the nearest contact, 3 m
-//! ahead, in close quarters) and 707 800 with its 32 cells, which every "alone" test reads;
+//! ahead, in close quarters) and 707 760 with its 32 cells, which every "alone" test reads;
 //! about 4 ms of the 100 ms period at the STM32G431's 170 MHz.
 //!
 //! **Mates may stop.** A craft that turns slowly also judges the other vehicles the host
@@ -311,9 +311,9 @@
 //! (at most 32 × 32); for each contact seen once ahead, two "alone" tests over the table and
 //! the map's cells. The worst cases: a slow-turning craft in traffic closing from all round,
 //! which searches every heading twice for a clear motion and once more for the least bad
-//! (`cargo selftest`'s flat-fish in traffic, whole period at most 434 400 instructions, the
+//! (`cargo selftest`'s flat-fish in traffic, whole period at most 434 480 instructions, the
 //! planner's step 90 080), and a vehicle among contacts seen once ("Close quarters" above:
-//! 707 800).
+//! 707 760).
 
 use super::tracks::Tracks;
 use crate::math::{cos, max, min, sin, wrap_angle, Vec2};

@@ -249,6 +249,21 @@
 //! does not keep crossing 120's mover: that VideoRay was running from it at 0.7 m/s when it
 //! was made still.
 //!
+//! *A circle wider than a vessel* is structure too (2026-12-06): a wall's run of echoes at a
+//! bend or a grazing angle may be fitted as a circle, and one of 10 m radius, tracked along a
+//! channel's wall at the VideoRay's 1 m/s, was met by its guard as a mover; the evasion ran the
+//! vehicle into the opposite wall, which the map did not yet believe (held-out channel 2065,
+//! a graze of 0.006 m). A circle of radius over `max_mover_half_m` (3 m; another flat-fish is
+//! 1.8 m) now counts as a long bar does. VPF, all families (`cargo hil bench --first-seed
+//! 2000 --seeds 200`, never flown before): 2 392 → 2 395 of 2 400 (3 channels gained, none
+//! lost), contacts 2 → 1 (that one gone); median guard periods per channel run 66.5 → 56.5.
+//! Seeds 0–199: 2 398 → 2 397 (boxes 189, at 3.4 × its reference time before, timed out),
+//! no contact either way; median guard periods per run in channels, wall gaps and serpentines
+//! 62 → 53, 52 → 43 and 45.5 → 37.5. Multipoint and navfn, seeds 0–199: 2 375 → 2 378 and
+//! 2 230 → 2 235 of 2 400, contacts 1 → 1 and 0 → 0 (the same run). The flat-fish with its
+//! recipe, seeds 0–169: 1 832 → 1 828 of 2 040 (10 gained, 14 lost, chance's share: boxes
+//! and clutter at `--trial 1`, 201 → 204 of 340), contacts 1 → 1 (the same run).
+//!
 //! **Extent.** Each track keeps the largest radius of its compact sightings
 //! ([`Tracks::extent`]), which the guard uses for a mover (`crate::guidance::guard`).
 //!
@@ -386,8 +401,9 @@ pub struct TrackConfig {
     pub min_speed_mps: f32,
     /// Speeds are capped here, m/s (≤ `MAX_OBJECT_SPEED`).
     pub max_speed_mps: f32,
-    /// A feature longer than this (the half-length of an elongated fit, m) is structure — a
-    /// wall, a pier — and is never given a velocity, nor counts towards a mover's extent.
+    /// A feature longer than this (the half-length of an elongated fit, or a circle's radius,
+    /// m) is structure — a wall, a pier — and is never given a velocity, nor counts towards a
+    /// mover's extent.
     pub max_mover_half_m: f32,
 }
 
@@ -946,15 +962,15 @@ impl Tracks {
         let Ok(shape) = f.to_shape() else {
             return Admission::Invalid;
         };
-        // A long echo, or one the map's structure runs on from, is a wall seen from a new
-        // place, not a wall on the move — but a track borne out twice in a row and coming on
+        // A long echo (a bar, or a circle wider than a vessel), or one the map's structure
+        // runs on from, is a wall seen from a new place, not a wall on the move — but a track borne out twice in a row and coming on
         // keeps its velocity through the cells it left behind (module notes, "Structure does
         // not move").
         let long = match f.kind {
             crate::sonar::FeatureKind::Rectangle { half, .. } => {
                 crate::math::max(half.x, half.y) > cfg.max_mover_half_m
             }
-            crate::sonar::FeatureKind::Circle { .. } => false,
+            crate::sonar::FeatureKind::Circle { .. } => f.radius > cfg.max_mover_half_m,
         };
         let structure = f.runs_on || long;
         self.tracks
@@ -1386,6 +1402,32 @@ mod tests {
         // the wall's fragment abeam (a grazing wall returns a short run of echoes).
         let (w, _) = run_along_marked(1.0, true);
         assert_eq!(w.obstacles()[0].velocity, Vec2::ZERO);
+    }
+
+    #[test]
+    fn a_circle_wider_than_a_vessel_never_moves() {
+        // A wall's curved run of echoes fitted as a circle 10 m across, abeam of a vehicle
+        // running along it at 1 m/s, sweep after sweep (module notes, "Structure does not
+        // move"); a 2 m target doing the same is a mover.
+        let run_along = |r: f32| {
+            let (cfg, mut w, mut t) = (TrackConfig::default(), World::new(), Tracks::default());
+            for k in 0..6u64 {
+                let x = 9.0 * k as f32;
+                let f = Feature {
+                    time_ms: 9000 * k,
+                    ..feature(x, 5.0 + r, r, 0.9)
+                };
+                t.admit(&cfg, 2.5, &mut w, &f, Vec2::new(x, 0.0));
+            }
+            (w, t)
+        };
+        let (w, t) = run_along(5.0);
+        assert_eq!(w.obstacles().len(), 1, "one track along the wall");
+        assert_eq!(w.obstacles()[0].velocity, Vec2::ZERO);
+        assert_eq!(t.extent(w.obstacles()[0].id), Some(0.0), "no mover extent");
+        let (w, _) = run_along(1.0);
+        let v = w.obstacles()[0].velocity;
+        assert!((v - Vec2::new(1.0, 0.0)).norm() < 0.05, "{v:?}");
     }
 
     #[test]
