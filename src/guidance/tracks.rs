@@ -1374,28 +1374,32 @@ mod tests {
         }
     }
 
+    /// A vehicle running along y = 0 at 1 m/s, with a sighting `at(x, t_ms)` abeam of it every
+    /// 9 s (one sweep's fit of what runs beside it).
+    fn run_along(at: impl Fn(f32, u64) -> Feature) -> (World, Tracks) {
+        let (cfg, mut w, mut t) = (TrackConfig::default(), World::new(), Tracks::default());
+        for k in 0..6u64 {
+            let x = 9.0 * k as f32;
+            t.admit(&cfg, 2.5, &mut w, &at(x, 9000 * k), Vec2::new(x, 0.0));
+        }
+        (w, t)
+    }
+
     #[test]
     fn a_wall_seen_from_new_places_never_moves_and_a_short_box_may() {
-        // A vehicle running along a quay at 1 m/s: each sweep's fit is centred abeam of it.
+        // A vehicle running along a quay: each sweep's fit is centred abeam of it.
         let run_along_marked = |half_len: f32, runs_on: bool| {
-            let (cfg, mut w, mut t) = (TrackConfig::default(), World::new(), Tracks::default());
-            for k in 0..6u64 {
-                let x = 9.0 * k as f32;
-                let f = Feature {
-                    runs_on,
-                    ..wall(x, 5.0, half_len, 9000 * k)
-                };
-                t.admit(&cfg, 2.5, &mut w, &f, Vec2::new(x, 0.0));
-            }
-            (w, t)
+            run_along(|x, t_ms| Feature {
+                runs_on,
+                ..wall(x, 5.0, half_len, t_ms)
+            })
         };
-        let run_along = |half_len: f32| run_along_marked(half_len, false);
-        let (w, t) = run_along(6.0);
+        let (w, t) = run_along_marked(6.0, false);
         assert_eq!(w.obstacles().len(), 1, "one track along the quay");
         assert_eq!(w.obstacles()[0].velocity, Vec2::ZERO);
         assert_eq!(t.extent(w.obstacles()[0].id), Some(0.0), "no mover extent");
         // A 2 m box doing the same is a mover.
-        let (w, _) = run_along(1.0);
+        let (w, _) = run_along_marked(1.0, false);
         let v = w.obstacles()[0].velocity;
         assert!((v - Vec2::new(1.0, 0.0)).norm() < 0.05, "{v:?}");
         // ... unless the evidence map's wall runs on through each of its sightings: then it is
@@ -1409,23 +1413,17 @@ mod tests {
         // A wall's curved run of echoes fitted as a circle 10 m across, abeam of a vehicle
         // running along it at 1 m/s, sweep after sweep (module notes, "Structure does not
         // move"); a 2 m target doing the same is a mover.
-        let run_along = |r: f32| {
-            let (cfg, mut w, mut t) = (TrackConfig::default(), World::new(), Tracks::default());
-            for k in 0..6u64 {
-                let x = 9.0 * k as f32;
-                let f = Feature {
-                    time_ms: 9000 * k,
-                    ..feature(x, 5.0 + r, r, 0.9)
-                };
-                t.admit(&cfg, 2.5, &mut w, &f, Vec2::new(x, 0.0));
-            }
-            (w, t)
+        let circles = |r: f32| {
+            run_along(|x, t_ms| Feature {
+                time_ms: t_ms,
+                ..feature(x, 5.0 + r, r, 0.9)
+            })
         };
-        let (w, t) = run_along(5.0);
+        let (w, t) = circles(5.0);
         assert_eq!(w.obstacles().len(), 1, "one track along the wall");
         assert_eq!(w.obstacles()[0].velocity, Vec2::ZERO);
         assert_eq!(t.extent(w.obstacles()[0].id), Some(0.0), "no mover extent");
-        let (w, _) = run_along(1.0);
+        let (w, _) = circles(1.0);
         let v = w.obstacles()[0].velocity;
         assert!((v - Vec2::new(1.0, 0.0)).norm() < 0.05, "{v:?}");
     }
