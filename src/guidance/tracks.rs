@@ -963,9 +963,9 @@ impl Tracks {
             return Admission::Invalid;
         };
         // A long echo (a bar, or a circle wider than a vessel), or one the map's structure
-        // runs on from, is a wall seen from a new place, not a wall on the move — but a track borne out twice in a row and coming on
-        // keeps its velocity through the cells it left behind (module notes, "Structure does
-        // not move").
+        // runs on from, is a wall seen from a new place, not a wall on the move — but a track
+        // borne out twice in a row and coming on keeps its velocity through the cells it left
+        // behind (module notes, "Structure does not move").
         let long = match f.kind {
             crate::sonar::FeatureKind::Rectangle { half, .. } => {
                 crate::math::max(half.x, half.y) > cfg.max_mover_half_m
