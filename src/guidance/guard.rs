@@ -171,6 +171,11 @@
 //! and two of them closing head-on at 0.75 m/s never took each other for vehicles, and met
 //! (head-on seed 83). To a VideoRay the rule takes another VideoRay fitted as a bar under
 //! 0.5 m: 14 of 3 600 crossing and head-on runs (seeds 0–599 × 3) change, contacts 55 → 56.
+//! A circle is taken whatever its size; taking only one the tracker sized as a mover (not
+//! wider than a vessel, nor a fragment the map's structure runs on through; tried
+//! 2026-12-06) changed nothing that counts: VPF, crossing, head-on, channels, wall gaps and
+//! serpentines, seeds 0–199, 999 → 998 of 1 000, no contact either way, the same median
+//! guard periods.
 //!
 //! *Measured and left as it is* (crossing and head-on worlds × 3 strategies, seeds 0–599,
 //! 55 contacts in 3 600 runs as it was then): the meeting course is looked for within
