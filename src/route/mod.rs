@@ -54,7 +54,11 @@
 //! 1 832 → 1 859, 1 815 → 1 846 and 1 452 → 1 482. But contacts rose 1 → 6, 6 → 11 and
 //! 0 → 9, all with crossing movers and the other flat-fish head-on: the route round the rocks
 //! it sees early changes where it meets the traffic, and that it meets it worse is measured,
-//! not understood.
+//! not understood. Circles alone (2026-12-06): crossing, head-on and formation, seeds 0–169,
+//! contacts 1 → 7; in crossing 46 every one of its 52 marks was one of the world's five
+//! rocks, and the new contact was a 0.33 m/s mover that the tracker held as a rock's track
+//! while it passed behind the rock, and that came out of it 2.7 m from a flat-fish its guard
+//! had stopped: the marks are right; the traffic they lead it into is the tracker's problem.
 //!
 //! *Tried and not kept:* with every feature marked, clearing the marks where a beam looks
 //! through them, so that a crossing mover's fits do not leave a trail beyond the window until
