@@ -225,13 +225,28 @@
 //! new), successes 2 391 → 2 393 of 2 400; VPF, all families, seeds 0–199: 2 398 → 2 398,
 //! 0 → 0, row for row. The contacts left are vehicles that saw each other within 2 m and
 //! turned into each other while stopping (head-on 292), or that neither saw before they
-//! touched (head-on 248: converging side by side at 1 m/s, both in transit). The guard runs
-//! after the planner's step, outside its 100 000-instruction budget. Its worst case for this
-//! and the head-on hypothesis, every table slot a contact seen once ahead and alone, is a
-//! phase of `cargo selftest` (a VideoRay at cruise among 32 of them, 4.7 m apart): the whole
-//! period is at most 497 840 instructions with the evidence map empty (the nearest contact, 3 m
-//! ahead, in close quarters) and 707 760 with its 32 cells, which every "alone" test reads;
-//! about 4 ms of the 100 ms period at the STM32G431's 170 MHz.
+//! touched (head-on 248: converging side by side at 1 m/s, both in transit).
+//!
+//! *A vessel that was closing* is judged the same way, from where it was last seen: a sonar
+//! mover no larger than another VideoRay whose velocity a sighting has borne out
+//! ([`Tracks::vessel`]), that was coming towards this vehicle and stands alone. Its own guard
+//! may have stopped and turned it since. In held-out head-on 2000 each VideoRay had rated the
+//! other; one's guard stopped it 2 m off and it turned onto the other's course, while the
+//! other, carrying it on at its last velocity, now behind it, steered into it. The simulated
+//! sonar's spurious echoes pair into phantom movers of that size ("Faint pairs" in
+//! `crate::guidance::tracks`), which nothing bears out: met too, they raised the median
+//! guard periods per run by a sixth in every family. VPF, seeds 2000–2199 (`cargo hil bench
+//! --first-seed 2000 --seeds 200`): 2 395 → 2 396 of 2 400, contacts 1 → 0; seeds 0–199 and
+//! 1000–1199 run for run the same (median guard periods per run: crossing 24 → 26.5,
+//! head-on 37.5 → 40.5); multipoint and navfn, seeds 0–199, 4 613 → 4 612 (a navfn wall gap
+//! timed out), contacts 1 → 1. Not for a craft that turns slowly, as above.
+//!
+//! The guard runs after the planner's step, outside its 100 000-instruction budget. Its worst
+//! case for this and the head-on hypothesis, every table slot a contact seen once ahead and
+//! alone, is a phase of `cargo selftest` (a VideoRay at cruise among 32 of them, 4.7 m apart):
+//! the whole period is at most 505 680 instructions with the evidence map empty (the nearest
+//! contact, 3 m ahead, in close quarters) and 720 240 with its 32 cells, which every "alone"
+//! test reads; about 4 ms of the 100 ms period at the STM32G431's 170 MHz.
 //!
 //! **Mates may stop.** A craft that turns slowly also judges the other vehicles the host
 //! reports where they are now, as if they stopped, besides on their closest approach: each
@@ -316,9 +331,9 @@
 //! (at most 32 × 32); for each contact seen once ahead, two "alone" tests over the table and
 //! the map's cells. The worst cases: a slow-turning craft in traffic closing from all round,
 //! which searches every heading twice for a clear motion and once more for the least bad
-//! (`cargo selftest`'s flat-fish in traffic, whole period at most 434 480 instructions, the
+//! (`cargo selftest`'s flat-fish in traffic, whole period at most 435 080 instructions, the
 //! planner's step 90 080), and a vehicle among contacts seen once ("Close quarters" above:
-//! 707 760).
+//! 720 240).
 
 use super::tracks::Tracks;
 use crate::math::{cos, max, min, sin, wrap_angle, Vec2};
@@ -577,7 +592,8 @@ impl Believed<'_> {
         // Shapes: sampled along the segment, only those that can reach it.
         let samples = (len / SAMPLE_M) as u32 + 1;
         let judged = |(i, o): &(usize, &crate::world::Obstacle)| {
-            still(o.velocity) && (!w.left_to_map(o) || (self.unmapped | self.close) & bit(*i) != 0)
+            let close = self.close & bit(*i) != 0;
+            close || still(o.velocity) && (!w.left_to_map(o) || self.unmapped & bit(*i) != 0)
         };
         for (i, o) in w.obstacles().iter().enumerate().filter(judged) {
             let grown = self.drift(i, o);
@@ -1039,6 +1055,19 @@ pub fn check(
                 velocity,
                 radius: extent,
             });
+        }
+    }
+    // A vessel that was closing may have turned or stopped since its last sighting, its own
+    // guard acting (module notes, "Close quarters").
+    for (i, o) in (world.obstacles().iter().enumerate())
+        .filter(|(_, o)| drift_mps > 0.0 && o.origin == Origin::Sonar && !still(o.velocity))
+    {
+        let d = o.shape.center() - p;
+        let closing = o.velocity.dot(d) < 0.0;
+        let reach = d.norm() - extent(o) - drifted(drift_mps, age(o.seen_ms));
+        let vessel = || tracks.vessel(o.id) && alone(world, o, extent(o), HEAD_ON_ALONE_M, r_map);
+        if closing && reach <= near && vessel() {
+            close |= bit(i);
         }
     }
     // Slow tracks: the guard meets a sonar track on the velocity its sightings suggest before
@@ -1864,6 +1893,46 @@ mod tests {
         };
         let (out, v) = check(&g, &slow, 12_000, &moving, &w, &once, None, towards, 1.0);
         assert_eq!(v, Verdict::Clear, "{out:?}");
+    }
+
+    #[test]
+    fn a_vessel_that_was_closing_may_have_turned_since_it_was_last_seen() {
+        // Another VideoRay, seen at 1, 5 and 10 s, crossing westward at 1 m/s 2.5 m to port.
+        // Just seen, heading for where it was is clear: it will have gone on. Four seconds
+        // unseen, it may have stopped and turned (its own guard acting): the same heading is
+        // not. The same track keeping pace with this vehicle, a rock-sized mover, or one seen
+        // twice whose velocity nothing has borne out leaves it clear.
+        use crate::sonar::FeatureKind;
+        let (g, p) = (GuardConfig::default(), Params::default());
+        let moving = nav(Vec2::new(1.0, 0.0));
+        let towards = cmd(crate::math::atan2(2.5, 3.0), 1.0);
+        let cfg = crate::guidance::TrackConfig::default();
+        let track = |xs: &[(f32, u64)], radius: f32| {
+            let (mut w, mut tracks) = (World::new(), Tracks::default());
+            for &(x, t) in xs {
+                let f = sighting(Vec2::new(x, 2.5), FeatureKind::Circle { radius }, t);
+                tracks.admit(&cfg, 2.5, &mut w, &f, Vec2::ZERO);
+            }
+            (w, tracks)
+        };
+        let at = |now_ms, (w, tracks): &(World, Tracks)| {
+            check(&g, &p, now_ms, &moving, w, tracks, None, towards, 1.0)
+        };
+        let westward = [(12.0, 1_000), (8.0, 5_000), (3.0, 10_000)];
+        let closing = track(&westward, 0.2);
+        assert!(closing.0.obstacles()[0].velocity.x < -0.9);
+        assert_eq!(at(10_000, &closing).1, Verdict::Clear);
+        let (out, v) = at(14_000, &closing);
+        assert_eq!(v, Verdict::Turned, "{out:?}");
+        assert!(
+            (out.psi_set - towards.psi_set).abs() > 0.2,
+            "{}",
+            out.psi_set
+        );
+        let pacing = [(-6.0, 1_000), (-2.0, 5_000), (3.0, 10_000)];
+        assert_eq!(at(14_000, &track(&pacing, 0.2)).1, Verdict::Clear);
+        assert_eq!(at(14_000, &track(&westward, 1.0)).1, Verdict::Clear);
+        assert_eq!(at(14_000, &track(&westward[1..], 0.2)).1, Verdict::Clear);
     }
 
     #[test]

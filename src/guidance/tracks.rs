@@ -679,6 +679,17 @@ impl Tracks {
         self.tracks.iter().any(|t| t.id == id && t.largest_dm > 0)
     }
 
+    /// Whether obstacle `id` is a sonar track of another vessel under way: no sighting of it
+    /// larger than another VideoRay's fits ([`HASTY_DM`]), and its velocity borne out by a
+    /// sighting where it predicted (`steady`; the simulated sonar's spurious echoes pair into
+    /// phantom movers of that size, which none bears out). Such a vessel manoeuvres, and its
+    /// own guard turns and stops it when it meets this one (`crate::guidance::guard`, "Close
+    /// quarters").
+    pub fn vessel(&self, id: u16) -> bool {
+        (self.tracks.iter())
+            .any(|t| t.id == id && t.steady > 0 && (1..=HASTY_DM).contains(&t.largest_dm))
+    }
+
     /// Whether obstacle `id` is a sonar track seen more than once.
     pub fn seen_again(&self, id: u16) -> bool {
         self.tracks.iter().any(|t| t.id == id && t.hits >= 2)
