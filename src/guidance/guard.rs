@@ -507,9 +507,9 @@ struct Believed<'a> {
     /// Radius of the disc that covers a map cell, m: a surface anywhere in a believed cell is
     /// within it, so the check errs on the safe side of the grid's resolution.
     r_map: f32,
-    /// The contacts seen once that may be vehicles close by (module notes, "Close quarters"):
-    /// bit i for `world.obstacles()[i]`, judged as their shape grown by how far they may have
-    /// come since ([`Believed::drift`]).
+    /// The contacts seen once that may be vehicles close by, and the vessels that were closing
+    /// (module notes, "Close quarters"): bit i for `world.obstacles()[i]`, judged as their
+    /// shape grown by how far they may have come since ([`Believed::drift`]).
     close: u32,
     /// Now, ms, and the speed the `close` contacts may have come at since their sighting, m/s.
     now_ms: u64,
