@@ -331,7 +331,7 @@
 //! (at most 32 × 32); for each contact seen once ahead, two "alone" tests over the table and
 //! the map's cells. The worst cases: a slow-turning craft in traffic closing from all round,
 //! which searches every heading twice for a clear motion and once more for the least bad
-//! (`cargo selftest`'s flat-fish in traffic, whole period at most 435 080 instructions, the
+//! (`cargo selftest`'s flat-fish in traffic, whole period at most 435 120 instructions, the
 //! planner's step 90 080), and a vehicle among contacts seen once ("Close quarters" above:
 //! 720 240).
 

@@ -785,14 +785,15 @@ impl Tracks {
         let k = self.tracks.iter().position(|t| {
             let jump = (t.center - t.first).norm();
             let from_first = (f.center - t.first).norm();
-            let since = gap_s(t) + f.time_ms.saturating_sub(t.time_ms) as f32 * 1e-3;
+            let gap = gap_s(t);
+            let since = gap + f.time_ms.saturating_sub(t.time_ms) as f32 * 1e-3;
             let gate = crate::math::max(t.extent_m(), f.radius)
                 + cfg.gate_m
                 + cfg.gate_speed_mps * min(since, UNRATED_GAP_S);
             t.rated
                 && t.hits == 2
                 && t.largest_dm > 0
-                && gap_s(t) <= MAX_GAP_S
+                && gap <= MAX_GAP_S
                 && f.time_ms < t.time_ms.saturating_add(cfg.revisit_ms)
                 && from_first < jump
                 && from_first <= gate
