@@ -138,6 +138,22 @@
 //! weighed as a mover among the others, the least bad way out of a mate closing from astern
 //! ran a flat-fish into another mate stopped ahead (formation worlds).
 //!
+//! **A close call.** A craft that turns slowly and would pass a mover less than
+//! [`CLOSE_CALL_M`] clear of its hull — on the command, or on the nearest clear turn — stops
+//! instead when stopping keeps it [`GAIN_M`] farther off, both within the horizon and after
+//! it ([`Believed::passing`]: stopped, it waits for the mover to pass however long that takes,
+//! and one coming at where it stops never does). In flat-fish crossing 72 (`--trial 1`) a
+//! mover faster than the craft crossed from its starboard side; the field turned the craft to
+//! port, along the mover's course, and the guard kept the nearest clear heading to that. The
+//! margin of going on was 0.2–0.7 m and shrank each second, until nothing was clear; stopping
+//! 6 s before would have kept 0.9–1.7 m. That run keeps its contact: its mover came at where
+//! the craft would have stopped. *Tried first:* the same without the wait for the mover to
+//! pass. Two flat-fish meeting head-on then stopped in turn as each came on, stopping only
+//! putting the other's arrival beyond the horizon, and they met (head-on 31, at trials 0 and
+//! 1). The flat-fish with its recipe, crossing, head-on and formation, seeds 0–169 at trials
+//! 0–3 (`cargo hil bench --models flatfish --params hil/recipes/flatfish.toml --families
+//! crossing,head_on,formation --seeds 170 --trial K`): contacts 12 → 5 (10 gone, 3 new).
+//!
 //! **Head-on.** A sonar contact seen once has no velocity yet, and the next look is a sweep
 //! (9 s) away. Another vehicle meeting this one head-on closes at twice the cruise speed: seen
 //! at 10–15 m, it arrives before the second look, and both vehicles, each believing the other
@@ -383,6 +399,12 @@ pub const TRACK_STEPS: usize = 15;
 /// How much farther from a mover than stopping keeps a motion must keep a slow-turning craft
 /// before it takes that motion when nothing is clear, m (module notes, "Movers").
 pub const GAIN_M: f32 = 0.5;
+/// A motion a slow-turning craft would take that passes a mover closer than this beyond the
+/// hull, m, while stopping keeps [`GAIN_M`] farther off, is a close call: it stops instead
+/// (module notes, "A close call").
+pub const CLOSE_CALL_M: f32 = 1.0;
+/// The step of [`Helm::course`] at [`CPA_HORIZON_S`].
+const STOPPED: usize = (CPA_HORIZON_S * TRACK_STEPS as f32 / SURE_HORIZON_S) as usize;
 /// Slower than this, m/s, an obstacle or vehicle is judged still: it moves less than 0.5 m
 /// over [`CPA_HORIZON_S`], and a way out of the movers must not run into it (module notes,
 /// "Movers"). The sonar tracker gives no velocity below 0.3 m/s; contacts from the host carry
@@ -659,6 +681,20 @@ impl Believed<'_> {
                 0.0
             };
             min(worst, self.clear_of(m, p, (d + w * t).norm() - m.radius))
+        })
+    }
+
+    /// How far, at the worst, the movers pass clear of a vehicle stopped at `at` from `after_s`
+    /// s on, however long they take to pass (no horizon: one coming straight at it does not
+    /// pass), m.
+    fn passing(&self, at: Vec2, after_s: f32) -> f32 {
+        self.movers.iter().fold(f32::INFINITY, |worst, m| {
+            let d = m.center + m.velocity * after_s - at;
+            let t = max(0.0, -d.dot(m.velocity) / max(m.velocity.norm2(), 1e-9));
+            min(
+                worst,
+                self.clear_of(m, at, (d + m.velocity * t).norm() - m.radius),
+            )
         })
     }
 
@@ -1198,7 +1234,32 @@ pub fn check(
     let v = map.map_or(planned, |m| {
         min(planned, lookout(cfg, prm, b.hull, m, p, going))
     });
-    if !helm.blocked(&b, cmd.psi_set, v) {
+    // 3. Else the nearest clear heading at the same speed.
+    let clear = !helm.blocked(&b, cmd.psi_set, v);
+    let heading = if clear {
+        Some(cmd.psi_set)
+    } else {
+        nearest_clear(cfg, &helm, &b, cmd.psi_set, v, cfg.max_turn_rad)
+    };
+    if let Some(a) = heading {
+        // A close call: a slow-turning craft does not pass a mover close when stopping keeps
+        // well clear of it (module notes).
+        let stopping = || {
+            let at = helm.course(cmd.psi_set, 0.0)[STOPPED];
+            min(stop_margin, b.passing(at, CPA_HORIZON_S))
+        };
+        if helm.turns_slowly()
+            && can_stop
+            && helm.mover_margin(&b, a, v) < min(CLOSE_CALL_M, stopping() - GAIN_M)
+        {
+            return (
+                with_motion(cmd, cmd.psi_set, 0.0, Verdict::Stopped),
+                Verdict::Stopped,
+            );
+        }
+        if !clear {
+            return (with_motion(cmd, a, v, Verdict::Turned), Verdict::Turned);
+        }
         if v < planned {
             return (
                 with_motion(cmd, cmd.psi_set, v, Verdict::Slowed),
@@ -1206,10 +1267,6 @@ pub fn check(
             );
         }
         return (cmd, Verdict::Clear);
-    }
-    // 3. The nearest clear heading at the same speed.
-    if let Some(a) = nearest_clear(cfg, &helm, &b, cmd.psi_set, v, cfg.max_turn_rad) {
-        return (with_motion(cmd, a, v, Verdict::Turned), Verdict::Turned);
     }
     // 4. Slower on the planned heading.
     let mut s = 0.5 * v;
@@ -2252,9 +2309,9 @@ mod tests {
     #[test]
     fn a_slow_turning_craft_meets_a_reported_mover_over_a_longer_horizon_than_a_sonar_track() {
         // The flat-fish heads east at 0.65 m/s; a mover crossing north at 1 m/s reaches its
-        // track 13.5 s from now, just where it will be. Within 10 s they stay 3.8 m apart, more
-        // than hull and mover; a contact the host reports is judged over 15 s, a sonar track
-        // (whose velocity is a few fits old) over 10.
+        // track 14.5 s from now, just where it will be. Within 10 s they stay 5.3 m apart, more
+        // than hull and mover and a close call ([`CLOSE_CALL_M`]); a contact the host reports
+        // is judged over 15 s, a sonar track (whose velocity is a few fits old) over 10.
         let prm = Params {
             v_max: 0.65,
             ..flatfish()
@@ -2264,7 +2321,7 @@ mod tests {
             let mut w = World::new();
             let o = Obstacle::new(
                 1,
-                Shape::circle(Vec2::new(8.8, -13.5), 1.0).unwrap(),
+                Shape::circle(Vec2::new(9.4, -14.5), 1.0).unwrap(),
                 2.5,
                 origin,
                 0,
@@ -2276,6 +2333,31 @@ mod tests {
         };
         assert_eq!(verdict(Origin::Sonar), Verdict::Clear);
         assert_ne!(verdict(Origin::Sensed), Verdict::Clear);
+    }
+
+    #[test]
+    fn a_slow_turning_craft_stops_rather_than_pass_close_ahead_of_a_crossing_mover() {
+        // The flat-fish heads east at 0.65 m/s. A sonar mover crossing north 9 m ahead passes
+        // in front of it by less than a metre beyond the hull if it goes on, by 3.6 m if it
+        // stops: it stops. A slower one, further off, would pass astern of it going on but
+        // run into it stopped, however long it took: it goes on.
+        let prm = Params {
+            v_max: 0.65,
+            ..flatfish()
+        };
+        let g = GuardConfig::default();
+        let verdict = |at: Vec2, v: Vec2| {
+            let w = mover(at, v, 0);
+            under_way(&g, &prm, &w, Vec2::new(0.65, 0.0), cmd(0.0, 0.65))
+        };
+        assert_eq!(
+            verdict(Vec2::new(9.0, -7.0), Vec2::new(0.0, 1.0)),
+            Verdict::Stopped
+        );
+        assert_eq!(
+            verdict(Vec2::new(5.0, -11.0), Vec2::new(0.0, 0.8)),
+            Verdict::Clear
+        );
     }
 
     #[test]
