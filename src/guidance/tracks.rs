@@ -709,6 +709,11 @@ impl Tracks {
             .any(|t| t.id == id && t.steady > 0 && (1..=HASTY_DM).contains(&t.largest_dm))
     }
 
+    /// Whether obstacle `id` is a sonar track whose velocity a sighting has borne out.
+    pub fn borne_out(&self, id: u16) -> bool {
+        self.tracks.iter().any(|t| t.id == id && t.steady > 0)
+    }
+
     /// Whether obstacle `id` is a sonar track seen more than once.
     pub fn seen_again(&self, id: u16) -> bool {
         self.tracks.iter().any(|t| t.id == id && t.hits >= 2)
