@@ -927,15 +927,7 @@ impl Helm<'_> {
 
     /// Whether the command (`psi`, `v`) is blocked ([`Believed::blocked`]).
     fn blocked(&self, b: &Believed, psi: f32, v: f32) -> bool {
-        if !self.turns_slowly() {
-            return b.blocked(
-                self.p,
-                Vec2::from_angle(psi),
-                reach(v, self.prm, self.cfg),
-                v,
-            );
-        }
-        b.blocked_path(&self.commanded(psi, v)) || self.mover_margin(b, psi, v) < 0.0
+        self.blocked_still(b, psi, v) || self.mover_margin(b, psi, v) < 0.0
     }
 
     /// Whether the command (`psi`, `v`) is blocked by what stands still.

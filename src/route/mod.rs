@@ -17,9 +17,11 @@
 //!    as the hull (none for a small craft; a disc's octagon for a larger one, [`grow`]), and
 //!    takes the widest pass whose way is at most a quarter longer than the shortest
 //!    ([`acceptable`]); a large craft whose hull's pass finds none gets one more, with the
-//!    obstacles as they are (`Router::bare_pass`). Keeping 4 m off on 2 m cells closes
-//!    every gap under about 10 m; a waypoint 26 m away behind a 5 m gap between two rocks
-//!    was once reached after a 300 m tour of the field (`waypoints_through_clutter.toml`);
+//!    obstacles as they are, and then any craft one that also steps through the cells'
+//!    corners (`Router::bare_pass`; [`wavefront`], "Diagonal steps"). Keeping 4 m off on
+//!    2 m cells closes every gap under about 10 m; a waypoint 26 m away behind a 5 m gap
+//!    between two rocks was once reached after a 300 m tour of the field
+//!    (`waypoints_through_clutter.toml`);
 //! 3. walks down the wavefront from the vehicle and takes the farthest cell of the walk it can
 //!    see in a straight line (`aim`);
 //! 4. publishes a [`Route`] through a lock-free [`RouteSlot`].
@@ -461,25 +463,32 @@ impl Router {
         }
     }
 
-    /// The last resort of a large craft whose hull's pass found no way: the obstacles as they
-    /// are, as a small craft's last pass has them (for which there is nothing more to try).
-    /// On 2 m cells the hull's growth closes a channel a flat-fish fits that runs at 45° to
-    /// the grid (9 m between the walls' centres): routed nowhere, it was left to the field,
-    /// which turned it at the mouth towards the goal beyond a wall and held it there for the
-    /// whole run (bench channel seed 18). The guard still keeps the hull off what is believed;
-    /// a way too narrow for it ends where the guard stops it, as no way did.
+    /// The last resort when no pass found a way: the obstacles as they are, as a small craft's
+    /// last pass has them, for a large craft whose hull's pass found none; then, for any
+    /// craft, the same through the cells' corners too. On 2 m cells the hull's growth closes a
+    /// channel a flat-fish fits that runs at 45° to the grid (9 m between the walls' centres):
+    /// routed nowhere, it was left to the field, which turned it at the mouth towards the
+    /// goal beyond a wall and held it there for the whole run (bench channel seed 18). A 5 m
+    /// channel at 45° is closed for a VideoRay by the map's cells along its walls, bar a
+    /// staircase of cells that touch at their corners: it turned back at the mouth, or
+    /// stopped at the bend for the rest of the run (held-out channels 4013 and 4186). The
+    /// guard still keeps the hull off what is believed; a way too narrow for it ends where
+    /// the guard stops it, as no way did.
     fn bare_pass(&mut self, start: Cell, source: Cell) -> bool {
-        if self.narrowest == 0 {
-            return false;
+        if self.narrowest > 0 && self.spread(0, start, source).is_some() {
+            return true;
         }
-        self.spread(0, start, source).is_some()
+        self.fill_blocked(0, start, source);
+        let ends = (source, start);
+        (self.wave.spread(&self.blocked, ends, MAX_LAYERS, true)).is_some()
     }
 
     /// One pass: `blocked` filled with obstacles grown by `growth` cells and the wavefront
     /// spread through it; the way's length in steps, if there is one.
     fn spread(&mut self, growth: u8, start: Cell, source: Cell) -> Option<u32> {
         self.fill_blocked(growth, start, source);
-        self.wave.spread(&self.blocked, source, start, MAX_LAYERS)
+        self.wave
+            .spread(&self.blocked, (source, start), MAX_LAYERS, false)
     }
 
     /// Walks down from `start` (at most [`MAX_WALK`] steps) and returns the farthest cell of
@@ -835,9 +844,18 @@ mod tests {
         let axis = Vec2::from_angle(crate::math::PI / 4.0);
         assert!(route.aim.dot(axis) > 5.0, "{route:?}");
         assert!(route.aim.cross(axis).abs() < 4.65, "{route:?}");
-        // A small craft's last pass is already the bare one: nothing more to try.
-        let mut r = Router::new(RouteConfig::default());
-        r.set_params(&Params::default());
-        assert!(!r.bare_pass((0, 0), (1, 1)));
+    }
+
+    #[test]
+    fn a_five_metre_channel_at_45_degrees_is_routed_up_through_the_corners() {
+        // 5 m of water between walls 1 m thick: on 2 m cells the walls leave only cells that
+        // touch at their corners. A VideoRay's way goes up the channel through them.
+        for apart in [6.0, 6.5] {
+            let route = channel_at_45_degrees(0.5, apart);
+            assert_ne!(route.status, RouteStatus::Blocked, "{apart} m: {route:?}");
+            let axis = Vec2::from_angle(crate::math::PI / 4.0);
+            assert!(route.aim.dot(axis) > 2.0, "{apart} m: {route:?}");
+            assert!(route.aim.cross(axis).abs() < 2.5, "{apart} m: {route:?}");
+        }
     }
 }

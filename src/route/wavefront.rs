@@ -1,5 +1,6 @@
 //! The wavefront: a discrete navigation function on the route grid, spread from the goal
-//! through free cells one layer per step (4-neighbour breadth-first search).
+//! through free cells one layer per step (4-neighbour breadth-first search; 8-neighbour as the
+//! route's last resort, "Diagonal steps" below).
 //!
 //! Seed 004 (Rimon–Koditschek) asks for a potential with no local minimum but the goal; on a
 //! grid the wavefront distance is exactly that — every reachable cell but the goal has a
@@ -11,6 +12,12 @@
 //! "label − 1 mod 3". A layer's frontier is the cells labelled with its distance mod 3: older
 //! cells with the same label have no unreached neighbour left, so they add nothing. Each layer
 //! is a few word operations per row.
+//!
+//! **Diagonal steps.** The route's last resort ([`Wavefront::spread`] with `diagonal`) also
+//! steps to the four corner neighbours, between two blocked cells: a 5 m channel at 45° to
+//! the grid, its walls' map cells coarsened to 2 m, leaves only a staircase of cells that
+//! touch at their corners (the 8-neighbour distance differs by one between neighbours too,
+//! so the labels mod 3 still hold).
 
 use super::grid::{Rows, ROUTE_SIDE};
 
@@ -19,6 +26,8 @@ use super::grid::{Rows, ROUTE_SIDE};
 pub struct Wavefront {
     lo: Rows,
     hi: Rows,
+    /// Spread through corners too (module notes, "Diagonal steps").
+    diagonal: bool,
 }
 
 /// A window cell: (column, row).
@@ -40,6 +49,7 @@ impl Wavefront {
         Wavefront {
             lo: [u64::MAX; ROUTE_SIDE],
             hi: [u64::MAX; ROUTE_SIDE],
+            diagonal: false,
         }
     }
 
@@ -78,17 +88,20 @@ impl Wavefront {
     }
 
     /// Spreads from `source` through cells not set in `blocked` (the source itself may be
-    /// blocked) until `target` is reached, at most `max_layers` layers. Returns the target's
-    /// distance in steps, `None` if it was not reached.
+    /// blocked) until `target` is reached, at most `max_layers` layers; through the corners
+    /// too if `diagonal`. Returns the target's distance in steps, `None` if it was not
+    /// reached.
     pub fn spread(
         &mut self,
         blocked: &Rows,
-        source: Cell,
-        target: Cell,
+        (source, target): (Cell, Cell),
         max_layers: u32,
+        diagonal: bool,
     ) -> Option<u32> {
         self.lo = [u64::MAX; ROUTE_SIDE];
         self.hi = [u64::MAX; ROUTE_SIDE];
+        self.diagonal = diagonal;
+        let beside = |f: u64| if diagonal { f | (f << 1) | (f >> 1) } else { f };
         self.set(source.1, bit(source.0), 0);
         for layer in 0..max_layers {
             if self.label(target).is_some() {
@@ -98,7 +111,8 @@ impl Wavefront {
             let mut grew = false;
             for r in 0..ROUTE_SIDE {
                 let f = self.labelled(Some(r), l);
-                let around = self.labelled(r.checked_sub(1), l) | self.labelled(Some(r + 1), l);
+                let around =
+                    beside(self.labelled(r.checked_sub(1), l) | self.labelled(Some(r + 1), l));
                 let (lo, hi) = self.row(r);
                 let free = !blocked.get(r).copied().unwrap_or(u64::MAX);
                 let new = (f | (f << 1) | (f >> 1) | around) & free & lo & hi;
@@ -126,11 +140,22 @@ impl Wavefront {
             let dy = b as i32 - toward.1 as i32;
             dx * dx + dy * dy
         };
+        let corner = |dc: usize, dr: usize| {
+            let n = (
+                c.checked_add(dc)?.checked_sub(1)?,
+                r.checked_add(dr)?.checked_sub(1)?,
+            );
+            Some(n).filter(|_| self.diagonal)
+        };
         [
             c.checked_sub(1).map(|c| (c, r)),
             Some((c + 1, r)),
             r.checked_sub(1).map(|r| (c, r)),
             Some((c, r + 1)),
+            corner(0, 0),
+            corner(2, 0),
+            corner(0, 2),
+            corner(2, 2),
         ]
         .into_iter()
         .flatten()
@@ -156,7 +181,10 @@ mod tests {
     fn the_way_down_goes_round_the_wall_and_has_no_minimum() {
         let mut w = Wavefront::new();
         let (source, target) = ((20, 5), (2, 5));
-        assert_eq!(w.spread(&wall(), source, target, 400), Some(36 + 18 + 36));
+        assert_eq!(
+            w.spread(&wall(), (source, target), 400, false),
+            Some(36 + 18 + 36)
+        );
         let mut cell = target;
         let mut steps = 0;
         let mut highest = 0;
@@ -173,6 +201,29 @@ mod tests {
     }
 
     #[test]
+    fn cells_that_touch_only_at_their_corners_are_crossed_only_by_diagonal_steps() {
+        // Cell (k, k) blocked for every k: the free cells on either side of that line touch
+        // only at their corners.
+        let mut b = [0u64; ROUTE_SIDE];
+        for (k, row) in b.iter_mut().enumerate() {
+            *row = 1 << k;
+        }
+        let (source, target) = ((5, 30), (30, 5));
+        let mut w = Wavefront::new();
+        assert_eq!(w.spread(&b, (source, target), 4000, false), None);
+        // Diagonally, the straight way: 25 steps, one of them through a corner.
+        assert_eq!(w.spread(&b, (source, target), 4000, true), Some(25));
+        let (mut cell, mut steps) = (target, 0);
+        while let Some(n) = w.downhill(cell, source) {
+            assert_ne!(b[n.1] & (1 << n.0), 1 << n.0, "{n:?} is blocked");
+            cell = n;
+            steps += 1;
+            assert!(steps <= 25);
+        }
+        assert_eq!(cell, source, "the walk ends at the source");
+    }
+
+    #[test]
     fn an_enclosed_target_is_not_reached() {
         let mut b = [0u64; ROUTE_SIDE];
         for (r, row) in b.iter_mut().enumerate().take(13).skip(7) {
@@ -183,7 +234,7 @@ mod tests {
             };
         }
         let mut w = Wavefront::new();
-        assert_eq!(w.spread(&b, (40, 40), (9, 9), 4000), None);
+        assert_eq!(w.spread(&b, ((40, 40), (9, 9)), 4000, false), None);
         assert_eq!(w.label((9, 9)), None);
         assert!(w.label((0, 0)).is_some(), "everything outside is reached");
     }
