@@ -271,6 +271,8 @@ pub struct Router {
     keep_off: u8,
     /// Cells the last pass grows obstacles by ([`last_pass_growth`]).
     narrowest: u8,
+    /// Whether the last resort steps through the cells' corners too (`Router::bare_pass`).
+    corners: bool,
     grid: Grid,
     wave: Wavefront,
     /// What blocks the wavefront in the current pass (a field, not a local: 512 bytes off the
@@ -292,6 +294,7 @@ impl Router {
             cfg,
             keep_off: keep_off_cells(cfg.cell_m),
             narrowest: 0,
+            corners: true,
             grid: Grid::new(cfg.cell_m),
             wave: Wavefront::new(),
             blocked: [0; ROUTE_SIDE],
@@ -327,6 +330,7 @@ impl Router {
         }
         self.keep_off = keep_off_cells(self.cfg.cell_m);
         self.narrowest = last_pass_growth(prm.agent_radius_m, self.cfg.cell_m, self.keep_off);
+        self.corners = prm.strategy != crate::params::Strategy::Navfn;
     }
 
     /// A new mission goal (replanned at the next navigation), or none.
@@ -465,18 +469,24 @@ impl Router {
 
     /// The last resort when no pass found a way: the obstacles as they are, as a small craft's
     /// last pass has them, for a large craft whose hull's pass found none; then, for any
-    /// craft, the same through the cells' corners too. On 2 m cells the hull's growth closes a
+    /// craft (navfn's excepted), the same through the cells' corners too. On 2 m cells the
+    /// hull's growth closes a
     /// channel a flat-fish fits that runs at 45° to the grid (9 m between the walls' centres):
     /// routed nowhere, it was left to the field, which turned it at the mouth towards the
     /// goal beyond a wall and held it there for the whole run (bench channel seed 18). A 5 m
     /// channel at 45° is closed for a VideoRay by the map's cells along its walls, bar a
-    /// staircase of cells that touch at their corners: it turned back at the mouth, or
-    /// stopped at the bend for the rest of the run (held-out channels 4013 and 4186). The
-    /// guard still keeps the hull off what is believed; a way too narrow for it ends where
-    /// the guard stops it, as no way did.
+    /// staircase of cells that touch at their corners: it stopped at a bend for the rest of
+    /// the run (held-out channel 4013). The guard still keeps the hull off what is believed;
+    /// a way too narrow for it ends where the guard stops it, as no way did. Not for navfn:
+    /// its sphere world (seed 004) holds a 5 m channel's walls as rows of spheres, between
+    /// which it crept up the channel, stopped by its guard most of the way (bench channel 8:
+    /// 50 m in 600 s), where routed nowhere it had gone round the walls.
     fn bare_pass(&mut self, start: Cell, source: Cell) -> bool {
         if self.narrowest > 0 && self.spread(0, start, source).is_some() {
             return true;
+        }
+        if !self.corners {
+            return false;
         }
         self.fill_blocked(0, start, source);
         let ends = (source, start);
@@ -808,9 +818,19 @@ mod tests {
     /// A router for a craft of hull `hull_m` in a channel of two charted walls 60 m long at
     /// 45° to the grid, their centres `apart_m` apart, and its route to a goal 45 m up it.
     fn channel_at_45_degrees(hull_m: f32, apart_m: f32) -> Route {
+        channel_at_45_degrees_for(hull_m, apart_m, crate::params::Strategy::Vpf)
+    }
+
+    /// [`channel_at_45_degrees`] for a craft flown by `strategy`.
+    fn channel_at_45_degrees_for(
+        hull_m: f32,
+        apart_m: f32,
+        strategy: crate::params::Strategy,
+    ) -> Route {
         let mut r = Router::new(RouteConfig::default());
         r.set_params(&Params {
             agent_radius_m: hull_m,
+            strategy,
             ..Params::default()
         });
         r.grid.follow(Vec2::ZERO);
@@ -856,6 +876,9 @@ mod tests {
             let axis = Vec2::from_angle(crate::math::PI / 4.0);
             assert!(route.aim.dot(axis) > 2.0, "{apart} m: {route:?}");
             assert!(route.aim.cross(axis).abs() < 2.5, "{apart} m: {route:?}");
+            // Not navfn's: its sphere world creeps between the walls (`Router::bare_pass`).
+            let navfn = channel_at_45_degrees_for(0.5, apart, crate::params::Strategy::Navfn);
+            assert_eq!(navfn.status, RouteStatus::Blocked, "{apart} m: {navfn:?}");
         }
     }
 }
