@@ -470,14 +470,14 @@ impl Router {
     /// The last resort when no pass found a way: the obstacles as they are, as a small craft's
     /// last pass has them, for a large craft whose hull's pass found none; then, for any
     /// craft (navfn's excepted), the same through the cells' corners too. On 2 m cells the
-    /// hull's growth closes a
-    /// channel a flat-fish fits that runs at 45° to the grid (9 m between the walls' centres):
-    /// routed nowhere, it was left to the field, which turned it at the mouth towards the
-    /// goal beyond a wall and held it there for the whole run (bench channel seed 18). A 5 m
-    /// channel at 45° is closed for a VideoRay by the map's cells along its walls, bar a
-    /// staircase of cells that touch at their corners: it stopped at a bend for the rest of
-    /// the run (held-out channel 4013). The guard still keeps the hull off what is believed;
-    /// a way too narrow for it ends where the guard stops it, as no way did. Not for navfn:
+    /// hull's growth closes a channel a flat-fish fits that runs at 45° to the grid (9 m
+    /// between the walls' centres): routed nowhere, it was left to the field, which turned it
+    /// at the mouth towards the goal beyond a wall and held it there for the whole run (bench
+    /// channel seed 18). A 5 m channel at 45° is closed for a VideoRay by the map's cells
+    /// along its walls, bar a staircase of cells that touch at their corners: it stopped at a
+    /// bend for the rest of the run (held-out channel 4013). The guard still keeps the hull
+    /// off what is believed; a way too narrow for it ends where the guard stops it, as no way
+    /// did. Not for navfn:
     /// its sphere world (seed 004) holds a 5 m channel's walls as rows of spheres, between
     /// which it crept up the channel, stopped by its guard most of the way (bench channel 8:
     /// 50 m in 600 s), where routed nowhere it had gone round the walls. VPF, seeds 0–199,
@@ -493,7 +493,9 @@ impl Router {
         }
         self.fill_blocked(0, start, source);
         let ends = (source, start);
-        (self.wave.spread(&self.blocked, ends, MAX_LAYERS, true)).is_some()
+        self.wave
+            .spread(&self.blocked, ends, MAX_LAYERS, true)
+            .is_some()
     }
 
     /// One pass: `blocked` filled with obstacles grown by `growth` cells and the wavefront

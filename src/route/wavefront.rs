@@ -129,8 +129,9 @@ impl Wavefront {
         self.label(target).map(|_| max_layers)
     }
 
-    /// The neighbour of a reached `cell` one step nearer the source, preferring the one
-    /// nearest `toward` (the source: fewer turns in the staircase). `None` at the source.
+    /// The neighbour of a reached `cell` one step nearer the source (a corner one too after a
+    /// diagonal spread), preferring the one nearest `toward` (the source: fewer turns in the
+    /// staircase). `None` at the source.
     pub fn downhill(&self, cell: Cell, toward: Cell) -> Option<Cell> {
         let l = self.label(cell)?;
         let want = (l + 2) % 3;
@@ -140,6 +141,7 @@ impl Wavefront {
             let dy = b as i32 - toward.1 as i32;
             dx * dx + dy * dy
         };
+        // (c + dc − 1, r + dr − 1), after a diagonal spread only.
         let corner = |dc: usize, dr: usize| {
             let n = (
                 c.checked_add(dc)?.checked_sub(1)?,
