@@ -39,6 +39,7 @@ fn one_world_of_every_family_is_flown_without_contact() {
                 sensing: Sensing::Sonar,
                 trial: 0,
                 head: case::Head::default(),
+                current_mps: 0.0,
             };
             case::fly(&c, None, &run, &failed_dir())
         })
@@ -90,6 +91,7 @@ fn perfect_perception_reports_no_belief_and_the_reference_is_the_grid_path() {
         sensing: Sensing::Contacts,
         trial: 0,
         head: case::Head::default(),
+        current_mps: 0.0,
     };
     let row = case::fly(&c, None, &quiet(), &failed_dir());
     assert!(row.error.is_none(), "{:?}", row.error);

@@ -88,6 +88,9 @@ pub struct Case {
     pub trial: u64,
     /// The sonar's set-up.
     pub head: Head,
+    /// A steady current of this speed, m/s, its direction drawn from the world's seed
+    /// ([`Case::current`]); 0: still water.
+    pub current_mps: f64,
 }
 
 impl Case {
@@ -101,6 +104,15 @@ impl Case {
         let mixed = crate::sweep::fnv1a(&[&self.seed.to_le_bytes(), &self.trial.to_le_bytes()]);
         // The scenario schema's seed is a non-negative TOML integer (an i64).
         mixed >> 1
+    }
+
+    /// The current's velocity over ground, m/s: [`Case::current_mps`] in a direction drawn
+    /// from the world's seed alone, so every strategy, model and trial of a world meets the
+    /// same water.
+    pub fn current(&self) -> P2 {
+        let draw = crate::sweep::fnv1a(&[b"current", &self.seed.to_le_bytes()]);
+        let a = (draw % 3600) as f64 / 3600.0 * std::f64::consts::TAU;
+        P2::new(a.cos(), a.sin()).scale(self.current_mps)
     }
 
     /// `clutter:3:vpf:videoray:scanlines`: the row's key in `runs.jsonl`.
@@ -348,6 +360,10 @@ pub fn scenario_text(world: &World, attempt: u64, case: &Case, duration_s: f64) 
     if world.formation_m.is_some() {
         // The virtual leader needs the neighbours' positions (seed 001 takes them as known).
         t.push_str("vehicle_contacts = true\n");
+    }
+    if case.current_mps > 0.0 {
+        let c = case.current();
+        let _ = writeln!(t, "\n[current]\nvelocity = [{:.4}, {:.4}]", c.x, c.y);
     }
     let sensing = match case.sensing {
         Sensing::Sonar => "sonar",
@@ -726,6 +742,7 @@ mod tests {
             sensing: Sensing::Sonar,
             trial,
             head: Head::default(),
+            current_mps: 0.0,
         };
         assert_eq!(
             case(0).sim_seed(),
@@ -773,6 +790,7 @@ mod tests {
                     sensing: Sensing::Sonar,
                     trial: 0,
                     head: Head::default(),
+                    current_mps: 0.0,
                 };
                 let Drawn {
                     world: w,
@@ -813,6 +831,7 @@ mod tests {
             sensing: Sensing::Sonar,
             trial: 0,
             head: Head::default(),
+            current_mps: 0.0,
         };
         let f = feasible_world(&case(ModelKind::FlatFish)).unwrap();
         assert!(
@@ -839,6 +858,7 @@ mod tests {
                 sensing: Sensing::Sonar,
                 trial: 0,
                 head: Head::default(),
+                current_mps: 0.0,
             };
             let Drawn {
                 world: w,

@@ -49,6 +49,9 @@ use worlds::{Family, FAMILIES};
 
 /// Bumped when the worlds or the row format change, so old rows are not mixed in.
 pub const FORMAT: &str = "hil-bench-1";
+/// Fastest current a bench flies, m/s: half a VideoRay's cruise, so every world stays one it
+/// can make way in.
+pub const MAX_CURRENT_MPS: f64 = 0.5;
 /// Most runs one bench may hold (families × seeds × strategies × models × sensing).
 pub const MAX_RUNS: usize = 100_000;
 
@@ -67,6 +70,8 @@ pub struct Options {
     pub sonar_range_m: Option<f64>,
     /// The sonar head's step, degrees.
     pub sonar_step_deg: f64,
+    /// A steady current of this speed, m/s, in a direction drawn per world (0: still water).
+    pub current_mps: f64,
     /// Strategies.
     pub strategies: Vec<Strategy>,
     /// Models.
@@ -95,6 +100,15 @@ impl Options {
         }
     }
 
+    /// The water, as the tables name it: `, current 0.2 m/s`, or nothing in still water.
+    fn water(&self) -> String {
+        if self.current_mps > 0.0 {
+            format!(", current {} m/s", self.current_mps)
+        } else {
+            String::new()
+        }
+    }
+
     /// The set-ups flown, as the tables name them: one, or each model's
     /// (`flatfish: sonar 40 m, 3.6° steps`).
     fn heads(&self) -> String {
@@ -119,6 +133,7 @@ impl Default for Options {
             trial: 0,
             sonar_range_m: None,
             sonar_step_deg: Head::default().step_deg,
+            current_mps: 0.0,
             strategies: vec![Strategy::Vpf],
             models: vec![ModelKind::VideoRay],
             sensing: vec![Sensing::Sonar],
@@ -165,6 +180,10 @@ pub struct Args {
     /// 30 m is the Micron's high-resolution 9 s sweep
     #[arg(long, value_name = "DEG", value_parser = sonar_step)]
     sonar_step: Option<f64>,
+    /// a steady current of this speed, m/s (default 0: still water), 0 ..= 0.5, in a direction
+    /// drawn from each world's seed; times are against the still-water reference
+    #[arg(long, value_name = "M/S", value_parser = current)]
+    current: Option<f64>,
     /// vpf, multipoint, navfn (default vpf)
     #[arg(long, value_name = "a,b,...", value_delimiter = ',', value_parser = strategy)]
     strategies: Vec<Strategy>,
@@ -207,6 +226,7 @@ impl From<Args> for Options {
             trial: a.trial.unwrap_or(d.trial),
             sonar_range_m: a.sonar_range.or(d.sonar_range_m),
             sonar_step_deg: a.sonar_step.unwrap_or(d.sonar_step_deg),
+            current_mps: a.current.unwrap_or(d.current_mps),
             strategies: or(a.strategies, d.strategies),
             models: or(a.models, d.models),
             sensing: or(a.sensing, d.sensing),
@@ -243,6 +263,10 @@ fn sonar_step(s: &str) -> Result<f64, String> {
     let lo = (vpf::sonar::MIN_STEP_RAD.to_degrees() * 100.0).ceil() / 100.0;
     let hi = (vpf::sonar::MAX_STEP_RAD.to_degrees() * 100.0).floor() / 100.0;
     within(s, lo, hi, "degrees")
+}
+
+fn current(s: &str) -> Result<f64, String> {
+    within(s, 0.0, MAX_CURRENT_MPS as f32, "m/s")
 }
 
 fn family(s: &str) -> Result<Family, String> {
@@ -291,6 +315,7 @@ pub fn cases(o: &Options) -> Vec<Case> {
                             sensing,
                             trial: o.trial,
                             head: o.head(model),
+                            current_mps: o.current_mps,
                         });
                     }
                 }
@@ -326,9 +351,10 @@ pub fn bench(o: &Options) -> Result<(PathBuf, report::Report), Error> {
         PathBuf::from("bench").join(crate::output::file_stem(&name))
     });
     std::fs::create_dir_all(&dir).map_err(Error::io("cannot create", &dir))?;
-    // The head's set-up is part of what was flown; trial 0 adds nothing more.
+    // The head's set-up and the water are part of what was flown; trial 0 and still water add
+    // nothing more.
     let trial = o.trial.to_le_bytes();
-    let head = o.heads();
+    let head = o.heads() + &o.water();
     let mut parts: Vec<&[u8]> = vec![FORMAT.as_bytes(), recipe_text.as_bytes(), head.as_bytes()];
     if o.trial != 0 {
         parts.push(&trial);
@@ -414,7 +440,8 @@ pub fn bench(o: &Options) -> Result<(PathBuf, report::Report), Error> {
     rows.sort_by_key(|r| order.get(&r.id).copied().unwrap_or(usize::MAX));
     rows.dedup_by(|a, b| a.id == b.id);
     let mut rep = report::Report::of(&rows, &params.unwrap_or_default(), o.params.as_deref());
-    rep.params.push_str(&format!("; {}", o.heads()));
+    rep.params
+        .push_str(&format!("; {}{}", o.heads(), o.water()));
     if o.trial != 0 {
         rep.params.push_str(&format!(", trial {}", o.trial));
     }
@@ -424,6 +451,7 @@ pub fn bench(o: &Options) -> Result<(PathBuf, report::Report), Error> {
     let json = serde_json::json!({
         "format": FORMAT,
         "trial": o.trial,
+        "current_mps": o.current_mps,
         "sonar": o.models.iter().map(|&m| {
             let h = o.head(m);
             serde_json::json!({ "model": m.name(), "range_m": h.range_m, "step_deg": h.step_deg })

@@ -501,6 +501,7 @@ pub fn batch(spec: &Spec, spec_dir: &std::path::Path) -> Result<Batch, ScenarioE
                 sensing: sc.sensing,
                 trial: 0,
                 head: crate::bench::case::Head::default(),
+                current_mps: 0.0,
             };
             let id = format!("bench:{}:{}", family.name(), sc.bench_first_seed + i as u64);
             let crate::bench::case::Drawn {
