@@ -103,3 +103,39 @@ fn perfect_perception_reports_no_belief_and_the_reference_is_the_grid_path() {
     assert!(shortest > straight + 1.0, "{shortest} vs {straight}");
     assert!((row.reference_s.unwrap() - shortest / case::CRUISE_MPS).abs() < 1e-9);
 }
+
+/// Three worlds in a steady 0.2 m/s current (its direction drawn from each world's seed) that
+/// the VideoRay touched before the current was taken out of its set-points: the guard had
+/// stopped it beside a channel wall, a box or a wall's end, and the water carried it on
+/// (`src/guidance/drift.rs`). Flown as the slice is, they must be reached without contact.
+#[test]
+fn worlds_in_a_current_are_flown_without_contact() {
+    use hil::bench::worlds::Family;
+    let run = quiet();
+    for (family, seed) in [
+        (Family::Channel, 8),
+        (Family::Boxes, 7),
+        (Family::WallGap, 17),
+    ] {
+        let c = Case {
+            family,
+            seed,
+            strategy: Strategy::Vpf,
+            model: ModelKind::VideoRay,
+            sensing: Sensing::Sonar,
+            trial: 0,
+            head: case::Head::default(),
+            current_mps: 0.2,
+        };
+        let r = case::fly(&c, None, &run, &failed_dir());
+        assert!(r.error.is_none(), "{}: {:?}", r.id, r.error);
+        assert!(
+            r.success && !r.collided,
+            "{}: success {}, clearance {:?}; see {}",
+            r.id,
+            r.success,
+            r.min_clearance_m,
+            failed_dir().display()
+        );
+    }
+}

@@ -31,6 +31,7 @@
 //! Time is passed in (milliseconds); nothing here reads a clock.
 
 pub mod background;
+pub mod drift;
 pub mod failsafe;
 pub mod faint;
 pub mod guard;
@@ -41,6 +42,7 @@ pub mod tracks;
 pub mod upload;
 
 pub use background::{Background, BackgroundCounters, BackgroundOutputs};
+pub use drift::DriftConfig;
 pub use failsafe::FailsafeConfig;
 pub use guard::{GuardConfig, Verdict};
 pub use one_thread::OneThreadRuntime;

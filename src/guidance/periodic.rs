@@ -18,6 +18,7 @@ use crate::route::{Route, RouteConfig};
 use crate::types::NavState;
 use crate::world::{Obstacle, Origin, World};
 
+use super::drift::{Drift, DriftConfig};
 use super::failsafe::{self, FailsafeConfig, FreezeDetector, Situation, SonarWatch};
 use super::guard::{self, GuardConfig, Verdict, HEAD_ON_ALONE_M as ALONE_M};
 use super::tracks::{paces, TrackConfig, Tracks};
@@ -54,6 +55,8 @@ pub struct RuntimeConfig {
     pub belief_every: u16,
     /// The route layer (`crate::route`): the background plans, this task follows.
     pub route: RouteConfig,
+    /// The current's estimate, taken out of the set-points (`crate::guidance::drift`).
+    pub drift: DriftConfig,
 }
 
 impl Default for RuntimeConfig {
@@ -66,6 +69,7 @@ impl Default for RuntimeConfig {
             map_reach_m: 6.0,
             belief_every: 2,
             route: RouteConfig::default(),
+            drift: DriftConfig::default(),
         }
     }
 }
@@ -169,6 +173,8 @@ pub struct Periodic {
     future_navs: u32,
     /// A waypoint upload in progress.
     upload: Upload,
+    /// The current believed.
+    drift: Drift,
 }
 
 impl Periodic {
@@ -199,6 +205,7 @@ impl Periodic {
             refused_nav_ms: None,
             future_navs: 0,
             upload: Upload::default(),
+            drift: Drift::default(),
         })
     }
 
@@ -223,6 +230,11 @@ impl Periodic {
     /// The newest navigation accepted.
     pub fn nav(&self) -> Option<NavSample> {
         self.nav
+    }
+
+    /// The current believed, m/s over ground (`crate::guidance::drift`).
+    pub fn drift(&self) -> Vec2 {
+        self.drift.estimate()
     }
 
     /// The newest route read from the background.
@@ -364,6 +376,7 @@ impl Periodic {
             map,
             cost,
         );
+        let cmd = self.make_good(nav, cmd);
         self.last = Some((now_ms, cmd));
         self.last_heading = cmd.psi_set;
         let command = CommandRepr {
@@ -473,6 +486,24 @@ impl Periodic {
             }
         }
         self.nav
+    }
+
+    /// `cmd`'s set-points through the water, so that the vehicle makes good over ground what
+    /// was planned (`crate::guidance::drift`). Not on navigation that is stale or frozen: where
+    /// the vehicle is going is not known then (the estimate is kept for when it is again).
+    fn make_good(&mut self, nav: Option<NavSample>, cmd: Command) -> Command {
+        use crate::planner::{HoldReason, Mode};
+        let lost = matches!(
+            cmd.mode,
+            Mode::Hold(HoldReason::StaleNav | HoldReason::FrozenNav)
+        );
+        let (Some(n), false) = (nav, lost) else {
+            return cmd;
+        };
+        let (cfg, p) = (&self.config.drift, self.planner.params());
+        self.drift.update(cfg, &n.nav, p, p.period_s);
+        self.drift
+            .compensate(cfg, cmd, p.v_max, n.nav.heading, p.period_s)
     }
 
     /// Fail-safes, then the planner.

@@ -709,6 +709,7 @@ mod tests {
             sensing: Sensing::Sonar,
             trial: 0,
             head,
+            current_mps: 0.0,
         };
         for head in [
             Head::default(),
@@ -730,6 +731,37 @@ mod tests {
             "the bench flies the schema's default: a 360° sweep in {:.1} s",
             360.0 / 3.6 * (2.0 * d.range_m / 1500.0 + 0.005)
         );
+    }
+
+    #[test]
+    fn a_world_in_a_current_meets_the_same_water_whatever_flies_it() {
+        let case = |strategy, trial, current_mps| Case {
+            family: Family::Channel,
+            seed: 7,
+            strategy,
+            model: ModelKind::VideoRay,
+            sensing: Sensing::Sonar,
+            trial,
+            head: Head::default(),
+            current_mps,
+        };
+        let water = |c: &Case| {
+            let d = feasible_world(c).unwrap();
+            scenario::parse(&scenario_text(&d.world, d.attempt, c, 100.0), "t")
+                .unwrap()
+                .current
+                .velocity
+        };
+        let v = water(&case(Strategy::Vpf, 0, 0.3));
+        assert!((v.norm() - 0.3).abs() < 1e-3, "{v:?}");
+        assert_eq!(water(&case(Strategy::Navfn, 1, 0.3)), v);
+        assert_eq!(water(&case(Strategy::Vpf, 0, 0.0)), P2::default());
+        // Another world, other water.
+        let other = Case {
+            seed: 8,
+            ..case(Strategy::Vpf, 0, 0.3)
+        };
+        assert!(water(&other).sub(v).norm() > 1e-3);
     }
 
     #[test]
