@@ -22,12 +22,13 @@
 //! changes.
 //!
 //! **Compensation.** The command's velocity over ground is v_d = v_set·ê(ψ_set); through the
-//! water that is w = v_d − ĉ, so ψ_set = ∠w and v_set = min(|w|, v_max) (a stop becomes
-//! station-keeping, head to the current). Below [`DEADBAND_MPS`] nothing is changed. The
+//! water that is w = v_d − ĉ, so ψ_set = ∠w and v_set = min(|w|, v_max) (the guard's stop
+//! becomes station-keeping, head to the current; a fail-safe's hold stays zero speed, its
+//! contract, and is not handed here: `Periodic::make_good`). Below [`DEADBAND_MPS`] nothing is changed. The
 //! command's velocity v̄_c stays the planner's (over ground): the planner integrates on from
 //! it, and the MAVLink bridge sends it to an autopilot that holds velocity over ground itself.
 //!
-//! **Capacity.** Two vectors and three scalars; no tables.
+//! **Capacity.** One vector and four scalars; no tables.
 
 use crate::math::{atan2, min, Vec2};
 use crate::params::Params;
@@ -52,7 +53,7 @@ impl Default for DriftConfig {
 /// ([`HELD_MPS`]).
 pub const DEADBAND_MPS: f32 = 0.05;
 
-/// How far the speed set-point may wander and still count as held, m/s; and how long it must
+/// How far the speed asked for may wander and still count as held, m/s; and how long it must
 /// hold before the residual along the heading is used, s (the autopilot has caught up). No
 /// estimate while the heading turns faster than [`MAX_TURN_RPS`], rad/s (a turning hull
 /// skids). With 0.05 m/s, 1.5 s and 0.3 rad/s a VideoRay in still water believed up to
@@ -68,7 +69,7 @@ pub const MAX_TURN_RPS: f32 = 0.1;
 /// left as it was. Its hull skids through all of its turns: with this gate the flat-fish
 /// believed up to 0.09 m/s in still water and lost 56 bench worlds (gained 39; `--seeds 170`
 /// with its recipe); with a quarter of its own top rate and a settling time of v_max / brake
-/// it lost 9 formations; and in a 0.2 m/s current neither helped it (below).
+/// it lost 9 formations; and in a 0.2 m/s current neither helped it (README, "In a current").
 fn straight(craft: &Params, turn: f32, dt: f32) -> bool {
     craft.turn_rate_rps <= 0.0 && turn <= MAX_TURN_RPS * dt
 }
@@ -161,7 +162,15 @@ impl Drift {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::types::HoldReason;
+    use crate::types::{HoldReason, Mode};
+
+    /// The guard's stop, heading `psi` (the periodic task hands no hold to the estimate).
+    fn stopped(psi: f32) -> Command {
+        Command {
+            mode: Mode::Guarded,
+            ..Command::hold(HoldReason::NoMission, psi)
+        }
+    }
 
     fn nav(heading: f32, velocity: Vec2) -> NavState {
         NavState {
@@ -180,7 +189,7 @@ mod tests {
         want: Command,
         periods: u64,
     ) -> Command {
-        let mut sent = Command::hold(HoldReason::StaleNav, 0.0);
+        let mut sent = stopped(0.0);
         for _ in 0..periods {
             let through = Vec2::from_angle(sent.psi_set) * sent.v_set;
             d.update(
@@ -199,7 +208,7 @@ mod tests {
         let cfg = DriftConfig::default();
         let mut d = Drift::default();
         let current = Vec2::new(0.0, -0.2);
-        let stop = Command::hold(HoldReason::StaleNav, 0.0);
+        let stop = stopped(0.0);
         let sent = fly(&mut d, &cfg, current, stop, 300);
         assert!((d.estimate() - current).norm() < 0.01, "{:?}", d.estimate());
         assert!(
@@ -214,7 +223,7 @@ mod tests {
         let cfg = DriftConfig::default();
         let mut d = Drift::default();
         let current = Vec2::new(0.0, 0.3);
-        let mut east = Command::hold(HoldReason::StaleNav, 0.0);
+        let mut east = stopped(0.0);
         east.v_set = 0.8;
         let sent = fly(&mut d, &cfg, current, east, 600);
         let made_good = Vec2::from_angle(sent.psi_set) * sent.v_set + current;
@@ -228,7 +237,7 @@ mod tests {
     fn in_still_water_nothing_changes() {
         let cfg = DriftConfig::default();
         let mut d = Drift::default();
-        let mut cmd = Command::hold(HoldReason::StaleNav, 1.0);
+        let mut cmd = stopped(1.0);
         cmd.v_set = 0.7;
         let sent = fly(&mut d, &cfg, Vec2::ZERO, cmd, 100);
         assert_eq!(d.estimate(), Vec2::ZERO);
@@ -243,7 +252,7 @@ mod tests {
             ..Params::default()
         };
         let mut d = Drift::default();
-        let stop = Command::hold(HoldReason::StaleNav, 0.0);
+        let stop = stopped(0.0);
         for _ in 0..100 {
             d.update(&cfg, &nav(0.0, Vec2::new(0.3, 0.0)), &craft, 0.1);
             assert_eq!(d.compensate(&cfg, stop, 1.0, 0.0, 0.1), stop);
@@ -255,7 +264,7 @@ mod tests {
     fn switched_off_it_estimates_nothing() {
         let cfg = DriftConfig { tau_s: 0.0 };
         let mut d = Drift::default();
-        let stop = Command::hold(HoldReason::StaleNav, 0.0);
+        let stop = stopped(0.0);
         let sent = fly(&mut d, &cfg, Vec2::new(0.3, 0.0), stop, 100);
         assert_eq!(d.estimate(), Vec2::ZERO);
         assert_eq!(sent, stop);

@@ -277,7 +277,7 @@
 //! The guard runs after the planner's step, outside its 100 000-instruction budget. Its worst
 //! case for this and the head-on hypothesis, every table slot a contact seen once ahead and
 //! alone, is a phase of `cargo selftest` (a VideoRay at cruise among 32 of them, 4.7 m apart):
-//! the whole period is at most 510 520 instructions with the evidence map empty (the nearest
+//! the whole period is at most 510 560 instructions with the evidence map empty (the nearest
 //! contact, 3 m ahead, in close quarters) and 716 320 with its 32 cells, which every "alone"
 //! test reads; about 4 ms of the 100 ms period at the STM32G431's 170 MHz.
 //!

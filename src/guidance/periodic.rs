@@ -489,15 +489,11 @@ impl Periodic {
     }
 
     /// `cmd`'s set-points through the water, so that the vehicle makes good over ground what
-    /// was planned (`crate::guidance::drift`). Not on navigation that is stale or frozen: where
-    /// the vehicle is going is not known then (the estimate is kept for when it is again).
+    /// was planned (`crate::guidance::drift`). Not for a hold, which is zero speed whatever
+    /// its reason (the fail-safes' contract: navigation lost, a collision imminent, the sonar
+    /// blind); the guard's stops (`Guarded`) are the ones that hold station.
     fn make_good(&mut self, nav: Option<NavSample>, cmd: Command) -> Command {
-        use crate::planner::{HoldReason, Mode};
-        let lost = matches!(
-            cmd.mode,
-            Mode::Hold(HoldReason::StaleNav | HoldReason::FrozenNav)
-        );
-        let (Some(n), false) = (nav, lost) else {
+        let (Some(n), false) = (nav, matches!(cmd.mode, crate::planner::Mode::Hold(_))) else {
             return cmd;
         };
         let (cfg, p) = (&self.config.drift, self.planner.params());
