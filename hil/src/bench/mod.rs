@@ -238,7 +238,7 @@ impl From<Args> for Options {
     }
 }
 
-/// A number within `lo ..= hi` (the firmware's scanline limits).
+/// A number within `lo ..= hi` (the firmware's scanline limits, or the bench's current).
 fn within(s: &str, lo: f32, hi: f32, unit: &str) -> Result<f64, String> {
     let (lo, hi) = (f64::from(lo), f64::from(hi));
     match s.parse::<f64>() {
