@@ -637,6 +637,7 @@ fn payload(rng: &mut Rng, ctx: &Ctx<'_>, ty: u8) -> Vec<u8> {
             cost_unit: CostUnit::Unknown,
             counters: TelemetryCounters::default(),
             ping360: Default::default(),
+            current: Default::default(),
             mission: MissionProgress::default(),
         })),
         0x83 => payload_of(&Message::Reply(ReplyRepr::accepted(Header {
@@ -1705,8 +1706,14 @@ fn check_command(c: &Command, v_max: f32) {
         "velocity faster than v_max = {v_max}: {c:?}"
     );
     assert!(usize::from(c.ghost_depth) <= MAX_GHOSTS, "{c:?}");
-    if let Mode::Hold(_) = c.mode {
-        assert_eq!(c.v_set, 0.0, "a hold with speed: {c:?}");
+    if let Mode::Hold(r) = c.mode {
+        // Zero over ground; through the water only a hold that keeps station moves, head to
+        // the current (protocol §7).
+        assert_eq!(c.velocity, Vec2::ZERO, "a hold with velocity: {c:?}");
+        assert!(
+            r.keeps_station() || c.v_set == 0.0,
+            "a hold with speed: {c:?}"
+        );
     }
 }
 

@@ -23,8 +23,10 @@
 //!
 //! **Compensation.** The command's velocity over ground is v_d = v_set·ê(ψ_set); through the
 //! water that is w = v_d − ĉ, so ψ_set = ∠w and v_set = min(|w|, v_max) (the guard's stop
-//! becomes station-keeping, head to the current; a fail-safe's hold stays zero speed, its
-//! contract, and is not handed here: `Periodic::make_good`). Below [`DEADBAND_MPS`] nothing is changed. The
+//! becomes station-keeping, head to the current, and so do the fail-safe holds that
+//! [keep station](crate::planner::HoldReason::keeps_station): an obstacle too close, the sonar
+//! blind; the others stay zero speed and are not handed here: `Periodic::make_good`). Below
+//! [`DEADBAND_MPS`] nothing is changed. The
 //! command's velocity v̄_c stays the planner's (over ground): the planner integrates on from
 //! it, and the MAVLink bridge sends it to an autopilot that holds velocity over ground itself.
 //!
@@ -164,7 +166,7 @@ mod tests {
     use super::*;
     use crate::types::{HoldReason, Mode};
 
-    /// The guard's stop, heading `psi` (the periodic task hands no hold to the estimate).
+    /// The guard's stop, heading `psi` (a hold that keeps station is flown the same).
     fn stopped(psi: f32) -> Command {
         Command {
             mode: Mode::Guarded,

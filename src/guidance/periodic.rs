@@ -398,6 +398,7 @@ impl Periodic {
             cost_unit: self.cost_unit,
             counters: self.counters,
             ping360: inputs.ping360_counters(),
+            current: self.drift.estimate(),
         };
         self.send(&Message::Telemetry(telemetry), tx);
         if let Some(m) = map {
@@ -489,11 +490,12 @@ impl Periodic {
     }
 
     /// `cmd`'s set-points through the water, so that the vehicle makes good over ground what
-    /// was planned (`crate::guidance::drift`). Not for a hold, which is zero speed whatever
-    /// its reason (the fail-safes' contract: navigation lost, a collision imminent, the sonar
-    /// blind); the guard's stops (`Guarded`) are the ones that hold station.
+    /// was planned (`crate::guidance::drift`): the guard's stops and the holds that
+    /// [keep station](crate::planner::HoldReason::keeps_station) hold it head to the current.
+    /// Other holds keep zero speed and are not handed to the estimate.
     fn make_good(&mut self, nav: Option<NavSample>, cmd: Command) -> Command {
-        let (Some(n), false) = (nav, matches!(cmd.mode, crate::planner::Mode::Hold(_))) else {
+        let idle = matches!(cmd.mode, crate::planner::Mode::Hold(r) if !r.keeps_station());
+        let (Some(n), false) = (nav, idle) else {
             return cmd;
         };
         let (cfg, p) = (&self.config.drift, self.planner.params());

@@ -315,29 +315,29 @@ mod tests {
         };
         let mut b = [0u8; 4];
         assert_eq!(h.emit(&mut b), Ok(4));
-        assert_eq!(b, [0x07, 0x08, 0x01, 0x02]);
+        assert_eq!(b, [0x08, 0x08, 0x01, 0x02]);
         assert_eq!(Header::parse(&b), Ok(h));
-        assert_eq!(Header::parse(&[6, 8, 0, 0]), Err(Error::Version(6)));
+        assert_eq!(Header::parse(&[7, 8, 0, 0]), Err(Error::Version(7)));
         assert_eq!(
-            Header::parse(&[7, 0x42, 0, 0]),
+            Header::parse(&[8, 0x42, 0, 0]),
             Err(Error::UnknownType(0x42))
         );
         assert_eq!(Header::parse(&[3, 8, 0]), Err(Error::Truncated));
     }
 
-    /// A Tick frame (the example in docs/protocol.md): raw = 07 08 01 00 | e8 03 00 00 00 00
+    /// A Tick frame (the example in docs/protocol.md): raw = 08 08 01 00 | e8 03 00 00 00 00
     /// 00 00 | CRC, the CRC computed independently with Python's `binascii.crc_hqx(raw,
-    /// 0xFFFF)` = 0xF718, sent LE as 18 f7. A Tick flows to the firmware: the wire bytes are its
+    /// 0xFFFF)` = 0xE4FB, sent LE as fb e4. A Tick flows to the firmware: the wire bytes are its
     /// coded frame, from the protocol's Python reference code (docs/protocol.md §12).
     #[test]
     fn tick_frame_vector() {
         let raw = [
-            0x07, 0x08, 0x01, 0x00, 0xe8, 0x03, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x18, 0xf7,
+            0x08, 0x08, 0x01, 0x00, 0xe8, 0x03, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0xfb, 0xe4,
         ];
         let wire = [
-            0xff, 0xf8, 0xe9, 0x1c, 0x9a, 0x05, 0x86, 0x33, 0x24, 0xea, 0x7a, 0xd2, 0x39, 0x68,
-            0x60, 0xae, 0x0f, 0xdd, 0xc0, 0xcd, 0xc4, 0x69, 0xbc, 0x6e, 0x7a, 0xbf, 0x5d, 0x09,
-            0x9c, 0xec, 0xe1, 0x00,
+            0xff, 0xf7, 0xe9, 0x1c, 0x9a, 0x05, 0x86, 0x33, 0x24, 0xea, 0x7a, 0xd2, 0x39, 0x8b,
+            0x73, 0xd5, 0x90, 0x65, 0x0e, 0xb9, 0x9b, 0x07, 0xe4, 0xb4, 0x3d, 0x62, 0x81, 0xd5,
+            0x09, 0x80, 0x28, 0x00,
         ];
         let mut out = [0u8; 40];
         let n = encode_frame(
@@ -363,13 +363,13 @@ mod tests {
         assert_eq!(payload, &raw[4..12]);
     }
 
-    /// A Reply, firmware to host, so COBS (docs/protocol.md §11): raw 07 83 01 00 | 04 07 00 00
-    /// 00 00 | 93 49 (CRC 0x4993 from `binascii.crc_hqx`); COBS "07 83 01" + zero → 04 07 83 01;
-    /// "04 07" + zero → 03 04 07; three single zeros → 01 01 01; the tail → 03 93 49.
+    /// A Reply, firmware to host, so COBS (docs/protocol.md §11): raw 08 83 01 00 | 04 07 00 00
+    /// 00 00 | 22 1f (CRC 0x1F22 from `binascii.crc_hqx`); COBS "08 83 01" + zero → 04 08 83 01;
+    /// "04 07" + zero → 03 04 07; three single zeros → 01 01 01; the tail → 03 22 1f.
     #[test]
     fn reply_frame_vector() {
         let wire = [
-            0x04, 0x07, 0x83, 0x01, 0x03, 0x04, 0x07, 0x01, 0x01, 0x01, 0x03, 0x93, 0x49, 0x00,
+            0x04, 0x08, 0x83, 0x01, 0x03, 0x04, 0x07, 0x01, 0x01, 0x01, 0x03, 0x22, 0x1f, 0x00,
         ];
         let mut out = [0u8; 32];
         let n = encode_frame(
@@ -388,9 +388,9 @@ mod tests {
 
     #[test]
     fn split_frame_checks_in_order() {
-        assert_eq!(split_frame(&[7, 8, 0, 0, 0]), Err(Error::Truncated));
+        assert_eq!(split_frame(&[8, 8, 0, 0, 0]), Err(Error::Truncated));
         let mut raw = [
-            0x07, 0x08, 0x01, 0x00, 0xe8, 0x03, 0, 0, 0, 0, 0, 0, 0x18, 0xf7,
+            0x08, 0x08, 0x01, 0x00, 0xe8, 0x03, 0, 0, 0, 0, 0, 0, 0xfb, 0xe4,
         ];
         raw[5] ^= 0x10;
         assert_eq!(split_frame(&raw), Err(Error::Crc));
@@ -399,7 +399,7 @@ mod tests {
         let crc = crate::link::crc::crc16(&v1);
         v1.extend(crc.to_le_bytes());
         assert_eq!(split_frame(&v1), Err(Error::Version(1)));
-        let mut t: Vec<u8> = std::vec![7, 0x55, 0, 0];
+        let mut t: Vec<u8> = std::vec![8, 0x55, 0, 0];
         let crc = crate::link::crc::crc16(&t);
         t.extend(crc.to_le_bytes());
         assert_eq!(split_frame(&t), Err(Error::UnknownType(0x55)));

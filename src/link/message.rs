@@ -109,7 +109,10 @@ impl<'a> Message<'a> {
         each!(self, p => type_of(p))
     }
 
-    /// Parses the payload of a message of type `msg_type`.
+    /// Parses the payload of a message of type `msg_type`. Built for the target, the firmware
+    /// parses only messages to the firmware: one to the host is [`Error::WrongDirection`], as
+    /// its [`Decoder`](super::Decoder) refuses it before parsing anyway, and the five parsers
+    /// it never runs stay out of flash.
     pub fn parse(msg_type: MessageType, payload: &'a [u8]) -> Result<Self, Error> {
         Ok(match msg_type {
             MessageType::Nav => Message::Nav(Payload::parse(payload)?),
@@ -123,10 +126,21 @@ impl<'a> Message<'a> {
             MessageType::MissionCount => Message::MissionCount(Payload::parse(payload)?),
             MessageType::MissionItem => Message::MissionItem(Payload::parse(payload)?),
             MessageType::Survey => Message::Survey(Payload::parse(payload)?),
+            #[cfg(target_os = "none")]
+            MessageType::Command
+            | MessageType::Telemetry
+            | MessageType::Reply
+            | MessageType::Log
+            | MessageType::Belief => return Err(Error::WrongDirection(msg_type.code())),
+            #[cfg(not(target_os = "none"))]
             MessageType::Command => Message::Command(Payload::parse(payload)?),
+            #[cfg(not(target_os = "none"))]
             MessageType::Telemetry => Message::Telemetry(Payload::parse(payload)?),
+            #[cfg(not(target_os = "none"))]
             MessageType::Reply => Message::Reply(Payload::parse(payload)?),
+            #[cfg(not(target_os = "none"))]
             MessageType::Log => Message::Log(Payload::parse(payload)?),
+            #[cfg(not(target_os = "none"))]
             MessageType::Belief => Message::Belief(Payload::parse(payload)?),
         })
     }
@@ -262,24 +276,25 @@ pub(crate) mod tests {
     use std::vec::Vec;
 
     /// The worked example of docs/protocol.md: Mission {goal (10, −5), no formation}, seq 7.
-    /// CRC from Python's binascii.crc_hqx(raw, 0xFFFF) = 0x2CE3, and the coded frame from the
+    /// CRC from Python's binascii.crc_hqx(raw, 0xFFFF) = 0xEDB1, and the coded frame from the
     /// protocol's Python reference code (its Reed–Solomon parity checked against `reedsolo`),
     /// both independent of this crate.
     #[test]
     fn worked_example_mission_frame() {
         let raw = [
-            0x07, 0x04, 0x07, 0x00, // version 7, Mission, seq 7
+            0x08, 0x04, 0x07, 0x00, // version 8, Mission, seq 7
             0x00, 0x00, 0x20, 0x41, // goal_x 10.0
             0x00, 0x00, 0xa0, 0xc0, // goal_y -5.0
             0x00, // flags: no formation
-            0xe3, 0x2c, // CRC-16 LE
+            0xb1, 0xed, // CRC-16 LE
         ];
         let wire = [
             0xff, // the chunk's key: 0xff does not occur in the whitened codeword
-            // raw frame and parity 12 0d 1e 7f 94 49 bb 8a 44 47 d6 19 c3 5e 7e 77, XOR PN9
-            0xf8, 0xe5, 0x1a, 0x9a, 0xed, 0x85, 0x13, 0x65, 0xea, 0x7a, 0x72, 0xf9, 0x70, 0x74,
-            0x7b, 0x18, 0x59, 0x63, 0x52, 0x4c, 0x24, 0xb6, 0x30, 0xcb, 0x20, 0x8f, 0xde, 0x61,
-            0xe1, 0x4a, 0xbd, //
+            // raw frame and parity c1 a4 17 4a ac 50 8e d0 8f af af 26 4c 2c 01 04, XOR PN9;
+            // its one 0x00 (codeword byte 23, parity 0x8f XOR PN9 0x8f) is sent as the key
+            0xf7, 0xe5, 0x1a, 0x9a, 0xed, 0x85, 0x13, 0x65, 0xea, 0x7a, 0x72, 0xf9, 0x70, 0x26,
+            0xba, 0xcb, 0xf0, 0x6a, 0x67, 0x74, 0x3d, 0x83, 0x6a, 0xff, 0xc8, 0xf6, 0xe1, 0xee,
+            0x93, 0x35, 0xce, //
             0x00, // delimiter
         ];
         let m = Message::Mission(Mission {
@@ -400,10 +415,10 @@ pub(crate) mod tests {
     #[test]
     fn messages_are_small_enough_for_an_interrupt_stack() {
         // A Message is passed by value on the firmware's stack: keep it near a Shape's size. The
-        // largest is a Telemetry (144 B with its mission and Ping360 blocks and the two
-        // forward-error-correction counters); the stack's high-water mark is measured by the
-        // self-test (`tests/qemu.rs`).
-        assert!(core::mem::size_of::<Message<'_>>() <= 144);
+        // largest is a Telemetry (152 B with its mission and Ping360 blocks, the two
+        // forward-error-correction counters and the current); the stack's high-water mark is
+        // measured by the self-test (`tests/qemu.rs`).
+        assert!(core::mem::size_of::<Message<'_>>() <= 152);
         // The decoder holds a coded frame's codeword: the raw frame and 48 parity bytes.
         assert!(core::mem::size_of::<crate::link::Decoder>() <= crate::link::MAX_CODEWORD + 72);
     }

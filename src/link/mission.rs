@@ -596,7 +596,7 @@ pub(crate) mod tests {
                     formation: None,
                 }),
                 8,
-                "fe f8 e8 15 9a ef 85 33 24 ea 7a d2 99 e1 f7 db e4 ff cb f6 65 df 3c 26 a5 c8 0e d5 65 eb 00",
+                "ff f7 e8 15 9a ef 85 33 24 ea 7a d2 aa 6a de 5d 56 e6 f1 b7 45 f5 3a 14 b6 02 dd 37 65 f5 00",
             ),
             (
                 Message::MissionItem(MissionItemRepr {
@@ -607,7 +607,7 @@ pub(crate) mod tests {
                         .unwrap(),
                 }),
                 9,
-                "ff f8 eb 14 9a ec 85 33 04 a8 7a d2 19 31 97 57 0a 14 7d 2d d8 52 b2 1a 14 5d f2 29 50 75 cc e9 59 b5 20 2c 39 a1 4f b8 00",
+                "ff f7 eb 14 9a ec 85 33 04 a8 7a d2 19 31 97 57 0a 14 7d 2d d8 52 44 dc 5f b6 7b a5 bc 37 f7 99 05 1d 90 ab 0e 9a 51 16 00",
             ),
             (
                 Message::Survey(SurveyRepr {
@@ -624,7 +624,7 @@ pub(crate) mod tests {
                     formation: None,
                 }),
                 10,
-                "ff f8 ea 17 9a ed 85 33 24 ea 7a d2 39 70 97 77 48 54 7d 8d 99 6d 0d ba 8f 67 59 e7 e3 bf 34 ca 58 30 53 93 df 92 ec a7 15 8a dc ca bf 02 47 b8 cb 5b eb c0 b1 56 5e 56 87 3e c1 19 bd 00",
+                "ff f7 ea 17 9a ed 85 33 24 ea 7a d2 39 70 97 77 48 54 7d 8d 99 6d 0d ba 8f 67 59 e7 e3 bf 34 ca 58 30 53 93 df 92 ec a7 15 8a dc ef 99 a4 a6 dd e1 7e 3e 40 e6 4c 9b 77 28 d4 ca e7 d0 00",
             ),
         ];
         for (m, seq, wire) in cases {

@@ -91,7 +91,7 @@ use crate::params::Params;
 
 /// The protocol version this module speaks, first byte of every header. Frames with another
 /// version are refused (and counted): a new version is a new, incompatible layout.
-pub const PROTOCOL_VERSION: u8 = 7;
+pub const PROTOCOL_VERSION: u8 = 8;
 /// The frame delimiter. COBS guarantees it appears nowhere inside a frame.
 pub const DELIMITER: u8 = 0x00;
 /// Length of the frame header: version u8, message type u8, sequence u16.

@@ -23,11 +23,26 @@ pub enum HoldReason {
     SonarBlind,
 }
 
+impl HoldReason {
+    /// Whether the hold keeps station over ground in a current the vehicle has estimated
+    /// (`crate::guidance::drift`): for an obstacle too close or a sonar that cannot see, where
+    /// drifting carries the hull into what is there. The others — no mission, navigation stale or
+    /// frozen — send zero speed through the water: with no mission nothing should turn a
+    /// thruster, and without trustworthy navigation there is no current to take out.
+    pub fn keeps_station(self) -> bool {
+        matches!(
+            self,
+            HoldReason::InsideObstacle | HoldReason::CollisionImminent | HoldReason::SonarBlind
+        )
+    }
+}
+
 /// What the planner is doing.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum Mode {
-    /// Zero set-points, for the reason given.
+    /// Zero velocity over ground, for the reason given: zero set-points, or, where the reason
+    /// [keeps station](HoldReason::keeps_station) in an estimated current, head to it at its speed.
     Hold(HoldReason),
     /// Following the field to the mission goal.
     Transit,

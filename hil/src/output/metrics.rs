@@ -25,6 +25,8 @@
 //!   is not finite). Null when there is no such sample.
 //! - **step_cost**: maximum and mean of the firmware's reported step costs, with their unit.
 //! - **counters**: the last telemetry's counters, by name.
+//! - **current_believed**: the current the firmware believed at its last telemetry, m/s over
+//!   ground (protocol 8's `Telemetry` rows 39–40), to set beside the scenario's `[current]`.
 //!
 //! JSON keys come out in declaration order of the structs below, so the file is stable.
 
@@ -111,6 +113,9 @@ pub struct VehicleMetrics {
     /// The last telemetry's Ping360 port counters, when the firmware drove a Ping360 (it sent
     /// commands); null otherwise.
     pub ping360: Option<Ping360Counters>,
+    /// The current the firmware believed at its last telemetry, m/s over ground (x, y); null
+    /// if no telemetry arrived.
+    pub current_believed: Option<[f64; 2]>,
     /// A waypoint mission's waypoints and when each was reached (absent for a single goal).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub waypoints: Option<Vec<WaypointArrival>>,
@@ -394,6 +399,9 @@ impl VehicleMetrics {
                 .telemetry
                 .map(|t| t.ping360)
                 .filter(|p| v.ping360 && p.commands > 0),
+            current_believed: v
+                .telemetry
+                .map(|t| [f64::from(t.current.x), f64::from(t.current.y)]),
             waypoints,
         }
     }
@@ -482,6 +490,9 @@ impl fmt::Display for VehicleMetrics {
                 "; step cost max {max}, mean {mean:.0} {}",
                 self.step_cost.unit.unwrap_or("(unit unknown)")
             )?;
+        }
+        if let Some([x, y]) = self.current_believed.filter(|c| c[0].hypot(c[1]) >= 0.005) {
+            write!(f, "; believed a current of ({x:.2}, {y:.2}) m/s")?;
         }
         match &self.counters {
             None => f.write_str("; no telemetry received")?,
@@ -710,6 +721,7 @@ mod tests {
             cost_unit: vpf::link::CostUnit::Cycles,
             counters,
             ping360: Default::default(),
+            current: vpf::Vec2::new(0.5, -0.25),
             mission: Default::default(),
         });
         let m = VehicleMetrics::of(&v, 1.0, 0.5);
@@ -721,6 +733,11 @@ mod tests {
         assert_eq!(json["counters"]["deadline_overruns"], 2);
         assert_eq!(json["counters"].as_object().unwrap().len(), 22);
         assert!(m.to_string().contains("deadline_overruns 2"));
+        assert_eq!(json["current_believed"][0], 0.5);
+        assert_eq!(json["current_believed"][1], -0.25);
+        assert!(m
+            .to_string()
+            .contains("believed a current of (0.50, -0.25) m/s"));
     }
 
     #[test]

@@ -22,7 +22,7 @@ pub mod trajectory;
 use std::collections::HashSet;
 use std::path::Path;
 
-use crate::types::{SimObstacle, VehicleRecord};
+use crate::types::{SimObstacle, VehicleRecord, P2};
 
 pub use frames::{Dir, FrameLog};
 pub use metrics::{StepCost, Summary, VehicleMetrics};
@@ -47,6 +47,8 @@ pub struct RunOutput {
     /// The firmware was told where the other vehicles are (`[sonar] vehicle_contacts`): they
     /// are not its sonar's to find (the perception metrics leave them out of the misses).
     pub vehicles_known: bool,
+    /// The water's velocity over ground, m/s (`[current]`; zero in still water).
+    pub current: P2,
 }
 
 /// Makes sure the outputs can be written to `dir` before a run starts: creates it, then
@@ -208,6 +210,7 @@ pub(crate) mod test_support {
             arrival_radius_m: 1.0,
             params: vpf::Params::default(),
             vehicles_known: false,
+            current: P2::new(0.0, 0.2),
         }
     }
 }
@@ -264,6 +267,7 @@ mod tests {
             arrival_radius_m: f64::NAN,
             params: vpf::Params::default(),
             vehicles_known: false,
+            current: P2::new(f64::NAN, 0.0),
         };
         let s = write_all(&dir, &run).unwrap();
         assert!(!s.to_string().is_empty());

@@ -321,6 +321,7 @@ pub(super) fn simulate(
         arrival_radius_m: f64::from(params.arrival_radius_m),
         params,
         vehicles_known: sc.sonar.vehicle_contacts,
+        current: sc.current.velocity,
     };
     Ok(Simulated {
         output,

@@ -110,6 +110,8 @@ pub mod field {
             Field::new(36, 124, "u32", "ping360_bytes_skipped");
         pub const RX_FEC_CORRECTED: Field = Field::new(37, 128, "u32", "rx_fec_corrected");
         pub const RX_FEC_UNCORRECTABLE: Field = Field::new(38, 132, "u32", "rx_fec_uncorrectable");
+        pub const CURRENT_X: Field = Field::new(39, 136, "f32", "current_x");
+        pub const CURRENT_Y: Field = Field::new(40, 140, "f32", "current_y");
         /// Every row, in order.
         pub const ALL: &[Field] = &[
             TIME_MS,
@@ -151,6 +153,8 @@ pub mod field {
             PING360_BYTES_SKIPPED,
             RX_FEC_CORRECTED,
             RX_FEC_UNCORRECTABLE,
+            CURRENT_X,
+            CURRENT_Y,
         ];
     }
 
@@ -318,6 +322,7 @@ pub(crate) mod tests {
                 to_go_m: 40.0,
             },
             ping360: Ping360Counters::from_array(core::array::from_fn(|i| i as u32 + 21)),
+            current: Vec2::new(0.25, -0.125),
         }
     }
 
@@ -339,8 +344,10 @@ pub(crate) mod tests {
         }
         // Rows 37, 38: frames corrected 37, uncorrectable 38.
         want.extend([37, 0, 0, 0, 38, 0, 0, 0]);
+        // Rows 39, 40: the current believed, (0.25, −0.125) m/s.
+        want.extend([0x00, 0x00, 0x80, 0x3e, 0x00, 0x00, 0x00, 0xbe]);
         assert_eq!(want.len(), TELEMETRY_LEN);
-        assert_eq!(TELEMETRY_LEN, 136);
+        assert_eq!(TELEMETRY_LEN, 144);
         let mut out = [0u8; TELEMETRY_LEN];
         assert_eq!(t.emit(&mut out), Ok(TELEMETRY_LEN));
         assert_eq!(&out[..], &want[..]);
@@ -583,9 +590,10 @@ pub(crate) mod tests {
             proptest::array::uniform16(any::<u32>()),
             (0u8..=16, 0u8..=16, 0.0f32..1e6),
             proptest::array::uniform6(any::<u32>()),
+            (-3.0f32..3.0, -3.0f32..3.0),
         )
             .prop_map(
-                |(t, mode, (o, a, g), cost, unit, c, (i, n, d), p)| TelemetryRepr {
+                |(t, mode, (o, a, g), cost, unit, c, (i, n, d), p, (cx, cy))| TelemetryRepr {
                     time_ms: t,
                     mode,
                     obstacles: o,
@@ -600,6 +608,7 @@ pub(crate) mod tests {
                         to_go_m: d,
                     },
                     ping360: Ping360Counters::from_array(p),
+                    current: Vec2::new(cx, cy),
                 },
             )
     }
@@ -644,7 +653,7 @@ pub(crate) mod tests {
             r in arb_reply(),
             (level, text) in arb_log(),
         ) {
-            let mut out = [0u8; 136];
+            let mut out = [0u8; TELEMETRY_LEN];
             let n = c.emit(&mut out).unwrap();
             prop_assert_eq!(n, c.payload_len());
             prop_assert_eq!(CommandRepr::parse(&out[..n]), Ok(c));
@@ -661,7 +670,7 @@ pub(crate) mod tests {
         }
 
         #[test]
-        fn report_parsers_never_panic(bytes in proptest::collection::vec(any::<u8>(), 0..120)) {
+        fn report_parsers_never_panic(bytes in proptest::collection::vec(any::<u8>(), 0..160)) {
             let _ = CommandRepr::parse(&bytes);
             let _ = TelemetryRepr::parse(&bytes);
             let _ = ReplyRepr::parse(&bytes);

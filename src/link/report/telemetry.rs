@@ -1,12 +1,13 @@
 //! `Telemetry` (0x82): health and counters, sent periodically.
 
 use super::field::telemetry;
-use crate::link::codec::{refuse, within, Reader, Writer};
+use crate::link::codec::{finite, refuse, within, Reader, Writer};
 use crate::link::counters::{Ping360Counters, TelemetryCounters, TELEMETRY_COUNTERS};
 use crate::link::frame::MessageType;
 use crate::link::modes::{mode_codes, mode_from_codes};
 use crate::link::payload::Payload;
 use crate::link::{Error, Problem};
+use crate::math::Vec2;
 use crate::params::MAX_GHOSTS;
 use crate::types::{MissionProgress, Mode, MAX_WAYPOINTS};
 use crate::world::{MAX_AGENTS, MAX_OBSTACLES};
@@ -40,9 +41,9 @@ impl CostUnit {
 }
 
 /// `Telemetry` payload length: 98 bytes, the mission progress block (rows 28 ..= 30, 6 bytes),
-/// the Ping360 block (rows 31 ..= 36) and the forward error correction's two counters (rows
-/// 37, 38).
-pub const TELEMETRY_LEN: usize = 104 + 4 * Ping360Counters::COUNT + 8;
+/// the Ping360 block (rows 31 ..= 36), the forward error correction's two counters (rows
+/// 37, 38) and the current (rows 39, 40).
+pub const TELEMETRY_LEN: usize = 104 + 4 * Ping360Counters::COUNT + 8 + 8;
 /// The row of the first mission-progress field.
 pub const TELEMETRY_MISSION_ROW: u8 = telemetry::MISSION_WAYPOINT.row;
 /// Row of the first Ping360 counter in `Telemetry`.
@@ -50,7 +51,7 @@ pub const TELEMETRY_PING360_ROW: u8 = telemetry::PING360_DATA.row;
 
 /// `Telemetry` (0x82): health and counters, sent periodically.
 ///
-/// Layout (136 bytes): 0 `time_ms` u64 · 1 `step_cost` u32 · 2..=17 the sixteen u32 counters
+/// Layout (144 bytes): 0 `time_ms` u64 · 1 `step_cost` u32 · 2..=17 the sixteen u32 counters
 /// of [`TelemetryCounters`] in declaration order · 18 `mode` u8 · 19 `hold_reason` u8 ·
 /// 20 `obstacles` u8 (table fill, ≤ `MAX_OBSTACLES`) · 21 `agents` u8 (≤ `MAX_AGENTS`) ·
 /// 22 `ghost_depth` u8 (≤ `MAX_GHOSTS`) · 23 `cost_unit` u8 ([`CostUnit`]) ·
@@ -60,7 +61,8 @@ pub const TELEMETRY_PING360_ROW: u8 = telemetry::PING360_DATA.row;
 /// 29 `mission_waypoints` u8 (count, ≤ `MAX_WAYPOINTS`; 0: no mission) · 30 `mission_to_go_m`
 /// f32 (m along the remaining waypoints, finite, ≥ 0) · 31..=36 the Ping360 port's six u32
 /// counters of [`Ping360Counters`] in declaration order (all 0 where no Ping360 is driven) ·
-/// 37 `rx_fec_corrected` u32 · 38 `rx_fec_uncorrectable` u32 (version 7).
+/// 37 `rx_fec_corrected` u32 · 38 `rx_fec_uncorrectable` u32 (version 7) · 39 `current_x`
+/// f32 · 40 `current_y` f32 (m/s over ground, finite; version 8).
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct TelemetryRepr {
@@ -84,6 +86,9 @@ pub struct TelemetryRepr {
     pub mission: MissionProgress,
     /// The Ping360 port's counters since boot (rows 31 ..= 36; zero without a Ping360).
     pub ping360: Ping360Counters,
+    /// The current the firmware believes, m/s over ground (`crate::guidance::drift`; zero in
+    /// still water or with the estimate off).
+    pub current: Vec2,
 }
 
 impl TelemetryRepr {
@@ -96,6 +101,8 @@ impl TelemetryRepr {
             return refuse(telemetry::MISSION_WAYPOINT, Problem::OutOfRange);
         }
         within(telemetry::MISSION_TO_GO_M, m.to_go_m, 0.0, f32::MAX)?;
+        finite(telemetry::CURRENT_X, self.current.x)?;
+        finite(telemetry::CURRENT_Y, self.current.y)?;
         if usize::from(self.obstacles) > MAX_OBSTACLES {
             return refuse(telemetry::OBSTACLES, Problem::OutOfRange);
         }
@@ -141,6 +148,7 @@ impl<'a> Payload<'a> for TelemetryRepr {
         }
         let rx_fec_corrected = r.u32()?;
         let rx_fec_uncorrectable = r.u32()?;
+        let current = Vec2::new(r.f32()?, r.f32()?);
         r.finish()?;
         let t = TelemetryRepr {
             time_ms,
@@ -162,6 +170,7 @@ impl<'a> Payload<'a> for TelemetryRepr {
             },
             mission,
             ping360: Ping360Counters::from_array(ping360),
+            current,
         };
         t.check()?;
         Ok(t)
@@ -203,6 +212,9 @@ impl<'a> Payload<'a> for TelemetryRepr {
         // Version 7: the forward error correction's counters (rows 37, 38).
         w.u32(self.counters.rx_fec_corrected)?;
         w.u32(self.counters.rx_fec_uncorrectable)?;
+        // Version 8: the current believed (rows 39, 40).
+        w.f32(self.current.x)?;
+        w.f32(self.current.y)?;
         Ok(w.len())
     }
 }

@@ -568,6 +568,7 @@ fn legend(s: &mut Svg, f: &Frame, run: &RunOutput, any_collision: bool, believed
         text(s, y, "collision");
         y += 18.0;
     }
+    y = legend_current(s, x, y, run);
     if !run.vehicles.is_empty() {
         y += 8.0;
         s.text(x, y, "potential field contours", "fill=\"#222\"");
@@ -590,6 +591,29 @@ fn legend(s: &mut Svg, f: &Frame, run: &RunOutput, any_collision: bool, believed
             y += 14.0;
         }
     }
+}
+
+/// The current, true and as each vehicle's firmware believed it at its last telemetry: an arrow
+/// along each (north up), its speed in the label. Nothing in still water with nothing believed.
+fn legend_current(s: &mut Svg, x: f64, y: f64, run: &RunOutput) -> f64 {
+    let believed = run.vehicles.iter().enumerate().filter_map(|(i, v)| {
+        let c = v.telemetry?.current;
+        let c = P2::new(f64::from(c.x), f64::from(c.y));
+        (c.norm() >= 0.005).then(|| (svg::colour(i), format!("believed by {}", v.name), c))
+    });
+    let truth = (run.current.norm() > 0.0).then(|| ("#555", "current".to_string(), run.current));
+    let mut y = y;
+    for (colour, label, c) in truth.into_iter().chain(believed) {
+        let u = c.scale(1.0 / c.norm());
+        let (x0, y0) = (x + 12.0 - 8.0 * u.x, y + 8.0 * u.y);
+        let (x1, y1) = (x + 12.0 + 8.0 * u.x, y - 8.0 * u.y);
+        let style = format!("stroke=\"{colour}\" stroke-width=\"2\" marker-end=\"url(#arrow)\"");
+        s.line(x0, y0, x1, y1, &style);
+        let label = format!("{label} {:.2} m/s", c.norm());
+        s.text(x + 34.0, y + 4.0, &label, "fill=\"#222\"");
+        y += 18.0;
+    }
+    y
 }
 
 fn draw_legend_goal(s: &mut Svg, x: f64, y: f64) {
@@ -659,6 +683,7 @@ mod tests {
             "contours and trajectories"
         );
         assert!(svg.contains(">alpha<") && svg.contains(">beta<"));
+        assert!(svg.contains(">current 0.20 m/s<"), "the current's arrow");
     }
 
     #[test]
