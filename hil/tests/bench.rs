@@ -12,9 +12,7 @@ use hil::bench::case::{self, Case};
 use hil::bench::worlds::{FAMILIES, MISSION_FAMILIES};
 use hil::runner::QuietRun;
 use hil::scenario::Sensing;
-use hil::sim::ModelKind;
 use std::path::Path;
-use vpf::Strategy;
 
 fn quiet() -> QuietRun {
     QuietRun::host_until_done().expect("host firmware builds")
@@ -30,19 +28,7 @@ fn one_world_of_every_family_is_flown_without_contact() {
     let rows: Vec<_> = FAMILIES
         .iter()
         .chain(&MISSION_FAMILIES)
-        .map(|&family| {
-            let c = Case {
-                family,
-                seed: 1,
-                strategy: Strategy::Vpf,
-                model: ModelKind::VideoRay,
-                sensing: Sensing::Sonar,
-                trial: 0,
-                head: case::Head::default(),
-                current_mps: 0.0,
-            };
-            case::fly(&c, None, &run, &failed_dir())
-        })
+        .map(|&family| case::fly(&Case::new(family, 1), None, &run, &failed_dir()))
         .collect();
     for r in &rows {
         println!(
@@ -84,14 +70,8 @@ fn one_world_of_every_family_is_flown_without_contact() {
 #[test]
 fn perfect_perception_reports_no_belief_and_the_reference_is_the_grid_path() {
     let c = Case {
-        family: hil::bench::worlds::Family::WallGap,
-        seed: 2,
-        strategy: Strategy::Vpf,
-        model: ModelKind::VideoRay,
         sensing: Sensing::Contacts,
-        trial: 0,
-        head: case::Head::default(),
-        current_mps: 0.0,
+        ..Case::new(hil::bench::worlds::Family::WallGap, 2)
     };
     let row = case::fly(&c, None, &quiet(), &failed_dir());
     assert!(row.error.is_none(), "{:?}", row.error);
@@ -122,14 +102,8 @@ fn worlds_in_a_current_are_flown_without_contact() {
         (Family::Channel, 24, 0.35),
     ] {
         let c = Case {
-            family,
-            seed,
-            strategy: Strategy::Vpf,
-            model: ModelKind::VideoRay,
-            sensing: Sensing::Sonar,
-            trial: 0,
-            head: case::Head::default(),
             current_mps,
+            ..Case::new(family, seed)
         };
         let r = case::fly(&c, None, &run, &failed_dir());
         assert!(r.error.is_none(), "{}: {:?}", r.id, r.error);

@@ -94,6 +94,22 @@ pub struct Case {
 }
 
 impl Case {
+    /// World `seed` of `family` as the bench flies it by default: VPF, a VideoRay, its own
+    /// sonar (the default head), trial 0, still water. Other flights are this with fields
+    /// replaced (`Case { model: ModelKind::FlatFish, ..Case::new(family, seed) }`).
+    pub fn new(family: Family, seed: u64) -> Case {
+        Case {
+            family,
+            seed,
+            strategy: Strategy::Vpf,
+            model: ModelKind::VideoRay,
+            sensing: Sensing::Sonar,
+            trial: 0,
+            head: Head::default(),
+            current_mps: 0.0,
+        }
+    }
+
     /// The simulation's seed — the sonar's noise, speckle and false echoes, and every other
     /// draw of the flight: the world's seed for trial 0, else one mixed from both, so another
     /// trial flies the same world through other chance (`hil bench --trial`).
@@ -702,14 +718,8 @@ mod tests {
     #[test]
     fn the_world_file_names_the_sonar_set_up_it_was_flown_with() {
         let case = |head| Case {
-            family: Family::HeadOn,
-            seed: 3,
-            strategy: Strategy::Vpf,
-            model: ModelKind::VideoRay,
-            sensing: Sensing::Sonar,
-            trial: 0,
             head,
-            current_mps: 0.0,
+            ..Case::new(Family::HeadOn, 3)
         };
         for head in [
             Head::default(),
@@ -736,14 +746,10 @@ mod tests {
     #[test]
     fn a_world_in_a_current_meets_the_same_water_whatever_flies_it() {
         let case = |strategy, trial, current_mps| Case {
-            family: Family::Channel,
-            seed: 7,
             strategy,
-            model: ModelKind::VideoRay,
-            sensing: Sensing::Sonar,
             trial,
-            head: Head::default(),
             current_mps,
+            ..Case::new(Family::Channel, 7)
         };
         let water = |c: &Case| {
             let d = feasible_world(c).unwrap();
@@ -767,14 +773,8 @@ mod tests {
     #[test]
     fn another_trial_flies_the_same_world_through_other_chance() {
         let case = |trial| Case {
-            family: Family::Crossing,
-            seed: 5,
-            strategy: Strategy::Vpf,
-            model: ModelKind::VideoRay,
-            sensing: Sensing::Sonar,
             trial,
-            head: Head::default(),
-            current_mps: 0.0,
+            ..Case::new(Family::Crossing, 5)
         };
         assert_eq!(
             case(0).sim_seed(),
@@ -814,16 +814,7 @@ mod tests {
     fn every_family_gives_a_feasible_scenario_the_parser_accepts() {
         for family in FAMILIES.into_iter().chain(MISSION_FAMILIES) {
             for seed in 0..3 {
-                let case = Case {
-                    family,
-                    seed,
-                    strategy: Strategy::Vpf,
-                    model: ModelKind::VideoRay,
-                    sensing: Sensing::Sonar,
-                    trial: 0,
-                    head: Head::default(),
-                    current_mps: 0.0,
-                };
+                let case = Case::new(family, seed);
                 let Drawn {
                     world: w,
                     attempt,
@@ -856,14 +847,8 @@ mod tests {
     #[test]
     fn a_turning_craft_is_timed_against_the_way_it_can_turn() {
         let case = |model| Case {
-            family: Family::LTrap,
-            seed: 7,
-            strategy: Strategy::Vpf,
             model,
-            sensing: Sensing::Sonar,
-            trial: 0,
-            head: Head::default(),
-            current_mps: 0.0,
+            ..Case::new(Family::LTrap, 7)
         };
         let f = feasible_world(&case(ModelKind::FlatFish)).unwrap();
         assert!(
@@ -882,16 +867,7 @@ mod tests {
     #[test]
     fn survey_worlds_are_lawnmowers_over_rocks_flyable_leg_by_leg() {
         for seed in 0..6 {
-            let case = Case {
-                family: Family::Survey,
-                seed,
-                strategy: Strategy::Vpf,
-                model: ModelKind::VideoRay,
-                sensing: Sensing::Sonar,
-                trial: 0,
-                head: Head::default(),
-                current_mps: 0.0,
-            };
+            let case = Case::new(Family::Survey, seed);
             let Drawn {
                 world: w,
                 attempt,
