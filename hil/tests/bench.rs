@@ -89,7 +89,8 @@ fn perfect_perception_reports_no_belief_and_the_reference_is_the_grid_path() {
 /// a channel wall, a box or a wall's end, and the water carried it on (`src/guidance/drift.rs`).
 /// The last two still touched until the fail-safe holds for an obstacle too close kept station
 /// too (`HoldReason::keeps_station`; channel 196 had drifted onto its wall through 26 periods
-/// of `Hold(InsideObstacle)`). Flown as the slice is, they must be reached without contact.
+/// of `Hold(InsideObstacle)`). Flown as the slice is, they must be reached without contact,
+/// and the current the firmware believed at the end must be within 0.05 m/s of the truth.
 #[test]
 fn worlds_in_a_current_are_flown_without_contact() {
     use hil::bench::worlds::Family;
@@ -114,6 +115,13 @@ fn worlds_in_a_current_are_flown_without_contact() {
             r.success,
             r.min_clearance_m,
             failed_dir().display()
+        );
+        // And the firmware says what water it was in (`Telemetry`'s current).
+        assert!(
+            r.current_error_mps.is_some_and(|e| e < 0.05),
+            "{}: believed the current {:?} m/s off",
+            r.id,
+            r.current_error_mps
         );
     }
 }

@@ -203,6 +203,10 @@ pub struct Row {
     /// A formation world's spacing error in transit ([`formation_spacing`]), a share of λ.
     #[serde(default)]
     pub formation_spacing: Option<f64>,
+    /// How far the current the firmware believed at its last telemetry was from the true one
+    /// (`--current`; zero in still water), m/s: the worst vehicle's.
+    #[serde(default)]
+    pub current_error_mps: Option<f64>,
     /// Why the run was not flown or failed to run (then `success` is false).
     pub error: Option<String>,
 }
@@ -228,6 +232,7 @@ impl Row {
             perception_miss_mean_m: None,
             perception_false_frac: None,
             formation_spacing: None,
+            current_error_mps: None,
             error: None,
         }
     }
@@ -491,6 +496,11 @@ fn measure(row: &mut Row, out: &RunOutput, world: &World, shortest: f64, referen
         .sum();
     (row.cruise_frac, row.held_frac) = time_shares(out);
     row.formation_spacing = world.formation_m.and_then(|l| formation_spacing(out, l));
+    row.current_error_mps = vs
+        .iter()
+        .filter_map(|v| v.current_believed)
+        .map(|[x, y]| P2::new(x, y).sub(out.current).norm())
+        .reduce(f64::max);
     // Perception: the worst vehicle's miss, the fleet's mean share of false cells.
     let seen: Vec<_> = vs.iter().filter_map(|v| v.perception).collect();
     row.perception_miss_m = seen.iter().map(|p| p.miss_p95_m).reduce(f64::max);

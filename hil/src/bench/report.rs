@@ -46,6 +46,8 @@ pub struct Line {
     pub median_perception_false: Option<f64>,
     /// Median formation spacing error, a share of λ ([`super::case::formation_spacing`]).
     pub median_formation_spacing: Option<f64>,
+    /// Median error of the current believed at the end ([`Row::current_error_mps`]), m/s.
+    pub median_current_error_mps: Option<f64>,
 }
 
 /// The tables of every configuration.
@@ -140,6 +142,7 @@ fn line(family: &str, rows: &[&Row]) -> Line {
         median_perception_miss_mean_m: f(&|r| r.perception_miss_mean_m),
         median_perception_false: f(&|r| r.perception_false_frac),
         median_formation_spacing: f(&|r| r.formation_spacing),
+        median_current_error_mps: f(&|r| r.current_error_mps),
     }
 }
 
@@ -194,8 +197,9 @@ impl Report {
                 "| family | runs | success | collisions | collision rate (95 % bound) | not flown \
                  | clearance worst / median (m) | time / ref (median) | path / shortest (median) \
                  | guard periods (median) | under way: at cruise / held (mean) \
-                 | perception miss mean / p95 (m) | false cells | formation spacing error |\n\
-                 |---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
+                 | perception miss mean / p95 (m) | false cells | formation spacing error \
+                 | current believed, error (m/s) |\n\
+                 |---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
             );
             for l in lines {
                 let pct = if l.runs > 0 {
@@ -209,7 +213,7 @@ impl Report {
                 let _ = writeln!(
                     s,
                     "| {} | {} | {} ({pct:.0} %) | {} | {bound} | {} | {} / {} | {} | {} | {} | {} / {} \
-                     | {} / {} | {} | {} |",
+                     | {} / {} | {} | {} | {} |",
                     if l.family == "all" {
                         "**all**".to_string()
                     } else {
@@ -230,6 +234,7 @@ impl Report {
                     opt(l.median_perception_miss_m, 2),
                     opt(l.median_perception_false, 3),
                     pct_of(l.median_formation_spacing),
+                    opt(l.median_current_error_mps, 3),
                 );
             }
             s.push('\n');
@@ -266,6 +271,7 @@ mod tests {
             perception_miss_mean_m: None,
             perception_false_frac: None,
             formation_spacing: None,
+            current_error_mps: None,
             error: None,
         }
     }
