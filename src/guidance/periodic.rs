@@ -232,11 +232,6 @@ impl Periodic {
         self.nav
     }
 
-    /// The current believed, m/s over ground (`crate::guidance::drift`).
-    pub fn drift(&self) -> Vec2 {
-        self.drift.estimate()
-    }
-
     /// The newest route read from the background.
     pub fn route(&self) -> Option<&Route> {
         self.route.as_ref()
