@@ -125,3 +125,29 @@ fn worlds_in_a_current_are_flown_without_contact() {
         );
     }
 }
+
+#[test]
+fn a_flat_fish_is_told_the_current_it_is_in() {
+    // It is not steered by it (README, "In a current"): only the estimate is checked here.
+    use hil::bench::case::Head;
+    use hil::bench::worlds::Family;
+    use hil::scenario::ModelKind;
+    let run = quiet();
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("recipes/flatfish.toml");
+    let text = std::fs::read_to_string(&path).expect("the flat-fish recipe");
+    let params = hil::scenario::parse_planner(&text, "flatfish.toml", 0.1).expect("it parses");
+    let c = Case {
+        model: ModelKind::FlatFish,
+        head: Head::carried_by(ModelKind::FlatFish),
+        current_mps: 0.2,
+        ..Case::new(Family::Clutter, 31)
+    };
+    let r = case::fly(&c, Some((&params, &path)), &run, &failed_dir());
+    assert!(r.error.is_none(), "{}: {:?}", r.id, r.error);
+    assert!(
+        r.current_error_mps.is_some_and(|e| e < 0.05),
+        "{}: believed the current {:?} m/s off",
+        r.id,
+        r.current_error_mps
+    );
+}

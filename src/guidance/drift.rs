@@ -15,8 +15,9 @@
 //! flight) at the speed the autopilot was given: r = v_g − v_set·ê(ψ) − ĉ. Across the heading
 //! the residual needs no speed at all; along it, only once the speed asked for has held still
 //! for [`SETTLE_S`] (the autopilot has caught up). Both are skipped while the heading turns
-//! faster than [`MAX_TURN_RPS`] (a turning hull skids), and always for a slow-turning craft
-//! ([`straight`]). Each period ĉ moves by T/τ of the
+//! faster than [`MAX_TURN_RPS`] (a turning hull skids); a slow-turning craft's, until it has
+//! gone straight for as long as it takes to brake from v_max ([`straight`]). Each period ĉ
+//! moves by T/τ of the
 //! residual (τ = [`DriftConfig::tau_s`]). Seed 000's kinematic vehicle goes exactly where it
 //! points at the speed it is given, so in still water its residual is zero and nothing
 //! changes.
@@ -26,13 +27,16 @@
 //! becomes station-keeping, head to the current, and so do the fail-safe holds that
 //! [keep station](crate::planner::HoldReason::keeps_station): an obstacle too close, the sonar
 //! blind; the others stay zero speed and are not handed here: `Periodic::make_good`). Below
-//! [`DEADBAND_MPS`] nothing is changed. The
+//! [`DEADBAND_MPS`] nothing is changed, and a slow-turning craft is only told the current
+//! (telemetry), never steered by it: it cannot stop where it is in a current, and made good
+//! against it, its guard's stops became slow turns on the spot that drifted on all the same
+//! (README, "In a current"). The
 //! command's velocity v̄_c stays the planner's (over ground): the planner integrates on from
 //! it, and the MAVLink bridge sends it to an autopilot that holds velocity over ground itself.
 //!
-//! **Capacity.** One vector and four scalars; no tables.
+//! **Capacity.** One vector and five scalars; no tables.
 
-use crate::math::{atan2, min, Vec2};
+use crate::math::{atan2, max, min, Vec2};
 use crate::params::Params;
 use crate::types::{Command, NavState};
 
@@ -67,13 +71,32 @@ pub const SETTLE_S: f32 = 2.0;
 pub const MAX_TURN_RPS: f32 = 0.1;
 
 /// Whether a turn of `turn` rad over `dt` s is straight enough to estimate from: under
-/// [`MAX_TURN_RPS`], and never for a slow-turning craft (`Params::turn_rate_rps` > 0), which is
-/// left as it was. Its hull skids through all of its turns: with this gate the flat-fish
-/// believed up to 0.09 m/s in still water and lost 56 bench worlds (gained 39; `--seeds 170`
-/// with its recipe); with a quarter of its own top rate and a settling time of v_max / brake
-/// it lost 9 formations; and in a 0.2 m/s current neither helped it (README, "In a current").
+/// [`MAX_TURN_RPS`], or for a slow-turning craft (`Params::turn_rate_rps` > 0) under
+/// [`SLOW_STRAIGHT`] of its top rate — and for that craft only once it has been so for
+/// [`settle_s`] ([`Drift::update`]): its hull skids through all of its turns and for a while
+/// after. With the VideoRay's gate the flat-fish believed up to 0.09 m/s in still water
+/// (`hil bench --models flatfish --params hil/recipes/flatfish.toml --seeds 170`).
 fn straight(craft: &Params, turn: f32, dt: f32) -> bool {
-    craft.turn_rate_rps <= 0.0 && turn <= MAX_TURN_RPS * dt
+    let rate = if craft.turn_rate_rps > 0.0 {
+        SLOW_STRAIGHT * craft.turn_rate_rps
+    } else {
+        MAX_TURN_RPS
+    };
+    turn <= rate * dt
+}
+
+/// A slow-turning craft counts as straight below this fraction of its top turn rate.
+const SLOW_STRAIGHT: f32 = 0.25;
+
+/// How long a craft must have gone straight, and been asked for the same speed, before its
+/// residual is used, s: [`SETTLE_S`], or for a slow-turning craft, whose skid outlasts its turns
+/// and whose speed follows its set-point slowly, the time it takes to brake from v_max if longer.
+fn settle_s(craft: &Params) -> f32 {
+    if craft.turn_rate_rps > 0.0 {
+        max(SETTLE_S, craft.v_max / craft.brake())
+    } else {
+        SETTLE_S
+    }
 }
 
 /// A residual larger than this is not water but a fault (a position jump, a hull held against a
@@ -90,6 +113,8 @@ pub struct Drift {
     sent: Option<(f32, f32)>,
     /// The speed asked for has held within [`HELD_MPS`] of this, m/s, for this long, s.
     held: (f32, f32),
+    /// The heading has been straight ([`straight`]) for this long, s.
+    straight_s: f32,
 }
 
 impl Drift {
@@ -106,7 +131,18 @@ impl Drift {
         };
         // Unwrapped: across ±π it reads as a fast turn, and that one period is skipped.
         let turn = (nav.heading - psi0).abs();
-        if !(cfg.tau_s > 0.0 && straight(craft, turn, dt)) {
+        self.straight_s = if straight(craft, turn, dt) {
+            self.straight_s + dt
+        } else {
+            0.0
+        };
+        let settle = settle_s(craft);
+        let steady = if craft.turn_rate_rps > 0.0 {
+            self.straight_s >= settle
+        } else {
+            self.straight_s > 0.0
+        };
+        if !(cfg.tau_s > 0.0 && steady) {
             return;
         }
         let e = Vec2::from_angle(nav.heading);
@@ -117,7 +153,7 @@ impl Drift {
             return;
         }
         // Across the heading always; along it once the speed has held.
-        let along = if self.held.1 >= SETTLE_S { 1.0 } else { 0.0 };
+        let along = if self.held.1 >= settle { 1.0 } else { 0.0 };
         let step = r - e * ((1.0 - along) * r.dot(e));
         // Not bounded: no residual passes above 3 m/s, and a current beyond v_max is met at
         // v_max all the same (`compensate`).
@@ -131,7 +167,7 @@ impl Drift {
         &mut self,
         cfg: &DriftConfig,
         mut cmd: Command,
-        v_max: f32,
+        craft: &Params,
         heading: f32,
         dt: f32,
     ) -> Command {
@@ -146,9 +182,12 @@ impl Drift {
             (self.held.0, self.held.1 + dt)
         };
         let c = self.estimate;
-        if cfg.tau_s > 0.0 && c.norm2() >= DEADBAND_MPS * DEADBAND_MPS {
+        // A slow-turning craft is only told what the current is: it cannot hold station on the
+        // spot, and making good its planner's velocity made it no safer (README, "In a current").
+        let acts = craft.turn_rate_rps <= 0.0;
+        if cfg.tau_s > 0.0 && acts && c.norm2() >= DEADBAND_MPS * DEADBAND_MPS {
             let w = Vec2::from_angle(cmd.psi_set) * cmd.v_set - c;
-            let speed = min(w.norm(), v_max);
+            let speed = min(w.norm(), craft.v_max);
             if speed > 1e-3 {
                 cmd.psi_set = atan2(w.y, w.x);
             }
@@ -200,7 +239,7 @@ mod tests {
                 &Params::default(),
                 0.1,
             );
-            sent = d.compensate(cfg, want, 1.0, sent.psi_set, 0.1);
+            sent = d.compensate(cfg, want, &Params::default(), sent.psi_set, 0.1);
         }
         sent
     }
@@ -247,19 +286,38 @@ mod tests {
     }
 
     #[test]
-    fn a_slow_turning_craft_is_left_as_it_was() {
+    fn a_slow_turning_craft_learns_the_current_once_straight_and_is_only_told_it() {
         let cfg = DriftConfig::default();
         let craft = Params {
             turn_rate_rps: 0.046,
+            brake_mps2: 0.1,
+            v_max: 0.65,
             ..Params::default()
         };
+        let mut cruise = stopped(0.0);
+        cruise.v_set = 0.5;
+        let current = Vec2::new(0.0, 0.2);
+        // Swinging at half its top rate, it skids: it learns nothing.
         let mut d = Drift::default();
-        let stop = stopped(0.0);
-        for _ in 0..100 {
-            d.update(&cfg, &nav(0.0, Vec2::new(0.3, 0.0)), &craft, 0.1);
-            assert_eq!(d.compensate(&cfg, stop, 1.0, 0.0, 0.1), stop);
+        for k in 0..300 {
+            let heading = 0.023 * 0.1 * k as f32;
+            let through = Vec2::from_angle(heading) * 0.5;
+            d.update(&cfg, &nav(heading, through + current), &craft, 0.1);
+            assert_eq!(d.compensate(&cfg, cruise, &craft, heading, 0.1), cruise);
         }
         assert_eq!(d.estimate(), Vec2::ZERO);
+        // Straight, it learns the current once v_max / brake = 6.5 s have passed, and its
+        // set-points are left as they were asked.
+        let mut d = Drift::default();
+        let through = Vec2::new(0.5, 0.0);
+        for k in 0..400 {
+            d.update(&cfg, &nav(0.0, through + current), &craft, 0.1);
+            assert_eq!(d.compensate(&cfg, cruise, &craft, 0.0, 0.1), cruise);
+            if k == 60 {
+                assert_eq!(d.estimate(), Vec2::ZERO, "before it has settled");
+            }
+        }
+        assert!((d.estimate() - current).norm() < 0.01, "{:?}", d.estimate());
     }
 
     #[test]

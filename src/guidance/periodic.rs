@@ -496,7 +496,7 @@ impl Periodic {
         let (cfg, p) = (&self.config.drift, self.planner.params());
         self.drift.update(cfg, &n.nav, p, p.period_s);
         self.drift
-            .compensate(cfg, cmd, p.v_max, n.nav.heading, p.period_s)
+            .compensate(cfg, cmd, p, n.nav.heading, p.period_s)
     }
 
     /// Fail-safes, then the planner.
