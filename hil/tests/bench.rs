@@ -5,6 +5,8 @@
 //! reported its map) and honest (a perfect-perception run reports none); the formation must
 //! keep its lattice.
 //!
+//! And a flat-fish in a current, for the estimate it reports (it is not steered by it).
+//!
 //! The slice is not where the numbers come from — `cargo hil bench` flies 204 worlds — but a
 //! change that makes the vehicle drive into what it saw fails here.
 

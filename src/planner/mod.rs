@@ -591,8 +591,8 @@ impl Planner {
             heading: cx.nav.heading,
         };
         // At rest ê₁ is the heading: a craft that turns slowly, with the force astern, may spin
-        // on the spot after it; plain bounding at rest measured worse (docs/bench-history.md, "plain bounding
-        // for a stopped slow-turning craft"), and so did ê₁ at rest from the last planned
+        // on the spot after it; plain bounding at rest measured worse (docs/bench-history.md,
+        // "plain bounding for a stopped slow-turning craft"), and so did ê₁ at rest from the last planned
         // velocity, as eq. 9 takes it (setpoints.rs), which ends the spin (boxes seed 102: 30
         // → 1 s at rest commanded more than 150° off): flat-fish with its recipe, seeds 0–33,
         // 366 → 361 of 408; 102–169, 712 → 709 of 816.

@@ -40,9 +40,9 @@
 //! the wall too, and kept, it closed narrow channels. (`hil bench`, all families, seeds 0–199 ×
 //! 3 strategies: contacts 38 → 30; successes 6 933 → 6 902, navfn's in channels 58 → 46 of 200;
 //! seeds 200–299 of five families, 20 → 17; the flat-fish lost 10 of 408 successes, see
-//! docs/bench-history.md. Protecting from echo beams too gave 33 and 6 889; protecting only a cell with
-//! believed neighbours on both sides along the beam lost the gain, since a silent beam meets a
-//! wall's believed run at its near end.)
+//! docs/bench-history.md. Protecting from echo beams too gave 33 and 6 889; protecting only a
+//! cell with believed neighbours on both sides along the beam lost the gain, since a silent
+//! beam meets a wall's believed run at its near end.)
 //!
 //! **Contexts.** One writer, the background (scanlines, [`EvidenceMap::observe`]), and one
 //! reader, the periodic task ([`EvidenceMap::nearest`], [`EvidenceMap::row_bits`]); the

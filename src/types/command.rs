@@ -25,10 +25,11 @@ pub enum HoldReason {
 
 impl HoldReason {
     /// Whether the hold keeps station over ground in a current the vehicle has estimated
-    /// (`crate::guidance::drift`; a craft that turns at once): for an obstacle too close or a sonar that cannot see, where
-    /// drifting carries the hull into what is there. The others — no mission, navigation stale or
-    /// frozen — send zero speed through the water: with no mission nothing should turn a
-    /// thruster, and without trustworthy navigation there is no current to take out.
+    /// (`crate::guidance::drift`; a craft that turns at once): for an obstacle too close or a
+    /// sonar that cannot see, where drifting carries the hull into what is there. The others —
+    /// no mission, navigation stale or frozen — send zero speed through the water: with no
+    /// mission nothing should turn a thruster, and without trustworthy navigation there is no
+    /// current to take out.
     pub fn keeps_station(self) -> bool {
         matches!(
             self,

@@ -98,9 +98,9 @@ pub enum SonarMode {
 /// by how often the head looks again, not by how far it sees: another VideoRay echoes only
 /// within about 8 m, so at the high-resolution 30 m / 1.8° (a 9 s sweep) two closing at
 /// 2 m/s saw each other once, if at all. On generated worlds (`hil bench`) it cut contacts by
-/// about two thirds at about the same success; the numbers are in docs/bench-history.md ("The sonar's
-/// set-up"). The 3° beam leaves 0.6° between pings, 0.2 m at 20 m. The shipped scenarios name
-/// their own set-up.
+/// about two thirds at about the same success; the numbers are in docs/bench-history.md ("The
+/// sonar's set-up"). The 3° beam leaves 0.6° between pings, 0.2 m at 20 m. The shipped
+/// scenarios name their own set-up.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Sonar {
     /// Default sensing of the vehicles.
