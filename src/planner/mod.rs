@@ -599,7 +599,8 @@ impl Planner {
         let e1 = Some(measured.e1());
         let f_bar = bound::bound(f, prm.f_max, e1, prm.bounding);
         let v_c = (f_bar + m.integrator.force) * (0.5 * prm.period_s) + m.integrator.velocity;
-        let v_lim = crate::math::min(prm.v_max, self.arrival_speed(m, cx));
+        let arrival = self.arrival_speed(m, cx);
+        let v_lim = crate::math::min(prm.v_max, arrival);
         // A waypoint's own speed bounds the leg to it.
         let v_lim = crate::math::min(v_lim, cx.leg.speed);
         let v_bar = bound::bound(v_c, v_lim, e1, prm.bounding);
@@ -635,6 +636,8 @@ impl Planner {
                 (target - p).norm(),
                 prm.turn_rate_rps,
                 others,
+                // Bounded only while it steers for the goal it stops on.
+                arrival.is_finite(),
             )
         } else {
             v_set
@@ -663,13 +666,24 @@ impl Planner {
 ///   turn at ψ̇ and speed u has radius u/ψ̇, so u ≤ ψ̇·d / (2 sin e). That one is kept within
 ///   ψ̇ times `others`, the room to the nearest other vehicle (m): the guard judges vehicles by
 ///   their closest approach on straight lines, which does not see a turn;
-/// - never more than v.
+/// - never more than v; and, `arriving` at the goal it stops on (not a point it passes or a
+///   carrot it chases), never more than the speed whose turn passes through it.
+///
+/// The v·cos e floor lets a craft steering for a far point sweep on a turn wider than the
+/// circle through it: the point moves on with the craft. The goal does not. Within about
+/// v·sin 2e / ψ̇ of it (14 m at 0.65 m/s) that floor is the faster, and a flat-fish flew round
+/// its goal on a circle that never met the arrival radius (clutter seed 20: 0.2 m short when
+/// its time ran out). Capping every point steered for by the turn through it cost more than
+/// it gained (carrots and detour points come close on turns): `cargo hil bench --models
+/// flatfish --params hil/recipes/flatfish.toml --seeds 170`, 1 832 → 1 816 of 2 040. Capping
+/// the goal alone: 1 832 → 1 837 (5 gained, none lost), and on seeds 170–339 (`--first-seed
+/// 170`) 1 806 → 1 808 (2 gained, none lost); contacts 0 and 2 as before.
 ///
 /// With the cos e cut alone, a flat-fish stopped to turn whenever its heading was 60–90° off,
 /// even towards a goal-point 40 m away that it could have reached on the turn
 /// (`cargo hil bench --models flatfish --params hil/recipes/flatfish.toml --seeds 34`: 259 of
 /// 408 worlds, 7 contacts; with this, 275, 3).
-fn turning_speed(v: f32, e: f32, d: f32, rate: f32, others: f32) -> f32 {
+fn turning_speed(v: f32, e: f32, d: f32, rate: f32, others: f32, arriving: bool) -> f32 {
     // `e` is wrapped to ±π by the caller; NaN turns on the spot too.
     let ahead = e.abs() < core::f32::consts::FRAC_PI_2;
     if !ahead {
@@ -677,6 +691,11 @@ fn turning_speed(v: f32, e: f32, d: f32, rate: f32, others: f32) -> f32 {
     }
     let cos_e = crate::math::cos(e);
     let reach = rate * d / crate::math::max(2.0 * crate::math::sin(e).abs(), 1e-6);
+    let v = if arriving {
+        crate::math::min_num(v, reach)
+    } else {
+        v
+    };
     let reach = crate::math::min_num(reach, rate * crate::math::max(0.0, others));
     crate::math::min(v, crate::math::max(reach, v * cos_e))
 }
@@ -690,17 +709,38 @@ mod tests {
         let (v, rate, deg) = (0.567, 0.046, core::f32::consts::PI / 180.0);
         let open = f32::INFINITY;
         // Straight on: the plan's speed.
-        assert_eq!(turning_speed(v, 0.0, 40.0, rate, open), v);
+        assert_eq!(turning_speed(v, 0.0, 40.0, rate, open, false), v);
         // 60° off, a goal-point 40 m away: the turn at 0.567 m/s (radius 12.3 m) reaches it.
-        assert_eq!(turning_speed(v, 60.0 * deg, 40.0, rate, open), v);
+        assert_eq!(turning_speed(v, 60.0 * deg, 40.0, rate, open, false), v);
         // ... 4 m away it does not: cut to v·cos e, as before.
-        let cut = turning_speed(v, 60.0 * deg, 4.0, rate, open);
+        let cut = turning_speed(v, 60.0 * deg, 4.0, rate, open, false);
         assert!((cut - v * 0.5).abs() < 1e-4, "{cut}");
         // ... nor with another vehicle 3 m off the hull.
-        let near = turning_speed(v, 60.0 * deg, 40.0, rate, 3.0);
+        let near = turning_speed(v, 60.0 * deg, 40.0, rate, 3.0, false);
         assert!((near - v * 0.5).abs() < 1e-4, "{near}");
         // From 90° off on it turns on the spot, whatever lies ahead.
-        assert_eq!(turning_speed(v, 100.0 * deg, 400.0, rate, open), 0.0);
-        assert_eq!(turning_speed(v, f32::NAN, 40.0, rate, open), 0.0);
+        assert_eq!(turning_speed(v, 100.0 * deg, 400.0, rate, open, false), 0.0);
+        assert_eq!(turning_speed(v, f32::NAN, 40.0, rate, open, false), 0.0);
+    }
+
+    #[test]
+    fn a_slow_turning_craft_arriving_slows_to_a_turn_through_its_goal() {
+        let (v, rate, deg) = (0.65, 0.046, core::f32::consts::PI / 180.0);
+        let open = f32::INFINITY;
+        // The goal 4 m away, 60° off: the circle through it has radius 4 / (2 sin 60°) = 2.31 m,
+        // flown at 0.046 × 2.31 = 0.106 m/s, not at v·cos e = 0.325 m/s.
+        let arriving = turning_speed(v, 60.0 * deg, 4.0, rate, open, true);
+        assert!(
+            (arriving - 0.046 * 4.0 / 3f32.sqrt()).abs() < 1e-4,
+            "{arriving}"
+        );
+        let passing = turning_speed(v, 60.0 * deg, 4.0, rate, open, false);
+        assert!((passing - v * 0.5).abs() < 1e-4, "{passing}");
+        // Far off, or dead ahead, arriving changes nothing.
+        assert_eq!(turning_speed(v, 60.0 * deg, 40.0, rate, open, true), v);
+        assert_eq!(turning_speed(v, 0.0, 4.0, rate, open, true), v);
+        // It never asks for more than the turn through the goal, near other vehicles either.
+        let near = turning_speed(v, 60.0 * deg, 4.0, rate, 30.0, true);
+        assert!(near <= arriving + 1e-6, "{near}");
     }
 }
