@@ -77,7 +77,7 @@ pub const MAX_TURN_RPS: f32 = 0.1;
 /// after. With the VideoRay's gate the flat-fish believed up to 0.09 m/s in still water
 /// (`hil bench --models flatfish --params hil/recipes/flatfish.toml --seeds 170`).
 fn straight(craft: &Params, turn: f32, dt: f32) -> bool {
-    let rate = if craft.turn_rate_rps > 0.0 {
+    let rate = if craft.turns_slowly() {
         SLOW_STRAIGHT * craft.turn_rate_rps
     } else {
         MAX_TURN_RPS
@@ -92,7 +92,7 @@ const SLOW_STRAIGHT: f32 = 0.25;
 /// residual is used, s: [`SETTLE_S`], or for a slow-turning craft, whose skid outlasts its turns
 /// and whose speed follows its set-point slowly, the time it takes to brake from v_max if longer.
 fn settle_s(craft: &Params) -> f32 {
-    if craft.turn_rate_rps > 0.0 {
+    if craft.turns_slowly() {
         max(SETTLE_S, craft.v_max / craft.brake())
     } else {
         SETTLE_S
@@ -137,7 +137,7 @@ impl Drift {
             0.0
         };
         let settle = settle_s(craft);
-        let steady = if craft.turn_rate_rps > 0.0 {
+        let steady = if craft.turns_slowly() {
             self.straight_s >= settle
         } else {
             self.straight_s > 0.0
@@ -184,7 +184,7 @@ impl Drift {
         let c = self.estimate;
         // A slow-turning craft is only told what the current is: it cannot hold station on the
         // spot, and making good its planner's velocity made it no safer (README, "In a current").
-        let acts = craft.turn_rate_rps <= 0.0;
+        let acts = !craft.turns_slowly();
         if cfg.tau_s > 0.0 && acts && c.norm2() >= DEADBAND_MPS * DEADBAND_MPS {
             let w = Vec2::from_angle(cmd.psi_set) * cmd.v_set - c;
             let speed = min(w.norm(), craft.v_max);

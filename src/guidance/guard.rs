@@ -494,7 +494,7 @@ impl GuardConfig {
     /// 34–67 (held out) 315 → 323, 2 → 2 contacts (crossing movers, −0.01 m); seeds 68–101
     /// outside formations 289 → 286, 0 → 0 (worst clearance 0.50 → 0.20 m): a gain, noisy.
     pub fn hull_margin(&self, prm: &Params) -> f32 {
-        if prm.turn_rate_rps > 0.0 {
+        if prm.turns_slowly() {
             0.0
         } else {
             self.hull_margin_m
@@ -871,10 +871,6 @@ struct Helm<'a> {
 }
 
 impl Helm<'_> {
-    fn turns_slowly(&self) -> bool {
-        self.prm.turn_rate_rps > 0.0
-    }
-
     /// The arc swept by the command (`psi`, `v`), reaction time included.
     fn commanded(&self, psi: f32, v: f32) -> [Vec2; ARC_SEGMENTS + 2] {
         let (prm, cfg) = (self.prm, self.cfg);
@@ -919,7 +915,7 @@ impl Helm<'_> {
     /// its [`Helm::course`] by one that turns slowly (it goes where it points, not where it
     /// is told, and cannot stop at once either).
     fn mover_margin(&self, b: &Believed, psi: f32, v: f32) -> f32 {
-        if !self.turns_slowly() {
+        if !self.prm.turns_slowly() {
             return b.mover_margin(self.p, Vec2::from_angle(psi) * v);
         }
         b.mover_margin_along(&self.course(psi, v))
@@ -932,7 +928,7 @@ impl Helm<'_> {
 
     /// Whether the command (`psi`, `v`) is blocked by what stands still.
     fn blocked_still(&self, b: &Believed, psi: f32, v: f32) -> bool {
-        if !self.turns_slowly() {
+        if !self.prm.turns_slowly() {
             return b.blocked_still(self.p, Vec2::from_angle(psi), reach(v, self.prm, self.cfg));
         }
         b.blocked_path(&self.commanded(psi, v))
@@ -1071,7 +1067,7 @@ pub fn check(
     let head_on = cfg.head_on_mps > 0.0;
     // Close quarters: such a contact near enough to matter may have come any way since (not
     // for a craft that turns slowly: module notes).
-    let drift_mps = if prm.turn_rate_rps > 0.0 {
+    let drift_mps = if prm.turns_slowly() {
         0.0
     } else {
         CLOSE_DRIFT * cfg.head_on_mps
@@ -1136,7 +1132,7 @@ pub fn check(
     // overdue: unseen for a sweep, it was a rock's wander. Rated tracks only, never the
     // head-on hypothesis's: room for every obstacle, never full.
     let overdue_ms = (CPA_HORIZON_S * 1000.0) as u64;
-    let slow_turning = prm.turn_rate_rps > 0.0;
+    let slow_turning = prm.turns_slowly();
     let slow_tracks = world
         .obstacles()
         .iter()
@@ -1205,10 +1201,10 @@ pub fn check(
     // The slow craft's way out is looked for once, here, and only when it is needed.
     let stop_margin = helm.mover_margin(&b, cmd.psi_set, 0.0);
     let run_into = stop_margin < 0.0;
-    let slow_escape = (run_into && helm.turns_slowly())
+    let slow_escape = (run_into && helm.prm.turns_slowly())
         .then(|| way_out(cfg, &helm, &b, cmd.psi_set, evasion, stop_margin + GAIN_M))
         .flatten();
-    let can_stop = !run_into || (helm.turns_slowly() && slow_escape.is_none());
+    let can_stop = !run_into || (helm.prm.turns_slowly() && slow_escape.is_none());
     let get_away = |cmd: Command| match slow_escape {
         Some((a, v)) => (with_motion(cmd, a, v, Verdict::Turned), Verdict::Turned),
         None => evade(cfg, &helm, &b, cmd, evasion),
@@ -1221,10 +1217,10 @@ pub fn check(
     //    seed 102, 19 s pointing at a box 3 m ahead. Flat-fish with its recipe, seeds 0–33,
     //    358 → 366 of 408; 34–101 (not looked at), 705 → 714 of 816, contacts 2 → 1;
     //    102–169, 694 → 712, 2 → 1.
-    let creeping = helm.turns_slowly() && still(nav.velocity);
+    let creeping = helm.prm.turns_slowly() && still(nav.velocity);
     if let Some(u) = nav.velocity.normalized(1e-3).filter(|_| !creeping) {
         let braking = speed * speed / (2.0 * prm.brake()) + cfg.margin_m;
-        let blocked = if helm.turns_slowly() {
+        let blocked = if helm.prm.turns_slowly() {
             let path = arc(
                 p,
                 nav.heading,
@@ -1251,7 +1247,7 @@ pub fn check(
         return get_away(cmd);
     }
     // 2. The command as planned, no faster than the lookout vouches for where it goes.
-    let going = if helm.turns_slowly() {
+    let going = if helm.prm.turns_slowly() {
         nav.heading
     } else {
         cmd.psi_set
@@ -1273,7 +1269,7 @@ pub fn check(
             let at = helm.course(cmd.psi_set, 0.0)[STOPPED];
             min(stop_margin, b.passing(at, CPA_HORIZON_S))
         };
-        if helm.turns_slowly()
+        if helm.prm.turns_slowly()
             && can_stop
             && helm.mover_margin(&b, a, v) < min(CLOSE_CALL_M, stopping() - GAIN_M)
         {
@@ -1307,7 +1303,7 @@ pub fn check(
     // 5. Nothing is clear: stop, unless a mover would run into the stopped vehicle; a craft
     //    that turns slowly turns on the spot meanwhile, to where it can go.
     if can_stop {
-        let psi = if helm.turns_slowly() {
+        let psi = if helm.prm.turns_slowly() {
             turn_on_the_spot(cfg, &helm, &b, &cmd, v)
         } else {
             cmd.psi_set

@@ -421,7 +421,7 @@ impl Periodic {
     #[inline(never)]
     fn publish_wakes(&self, m: &EvidenceMap, nav: NavState, now_ms: u64) {
         let p = nav.position;
-        let own = (self.planner.params().turn_rate_rps > 0.0).then_some(nav.velocity);
+        let own = self.planner.params().turns_slowly().then_some(nav.velocity);
         let mut out: [Option<(f32, Vec2, f32)>; MAX_WAKES] = [None; MAX_WAKES];
         for o in self.world.obstacles() {
             let age = now_ms.saturating_sub(o.seen_ms);
@@ -642,7 +642,7 @@ impl Periodic {
     fn take_sightings(&mut self, inputs: &mut impl PeriodicInputs, vehicle: Vec2) {
         // A slow-turning craft opens no faint pairs (`crate::guidance::faint`, "Spurious
         // pairs"): taken for still, it is never under way.
-        let slow_turning = self.planner.params().turn_rate_rps > 0.0;
+        let slow_turning = self.planner.params().turns_slowly();
         let velocity = self.nav.map_or(Vec2::ZERO, |n| n.nav.velocity);
         self.tracks
             .own_velocity(if slow_turning { Vec2::ZERO } else { velocity });

@@ -274,6 +274,12 @@ impl core::fmt::Display for ParamError {
 impl core::error::Error for ParamError {}
 
 impl Params {
+    /// Whether the craft turns at a bounded rate (`turn_rate_rps` > 0, a flat-fish) rather than
+    /// at once, as seeds 000 and 001's vehicles do.
+    pub fn turns_slowly(&self) -> bool {
+        self.turn_rate_rps > 0.0
+    }
+
     /// The deceleration the guard plans stops with, m/s²: `brake_mps2`, or F_max when it is 0.
     pub fn brake(&self) -> f32 {
         if self.brake_mps2 > 0.0 {

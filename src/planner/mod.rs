@@ -625,7 +625,7 @@ impl Planner {
         // ([`turning_speed`]). The planned velocity v̄ is not cut: the field's motion, the stall
         // test and the set-points stay the paper's.
         let target = m.escape.active_target(cx.aim);
-        let v_set = if prm.turn_rate_rps > 0.0 {
+        let v_set = if prm.turns_slowly() {
             let p = cx.nav.position;
             let others = cx.world.agents().iter().fold(f32::INFINITY, |c, a| {
                 crate::math::min(c, (a.position - p).norm() - 2.0 * prm.agent_radius_m)

@@ -208,7 +208,7 @@ impl Planner {
         };
         let forces = field.sampled_forces(&self.circle);
         // A craft that turns slowly waits for its node rather than turning back to it.
-        let full = if prm.turn_rate_rps > 0.0 && leader.is_some() {
+        let full = if prm.turns_slowly() && leader.is_some() {
             super::formation::hold_back(forces.full, forces.without_leader, target - p)
         } else {
             forces.full
