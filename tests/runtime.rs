@@ -9,7 +9,7 @@ use vpf::link::{
 };
 use vpf::planner::HoldReason;
 use vpf::sonar::Scanline;
-use vpf::{Mission, Mode, NavState, Params, Vec2};
+use vpf::{Mission, Mode, NavState, Params, Strategy, Vec2};
 
 /// A host talking to a [`OneThreadRuntime`]: frames out, everything the firmware sent decoded.
 struct Host {
@@ -437,4 +437,72 @@ fn navigation_from_the_future_and_ticks_that_go_back_are_refused() {
     let t = host.telemetry.last().unwrap();
     assert_eq!(t.counters.rx_bad_payload, bad_payload + 1);
     assert_eq!(t.counters.bad_nav, 1);
+}
+
+/// Issue 12 §1, goals at any range: through the whole runtime (route layer on, default
+/// parameters but the arrival radius), a kinematic vehicle in open water reaches goals 1 m to
+/// 10 km away, in five directions, in the straight line's time at v_max and a few seconds to
+/// speed up and brake, cruises at v_max (the cruise goal-point, `goal_point` in `src/planner/vpf.rs`), and stops
+/// inside the arrival radius (the arrival brake, `Planner::arrival_speed` in `src/planner/mod.rs`).
+#[test]
+fn goals_from_one_metre_to_ten_kilometres_are_reached_at_cruise_speed() {
+    for strategy in [Strategy::Vpf, Strategy::Multipoint, Strategy::Navfn] {
+        let prm = Params {
+            strategy,
+            // Under the shortest mission's 1 m, so it is flown, not arrived at the start.
+            arrival_radius_m: 0.5,
+            ..Params::default()
+        };
+        for (d, bearing_deg) in [
+            (1.0f32, 0.0f32),
+            (10.0, 90.0),
+            (150.0, 200.0),
+            (1_000.0, -45.0),
+            (10_000.0, 135.0),
+        ] {
+            let mut host = Host::new(prm);
+            let start = Vec2::new(-37.0, 12.5);
+            let b = bearing_deg.to_radians();
+            let goal = start + Vec2::new(b.cos(), b.sin()) * d;
+            host.send(mission(goal));
+            // The truth integrated in f64: 10⁵ steps of 0.1 m in f32 drift by metres at 10 km.
+            let (mut x, mut y) = (f64::from(start.x), f64::from(start.y));
+            let (mut p, mut v) = (start, Vec2::ZERO);
+            let straight_s = d / prm.v_max;
+            let mut arrived_s = None;
+            // Speed over the middle 80 % of the way.
+            let (mut middle_m, mut middle_s) = (0.0f32, 0.0f32);
+            for k in 0..((straight_s + 60.0) * 10.0) as u64 {
+                let t = k * 100;
+                host.nav(t, p, v);
+                let cmd = host.tick(t);
+                assert!(cmd.velocity.is_finite(), "{d} m: {cmd:?}");
+                let gone = (p - start).norm();
+                if arrived_s.is_none() && gone > 0.1 * d && gone < 0.9 * d {
+                    middle_m += cmd.velocity.norm() * 0.1;
+                    middle_s += 0.1;
+                }
+                v = cmd.velocity;
+                x += 0.1 * f64::from(v.x);
+                y += 0.1 * f64::from(v.y);
+                p = Vec2::new(x as f32, y as f32);
+                if cmd.mode == Mode::Arrived && arrived_s.is_none() {
+                    arrived_s = Some(t as f32 / 1000.0);
+                }
+            }
+            let arrived_s = arrived_s.unwrap_or_else(|| panic!("{d} m: not arrived, at {p:?}"));
+            let cruise = middle_m / middle_s;
+            println!(
+            "{strategy:?}, {d} m: arrived after {arrived_s:.1} s ({straight_s:.0} s at v_max), \
+             {cruise:.3} m/s over the middle, stopped {:.2} m from the goal",
+            (p - goal).norm()
+        );
+            assert!(arrived_s <= straight_s + 10.0, "{d} m: {arrived_s} s");
+            assert!((p - goal).norm() <= prm.arrival_radius_m, "{d} m: {p:?}");
+            assert!(v.norm() < 0.01, "{d} m: still moving {v:?}");
+            if d >= 150.0 {
+                assert!(cruise > 0.98 * prm.v_max, "{d} m: {cruise} m/s");
+            }
+        }
+    }
 }
