@@ -22,6 +22,7 @@
 use std::fmt::{self, Write as _};
 use std::path::{Path, PathBuf};
 
+use vpf::guidance::tracks::Track;
 use vpf::guidance::{OneThreadRuntime, RuntimeConfig};
 use vpf::link::CostUnit;
 use vpf::math::Vec2;
@@ -46,6 +47,11 @@ pub struct Args {
     /// to lay what was believed over the world file's true surfaces.
     #[arg(long)]
     pub cells: bool,
+    /// Also each sonar track's filter: velocity, sightings, how many in a row landed where it
+    /// predicted, and how far it has moved from its first sighting (why a mover was believed
+    /// still).
+    #[arg(long)]
+    pub tracks: bool,
 }
 
 /// Why `hil beliefs` stopped.
@@ -76,6 +82,8 @@ pub struct Belief {
     /// How many sightings each sonar obstacle's track has had, by obstacle id (1: seen once,
     /// with no velocity yet: the guard's head-on hypothesis may apply).
     pub sightings: Vec<(u16, u16)>,
+    /// Each sonar track's filter state.
+    pub tracks: Vec<Track>,
     /// The slow velocity each still sonar track's sightings suggest but no third has borne out
     /// yet (`Tracks::tentative`: the guard may meet it on it), by obstacle id. A track that has
     /// drifted is listed as if it stood alone, as a slow-turning craft's guard would meet it.
@@ -105,6 +113,11 @@ pub fn cli(a: &Args) -> std::process::ExitCode {
                 if a.cells {
                     for c in &b.cells {
                         let _ = writeln!(text, "    cell {:.2} {:.2}", c.x, c.y);
+                    }
+                }
+                if a.tracks {
+                    for t in &b.tracks {
+                        let _ = writeln!(text, "{}", TrackLine(t));
                     }
                 }
             }
@@ -165,6 +178,7 @@ fn belief(fw: &OneThreadRuntime, at_s: f64, radius_m: f32) -> Belief {
             .iter()
             .map(|t| (t.id, u16::from(t.hits)))
             .collect(),
+        tracks: p.tracks().tracks().to_vec(),
         tentative: (p.world().obstacles().iter())
             .filter_map(|o| Some((o.id, p.tracks().tentative(o.id, || true)?)))
             .collect(),
@@ -298,6 +312,39 @@ impl fmt::Display for Belief {
             ),
             None => writeln!(f, "  route: none"),
         }
+    }
+}
+
+/// One sonar track's filter state, as `hil beliefs --tracks` lists it.
+struct TrackLine<'a>(&'a Track);
+
+impl fmt::Display for TrackLine<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let t = self.0;
+        write!(
+            f,
+            "    track #{:04x}: centre {}, filter velocity {} ({:.2} m/s), sightings {}, {} in a row \
+             where predicted, {:.1} m from its first at {}",
+            t.id,
+            Xy(t.center),
+            Xy(t.velocity),
+            t.velocity.norm(),
+            t.hits,
+            t.steady,
+            (t.center - t.first).norm(),
+            Xy(t.first)
+        )?;
+        if !t.rated {
+            write!(f, ", unrated")?;
+        }
+        match t.largest_dm {
+            0 => write!(f, ", never sized as a mover")?,
+            dm => write!(f, ", largest sighting {:.1} m", f32::from(dm) * 0.1)?,
+        }
+        if t.borne {
+            write!(f, ", once a mover")?;
+        }
+        Ok(())
     }
 }
 

@@ -96,6 +96,27 @@ fn a_replayed_frame_log_gives_back_the_route_the_rock_and_the_mover() {
         "no track moving north"
     );
 
+    // `--tracks` lists each sonar track's filter: the rock's is borne out where it stands.
+    let rock_track = end.tracks.iter().find(|t| t.id == still.id).unwrap();
+    assert!(
+        rock_track.steady >= 1 && rock_track.velocity.norm() < 0.3,
+        "{rock_track:?}"
+    );
+    let listed = std::process::Command::new(env!("CARGO_BIN_EXE_hil"))
+        .arg("beliefs")
+        .arg(&frames)
+        .args(["--tracks", "--at", "39"])
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&listed.stdout);
+    assert!(listed.status.success(), "{text}");
+    let line = format!("    track #{:04x}: centre ", still.id);
+    assert!(
+        text.lines()
+            .any(|l| l.starts_with(&line) && l.contains(" in a row where predicted")),
+        "{text}"
+    );
+
     // `hil beliefs … | head`: a reader that goes away early ends the command quietly. Every
     // second with its cells is more than a pipe holds, so the write meets the closed pipe.
     let times: Vec<String> = (1..40).map(|t| t.to_string()).collect();
