@@ -232,7 +232,9 @@
 //! 2 → 0), but VPF 400 → 398 (0 → 2) and navfn 400 → 386 (0 → 2; a navfn pair made 49 phantoms
 //! in 900 s of head-on 213 and wandered). *Tried and not kept:* a shorter `revisit_ms`
 //! (1 600 ms, half the bench's 3.2 s sweep, instead of 4 000): on the same worlds VPF 400 → 399
-//! (a new head-on contact), navfn 400 → 399, multipoint unchanged.
+//! (a new head-on contact), navfn 400 → 399, multipoint unchanged; again (2026-12-07) on
+//! crossing, head-on and formation × 3 strategies, seeds 0–199: 1 795 → 1 792 of 1 800,
+//! contacts 1 → 2 (a navfn crossing mover new).
 //!
 //! **Structure does not move.** A feature longer than `max_mover_half_m` (an elongated fit of
 //! a wall or a pier) is never given a velocity: running along a channel, each sweep fits the
