@@ -79,10 +79,8 @@ pub struct Belief {
     pub pose: Option<(Vec2, f32)>,
     /// Its obstacle table.
     pub obstacles: Vec<Obstacle>,
-    /// How many sightings each sonar obstacle's track has had, by obstacle id (1: seen once,
-    /// with no velocity yet: the guard's head-on hypothesis may apply).
-    pub sightings: Vec<(u16, u16)>,
-    /// Each sonar track's filter state.
+    /// Each sonar obstacle's track: its filter state, and how many sightings it has had
+    /// (`hits`; 1: seen once, with no velocity yet: the guard's head-on hypothesis may apply).
     pub tracks: Vec<Track>,
     /// The slow velocity each still sonar track's sightings suggest but no third has borne out
     /// yet (`Tracks::tentative`: the guard may meet it on it), by obstacle id. A track that has
@@ -172,12 +170,6 @@ fn belief(fw: &OneThreadRuntime, at_s: f64, radius_m: f32) -> Belief {
         now_ms: fw.now_ms(),
         pose,
         obstacles: p.world().obstacles().to_vec(),
-        sightings: p
-            .tracks()
-            .tracks()
-            .iter()
-            .map(|t| (t.id, u16::from(t.hits)))
-            .collect(),
         tracks: p.tracks().tracks().to_vec(),
         tentative: (p.world().obstacles().iter())
             .filter_map(|o| Some((o.id, p.tracks().tentative(o.id, || true)?)))
@@ -257,9 +249,9 @@ impl fmt::Display for Belief {
                 write!(f, "moving {}", Xy(o.velocity))?;
             }
             let ago = self.ago(o.seen_ms);
-            match self.sightings.iter().find(|(id, _)| *id == o.id) {
-                Some((_, 1)) => write!(f, ", seen once, {ago:.1} s ago")?,
-                Some((_, n)) => write!(f, ", seen {n} times, last {ago:.1} s ago")?,
+            match self.tracks.iter().find(|t| t.id == o.id).map(|t| t.hits) {
+                Some(1) => write!(f, ", seen once, {ago:.1} s ago")?,
+                Some(n) => write!(f, ", seen {n} times, last {ago:.1} s ago")?,
                 None => write!(f, ", seen {ago:.1} s ago")?,
             }
             if let Some((p, _)) = self.pose {

@@ -81,8 +81,8 @@ fn a_replayed_frame_log_gives_back_the_route_the_rock_and_the_mover() {
         .unwrap_or_else(|| panic!("no still track at the rock"));
     // A sweep takes about 9 s: by 39 s the rock has been seen on several of them, and the
     // printout says how often.
-    let seen = end.sightings.iter().find(|(id, _)| *id == still.id);
-    assert!(seen.is_some_and(|&(_, n)| n >= 3), "{seen:?}");
+    let rock_track = end.tracks.iter().find(|t| t.id == still.id).unwrap();
+    assert!(rock_track.hits >= 3, "{rock_track:?}");
     assert!(end.to_string().contains(" times, last "), "{end}");
     // By then the head has looked along every bearing: the lookout vouches for the way ahead
     // as far as the kept beam ran.
@@ -97,7 +97,6 @@ fn a_replayed_frame_log_gives_back_the_route_the_rock_and_the_mover() {
     );
 
     // `--tracks` lists each sonar track's filter: the rock's is borne out where it stands.
-    let rock_track = end.tracks.iter().find(|t| t.id == still.id).unwrap();
     assert!(
         rock_track.steady >= 1 && rock_track.velocity.norm() < 0.3,
         "{rock_track:?}"
