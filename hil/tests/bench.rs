@@ -153,3 +153,31 @@ fn a_flat_fish_is_told_the_current_it_is_in() {
         r.current_error_mps
     );
 }
+
+/// `hil bench --keep-worlds` keeps the scenario file of every run flown, a success too, under
+/// `worlds/<run>/`: `hil run` flies it again.
+#[test]
+fn every_world_flown_can_be_kept_to_fly_again() {
+    let out = failed_dir().join("keep-worlds");
+    let _ = std::fs::remove_dir_all(&out);
+    let done = std::process::Command::new(env!("CARGO_BIN_EXE_hil"))
+        .args(["bench", "--families", "rocks", "--seeds", "1", "--quiet"])
+        .args(["--keep-worlds", "--jobs", "1", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(
+        done.status.success(),
+        "{}",
+        String::from_utf8_lossy(&done.stderr)
+    );
+    let rows = std::fs::read_to_string(out.join("runs.jsonl")).unwrap();
+    assert!(rows.contains("\"success\":true"), "{rows}");
+    assert!(
+        !out.join("failed").exists(),
+        "nothing failed, nothing kept there"
+    );
+    let kept = out.join("worlds/rocks_0_vpf_videoray_scanlines/world.toml");
+    let sc = hil::scenario::load(&kept).unwrap_or_else(|e| panic!("{}: {e}", kept.display()));
+    assert_eq!(sc.name, "rocks:0:vpf:videoray:scanlines");
+}

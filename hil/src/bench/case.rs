@@ -440,6 +440,18 @@ pub type Recipe<'a> = (&'a Params, &'a Path);
 /// Flies `case` and measures it. `recipe`: planner parameters from a recipe (the case's
 /// strategy kept). `failed_dir`: where a failed run's plot and scenario file go.
 pub fn fly(case: &Case, recipe: Option<Recipe>, run: &QuietRun, failed_dir: &Path) -> Row {
+    fly_keeping(case, recipe, run, failed_dir, None)
+}
+
+/// [`fly`], also keeping the run's scenario file under `worlds_dir/<id>/` whatever its outcome
+/// (`hil bench --keep-worlds`).
+pub fn fly_keeping(
+    case: &Case,
+    recipe: Option<Recipe>,
+    run: &QuietRun,
+    failed_dir: &Path,
+    worlds_dir: Option<&Path>,
+) -> Row {
     let mut row = Row::unflown(case.id(), case.family.name(), case.seed, case.config());
     let Drawn {
         world,
@@ -477,9 +489,15 @@ pub fn fly(case: &Case, recipe: Option<Recipe>, run: &QuietRun, failed_dir: &Pat
         }
     };
     measure(&mut row, &out, &world, shortest, reference);
+    let text = || format!("{}{text}", flown_with(recipe.map(|(_, f)| f)));
     if !row.success {
-        let text = format!("{}{text}", flown_with(recipe.map(|(_, f)| f)));
-        keep_failure(failed_dir, case, &text, &out);
+        keep_failure(failed_dir, case, &text(), &out);
+    }
+    if let Some(dir) = worlds_dir {
+        let d = dir.join(crate::output::file_stem(&case.id()));
+        if std::fs::create_dir_all(&d).is_ok() {
+            let _ = std::fs::write(d.join("world.toml"), text());
+        }
     }
     row
 }

@@ -5,6 +5,7 @@
 //! hil bench [--families a,b,...] [--seeds N] [--first-seed F] [--trial K] [--strategies vpf,...]
 //!           [--models videoray,...] [--sensing scanlines,contacts] [--params RECIPE.toml]
 //!           [--sonar-range M] [--sonar-step DEG] [--jobs N] [--out DIR] [--quiet]
+//!           [--keep-worlds]
 //! ```
 //!
 //! - [`worlds`]: the twelve families, and the waypoint-mission family `survey` (flown when
@@ -23,7 +24,8 @@
 //! times plus a minute. Each finished run is appended to `runs.jsonl` in the output directory,
 //! so an interrupted bench run again with the same `--out` skips what is done (and more seeds
 //! or families add to it); a different `--params` recipe is refused there. A failed run's
-//! `plot.svg` and its scenario file (`world.toml`, for `hil run`) are kept under `failed/`.
+//! `plot.svg` and its scenario file (`world.toml`, for `hil run`) are kept under `failed/`;
+//! with `--keep-worlds`, every run's scenario file under `worlds/` too.
 
 pub mod case;
 pub mod diff;
@@ -86,6 +88,8 @@ pub struct Options {
     pub out: Option<PathBuf>,
     /// No progress bar.
     pub quiet: bool,
+    /// Keep every run's scenario file, not only a failed run's.
+    pub keep_worlds: bool,
 }
 
 impl Options {
@@ -141,6 +145,7 @@ impl Default for Options {
             jobs: None,
             out: None,
             quiet: false,
+            keep_worlds: false,
         }
     }
 }
@@ -152,7 +157,8 @@ impl Default for Options {
     long_about = "Flies generated worlds the planner was not tuned on and tabulates how it did.",
     after_help = "Writes runs.jsonl (one row per run; rerun to resume), bench.md and bench.json \
                   (tables per family and overall), and failed/<run>/{plot.svg, world.toml} for \
-                  every run that failed."
+                  every run that failed (with --keep-worlds, worlds/<run>/world.toml for every \
+                  run flown)."
 )]
 pub struct Args {
     /// world families (default: these twelve): clutter, boxes, wall_gap, harbour, utrap, ltrap,
@@ -205,6 +211,10 @@ pub struct Args {
     /// no progress bar
     #[arg(long)]
     quiet: bool,
+    /// also keep the scenario file of every run flown, not only of a failed one, under
+    /// worlds/<run>/world.toml (a few KB each): to fly any run again with `hil run`
+    #[arg(long)]
+    keep_worlds: bool,
 }
 
 /// `v`, or `default` if it is empty.
@@ -234,6 +244,7 @@ impl From<Args> for Options {
             jobs: a.jobs,
             out: a.out,
             quiet: a.quiet,
+            keep_worlds: a.keep_worlds,
         }
     }
 }
@@ -414,7 +425,8 @@ pub fn bench(o: &Options) -> Result<(PathBuf, report::Report), Error> {
             .map_err(Error::io("cannot open", &rows_path))?;
         let mut file = std::io::BufWriter::new(file);
         let recipe = params.as_ref().zip(o.params.as_deref());
-        let fly = |i: usize| case::fly(&all[i], recipe, &run, &failed);
+        let worlds = o.keep_worlds.then(|| dir.join("worlds"));
+        let fly = |i: usize| case::fly_keeping(&all[i], recipe, &run, &failed, worlds.as_deref());
         pool::run_all(
             &fly,
             &pending,
