@@ -11,7 +11,7 @@
 //! hil merge DIR... [--out DIR]
 //! hil compare [SCENARIO.toml...] [--strategies vpf,multipoint,navfn] [--firmware host|qemu]
 //! hil bench [--families ...] [--seeds N] [--strategies ...] [--models ...] [--sensing ...]
-//! hil beliefs FRAMES.log --at T1,T2,... [--radius M]
+//! hil beliefs FRAMES.log --at T1,T2,... [--radius M] [--cells] [--tracks]
 //! hil sonar-replay --ping360 FILE [--plot FILE.svg] [detection options]
 //! hil ping360-raw DUMP.txt OUT.bin
 //! ```
