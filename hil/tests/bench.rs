@@ -119,13 +119,18 @@ fn worlds_in_a_current_are_flown_without_contact() {
             failed_dir().display()
         );
         // And the firmware says what water it was in (`Telemetry`'s current).
-        assert!(
-            r.current_error_mps.is_some_and(|e| e < 0.05),
-            "{}: believed the current {:?} m/s off",
-            r.id,
-            r.current_error_mps
-        );
+        knew_the_current(&r);
     }
+}
+
+/// The current the firmware believed at the end of run `r` was within 0.05 m/s of the truth.
+fn knew_the_current(r: &case::Row) {
+    assert!(
+        r.current_error_mps.is_some_and(|e| e < 0.05),
+        "{}: believed the current {:?} m/s off",
+        r.id,
+        r.current_error_mps
+    );
 }
 
 #[test]
@@ -146,12 +151,7 @@ fn a_flat_fish_is_told_the_current_it_is_in() {
     };
     let r = case::fly(&c, Some((&params, &path)), &run, &failed_dir());
     assert!(r.error.is_none(), "{}: {:?}", r.id, r.error);
-    assert!(
-        r.current_error_mps.is_some_and(|e| e < 0.05),
-        "{}: believed the current {:?} m/s off",
-        r.id,
-        r.current_error_mps
-    );
+    knew_the_current(&r);
 }
 
 /// `hil bench --keep-worlds` keeps the scenario file of every run flown, a success too, under
