@@ -22,6 +22,7 @@ pub mod beliefs;
 pub mod bench;
 pub mod campaign;
 pub mod compare;
+pub mod echoes;
 pub mod error;
 pub mod faults;
 pub mod firmware;

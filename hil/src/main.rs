@@ -12,6 +12,7 @@
 //! hil compare [SCENARIO.toml...] [--strategies vpf,multipoint,navfn] [--firmware host|qemu]
 //! hil bench [--families ...] [--seeds N] [--strategies ...] [--models ...] [--sensing ...]
 //! hil beliefs FRAMES.log --at T1,T2,... [--radius M] [--cells] [--tracks]
+//! hil echoes RUN_DIR --between T0,T1 (--towards V | --point X,Y) [--vehicle V] [--within DEG] [--all]
 //! hil sonar-replay --ping360 FILE [--plot FILE.svg] [detection options]
 //! hil ping360-raw DUMP.txt OUT.bin
 //! ```
@@ -63,6 +64,10 @@ enum Command {
     Faults(hil::campaign::Args),
     #[command(about = "what the firmware believed at given times of a run, from its frame log")]
     Beliefs(hil::beliefs::Args),
+    #[command(
+        about = "what a vehicle's sonar heard towards another vehicle or a point, from a run"
+    )]
+    Echoes(hil::echoes::Args),
     #[command(about = "raw Ping360 bytes through the firmware's parser and extractor")]
     SonarReplay(hil::ping360::replay::Args),
     #[command(
@@ -328,6 +333,7 @@ fn main() -> ExitCode {
         Command::BenchDiff(a) => hil::bench::diff::cli(&a),
         Command::Faults(a) => hil::campaign::cli(a),
         Command::Beliefs(a) => hil::beliefs::cli(&a),
+        Command::Echoes(a) => hil::echoes::cli(&a),
         Command::SonarReplay(a) => hil::ping360::replay::cli(a),
         Command::Ping360Raw(a) => hil::ping360::replay::cli_raw(a),
     }
