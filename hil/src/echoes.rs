@@ -7,19 +7,24 @@
 //! firmware's own detection (`vpf::sonar::detect`, default configuration) on each. Every echo
 //! run is printed with its range, peak and mean intensity, and what one beam of it would be
 //! to the extractor: a glimpse (mean ≥ `GLIMPSE_INTENSITY`), a faint sighting (≥
-//! `FAINT_INTENSITY`), or weak. The ping's pose is the vehicle's true one from its own
+//! `FAINT_INTENSITY`, or `FAINT_AHEAD_INTENSITY` within `FAINT_AHEAD_RAD` of the bow), or
+//! weak. The ping's pose is the vehicle's true one from its own
 //! trajectory (the simulated sonar rendered it so).
 //!
 //! That is how the bench's head-on contacts were read (VPF 1111, 1154, 6155; multipoint 59,
 //! 6067; navfn 1071, 1098; re-flown at 8fab619): each VideoRay heard the other on one beam a
 //! sweep, at about 16, 10 and 4 m, with means of 100–200, most of them under the faint floor
-//! of 150, so neither believed the other until it was on two beams, 3–4 m off.
+//! then (150), so neither believed the other until it was on two beams, 3–4 m off. Hence the
+//! lower floor ahead (`vpf::sonar::FAINT_AHEAD_INTENSITY`).
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use vpf::link::{Direction, Message};
-use vpf::sonar::{detect, ExtractorConfig, FAINT_INTENSITY, GLIMPSE_INTENSITY};
+use vpf::sonar::{
+    detect, ExtractorConfig, FAINT_AHEAD_INTENSITY, FAINT_AHEAD_RAD, FAINT_INTENSITY,
+    GLIMPSE_INTENSITY,
+};
 
 use crate::output::frames::{Dir, FrameLog};
 
@@ -206,11 +211,12 @@ pub fn echoes(a: &Args) -> Result<Vec<Ping>, EchoesError> {
     Ok(out)
 }
 
-/// What one beam of an echo of mean `mean` is to the extractor.
-fn verdict(mean: f32) -> &'static str {
+/// What one beam of an echo of mean `mean`, `bearing_deg` from the bow, is to the extractor.
+fn verdict(mean: f32, bearing_deg: f64) -> &'static str {
+    let ahead = bearing_deg.abs().to_radians() <= f64::from(FAINT_AHEAD_RAD);
     if mean >= GLIMPSE_INTENSITY {
         "glimpse"
-    } else if mean >= FAINT_INTENSITY {
+    } else if mean >= FAINT_INTENSITY || (ahead && mean >= FAINT_AHEAD_INTENSITY) {
         "faint"
     } else {
         "weak"
@@ -235,7 +241,7 @@ pub fn cli(a: &Args) -> std::process::ExitCode {
                     let _ = write!(
                         text,
                         "  {r:.2} m peak {peak:.0} mean {mean:.0} ({})",
-                        verdict(mean)
+                        verdict(mean, p.bearing_deg)
                     );
                 }
                 text.push('\n');

@@ -12,7 +12,8 @@
 //!
 //! **What.** The extractor lets such a beam out as a *faint* sighting
 //! ([`crate::sonar::Feature::faint`]) when its mean is at least
-//! [`crate::sonar::FAINT_INTENSITY`]. One is nothing. Two are a target when the later lies
+//! [`crate::sonar::FAINT_INTENSITY`] (ahead, [`crate::sonar::FAINT_AHEAD_INTENSITY`]: "Ahead",
+//! below). One is nothing. Two are a target when the later lies
 //! where one seen at the earlier could have gone — [`PAIR_MIN_S`]..=[`PAIR_MAX_S`] apart (the
 //! next sweep or the one after), at [`MIN_MPS`]..=[`MAX_MPS`] — and when that motion brings it
 //! within [`THREAT_M`] of this vehicle within [`HORIZON_S`], on the two straight courses or
@@ -36,6 +37,22 @@
 //! aside from a mover 6 s off — its guard stops it — and phantoms stopped it again and again:
 //! the flat-fish with its recipe, seeds 0–33, went 333 → 322 of 408 with pairs (27 lost, 16
 //! gained, no contact either way; its bench's other vehicles are flat-fish, on many beams).
+//!
+//! **Ahead** (2026-12-07). What was left of the head-on contacts were pairs a floor of 150
+//! never formed: re-flown with `hil echoes`, in each of the eight of seeds 0–199 (trials 0 and
+//! 1), 1000–1199 and 6000–6199 (VPF 1111, 1154, 6155, 170; multipoint 59, 6067; navfn 1071,
+//! 1098) the two VideoRays heard each other on one beam a sweep, at about 16, 10 and 4 m and
+//! within 40° of the bow, with means of 110–150 on the first two. So within
+//! [`crate::sonar::FAINT_AHEAD_RAD`] (45°) of the bow the floor is
+//! [`crate::sonar::FAINT_AHEAD_INTENSITY`] (110), where a vessel met head-on is and closes at
+//! twice the cruise; elsewhere it stays 150. A faint sighting with a believed map cell 1–2 m
+//! from it is a wall's edge on one beam and pairs with nothing
+//! ([`crate::sonar::EvidenceMap::occupied_between`]), as one by an obstacle already was.
+//! *Tried first:* 110 all round. Crossing and head-on gained as much, but the phantoms of
+//! three quarters of the spurious targets cost multipoint 37 of 2 400 worlds (seeds 0–199:
+//! channels 197 → 181, wall gaps 194 → 184), and the median periods the guard intervened rose
+//! by a third; with the map's cells as well, channels came back (192) and wall gaps did not
+//! (180). Measured as kept: "The faint floor ahead" in docs/bench-history.md.
 //!
 //! *Tried and not kept* (2026-12-06): a weaker later sighting. In VPF head-on seed 1154 one
 //! VideoRay saw the other on one beam at 16 m (a mean of about 160) and a sweep later at

@@ -661,6 +661,28 @@ impl EvidenceMap {
             .any(|k| sides & (1 << k) != 0 && sides & 0x1_FFFF_u32.rotate_left(k + 8) != 0)
     }
 
+    /// Whether a believed cell's centre lies more than `inner` and at most `outer` from `p`:
+    /// structure beside a one-beam echo, not the cell the echo itself made (false with no
+    /// window, or for a non-finite or negative distance).
+    pub fn occupied_between(&self, p: Vec2, inner: f32, outer: f32) -> bool {
+        let Some(w) = self.window() else { return false };
+        if !(p.is_finite() && inner >= 0.0 && outer >= inner && outer.is_finite()) {
+            return false;
+        }
+        let cell = self.cfg.cell_m;
+        let r = min(outer / cell + 1.0, SIDE_I as f32) as i32;
+        let (ci, cj) = self.cell_of(p);
+        for j in cj.saturating_sub(r)..=cj.saturating_add(r) {
+            for i in ci.saturating_sub(r)..=ci.saturating_add(r) {
+                let d2 = (self.center_of(i, j) - p).norm2();
+                if d2 > inner * inner && d2 <= outer * outer && self.is_occupied(w, i, j) {
+                    return true;
+                }
+            }
+        }
+        false
+    }
+
     /// Row `r` (0 ..= [`MAP_SIDE`] − 1) of window `w` as a bitmap, bit k = column `w.x0 + k`.
     pub fn row_bits(&self, w: Window, r: i32) -> u64 {
         let j = w.y0.wrapping_add(r);
@@ -875,6 +897,24 @@ mod tests {
             far.believe(Vec2::new(4.2, y));
         }
         assert!(!far.runs_on(c, extent));
+    }
+
+    #[test]
+    fn structure_beside_a_one_beam_echo_is_found_and_its_own_cell_is_not() {
+        let m = map();
+        let p = Vec2::new(5.1, 0.1);
+        assert!(!m.occupied_between(p, 1.0, 2.0), "nothing believed");
+        // The cell the echo itself made.
+        m.believe(p);
+        assert!(!m.occupied_between(p, 1.0, 2.0));
+        // Wall 1.5 m off: beside it; 2.6 m off: not.
+        let far = map();
+        far.believe(Vec2::new(5.1, 2.7));
+        assert!(!far.occupied_between(p, 1.0, 2.0));
+        m.believe(Vec2::new(5.1, 1.6));
+        assert!(m.occupied_between(p, 1.0, 2.0));
+        assert!(!m.occupied_between(Vec2::new(f32::NAN, 0.0), 1.0, 2.0));
+        assert!(!m.occupied_between(p, 2.0, 1.0), "inner beyond outer");
     }
 
     #[test]

@@ -27,7 +27,8 @@ use super::evidence::{Beam, EvidenceMap};
 use super::fit::Hit;
 use super::known::KnownVehicles;
 use super::{
-    ConfigError, Counters, ExtractorConfig, Feature, Pose, ScanError, Scanline, MAX_RUNS_PER_BEAM,
+    ConfigError, Counters, ExtractorConfig, Feature, Pose, ScanError, Scanline, FAINT_ALONE_M,
+    MAX_RUNS_PER_BEAM,
 };
 
 /// Mean intensity from which a cluster of one beam leaves as a *glimpse*: a feature of one
@@ -48,8 +49,40 @@ pub const GLIMPSE_INTENSITY: f32 = 200.0;
 /// (`crate::guidance::faint`): another VideoRay at 10–18 m returned 131–212 on its one beam,
 /// most above this; the simulated spurious targets return at most 176 (0.4–0.8 of a surface
 /// echo's strength, spread evenly: a floor of 150 leaves about a third of them). Without the
-/// floor, pairs of them made a phantom mover every 20–50 s under way.
+/// floor, pairs of them made a phantom mover every 20–50 s under way. Ahead, lower:
+/// [`FAINT_AHEAD_INTENSITY`].
 pub const FAINT_INTENSITY: f32 = 150.0;
+
+/// The faint floor within [`FAINT_AHEAD_RAD`] of the bow, where a vehicle met head-on is seen
+/// and closes at twice the cruise: another VideoRay 10–18 m ahead returned 100–210 on its one
+/// beam, and in the bench's head-on contacts most of the first two sightings were 110–150
+/// (`hil echoes`), so neither vehicle believed the other until it was on two beams 3–4 m off.
+/// Three quarters of the spurious targets clear this; a quarter of the bearings keeps the
+/// phantoms they pair into few (`crate::guidance::faint`, "Ahead").
+pub const FAINT_AHEAD_INTENSITY: f32 = 110.0;
+
+/// Half-width of the sector ahead with the lower faint floor, rad (45°).
+pub const FAINT_AHEAD_RAD: f32 = core::f32::consts::FRAC_PI_4;
+
+/// A faint sighting with a believed map cell more than this and at most
+/// [`super::FAINT_ALONE_M`] from it is structure's edge ([`Feature::runs_on`]), m: nearer is
+/// the cell its own echo made (one echo is believed within the map's `near_m`).
+pub const FAINT_OWN_M: f32 = 1.0;
+
+/// Whether a one-beam echo of mean intensity `mean` at `center` is bright enough for a faint
+/// sighting: [`FAINT_INTENSITY`], or [`FAINT_AHEAD_INTENSITY`] within [`FAINT_AHEAD_RAD`] of
+/// the bow as of the latest ping `last`. (Not inlined: `close_where` has a copy per caller.)
+#[inline(never)]
+fn faint_enough(mean: f32, center: Vec2, last: Option<&LastPing>) -> bool {
+    mean >= FAINT_INTENSITY
+        || (mean >= FAINT_AHEAD_INTENSITY
+            && last.is_some_and(|l| {
+                let d = center - l.sensor;
+                let along = d.dot(Vec2::new(cos(l.heading), sin(l.heading)));
+                let c = cos(FAINT_AHEAD_RAD);
+                along > 0.0 && along * along >= c * c * d.norm2()
+            }))
+}
 
 /// Whether bit `k` of a per-echo mask is set (none beyond the eighth).
 fn flagged(mask: u8, k: usize) -> bool {
@@ -64,6 +97,8 @@ struct LastPing {
     time_ms: u64,
     /// Sensor position, world frame, m.
     sensor: Vec2,
+    /// The bow's direction, world frame, rad.
+    heading: f32,
     /// Sweep direction: +1 counter-clockwise, −1 clockwise, 0 not yet known.
     dir: i8,
     /// Its echoes' leading edges, world frame, m (the first `echo_count`).
@@ -152,7 +187,10 @@ impl Extractor {
         out: &mut impl FnMut(Feature) -> bool,
     ) -> Result<usize, ScanError> {
         let out = &mut |mut f: Feature| {
-            f.runs_on = map.is_some_and(|m| m.runs_on(f.center, f.radius));
+            f.runs_on = map.is_some_and(|m| {
+                m.runs_on(f.center, f.radius)
+                    || (f.faint && m.occupied_between(f.center, FAINT_OWN_M, FAINT_ALONE_M))
+            });
             out(f)
         };
         if let Err(e) = scan.validate().and_then(|()| pose.validate()) {
@@ -211,6 +249,7 @@ impl Extractor {
             bearing,
             time_ms: scan.time_ms,
             sensor,
+            heading: pose.heading,
             dir,
             echoes: [Vec2::ZERO; MAX_RUNS_PER_BEAM],
             echo_count: 0,
@@ -350,6 +389,7 @@ impl Extractor {
             cfg,
             table,
             counters,
+            last,
             ..
         } = self;
         let mut accepted = 0;
@@ -358,14 +398,16 @@ impl Extractor {
             let single = hits == 1;
             let mean = c.moments.mean_intensity();
             let glimpse = single && (c.seconded || mean >= GLIMPSE_INTENSITY);
-            let faint = single && !glimpse && mean >= FAINT_INTENSITY;
-            // A one-beam echo not a glimpse but bright enough leaves as a faint sighting.
-            let feature = (hits >= u32::from(cfg.min_beams) || glimpse || faint)
+            let faint_ahead = single && !glimpse && mean >= FAINT_AHEAD_INTENSITY;
+            // A one-beam echo not a glimpse but bright enough (ahead, less) leaves as a faint
+            // sighting.
+            let faint = |f: &Feature| faint_ahead && faint_enough(mean, f.center, last.as_ref());
+            let feature = (hits >= u32::from(cfg.min_beams) || glimpse || faint_ahead)
                 .then(|| c.moments.fit(c.spanned(), c.time_ms, cfg))
                 .flatten()
-                .filter(|f| f.confidence >= cfg.min_confidence || glimpse || faint)
+                .filter(|f| f.confidence >= cfg.min_confidence || glimpse || faint(f))
                 .map(|mut f| {
-                    f.faint = faint && f.confidence < cfg.min_confidence;
+                    f.faint = faint(&f) && f.confidence < cfg.min_confidence;
                     f
                 });
             match feature {
@@ -694,33 +736,41 @@ mod tests {
     fn a_strong_echo_on_one_beam_leaves_as_a_glimpse() {
         // Another VideoRay at 8 m on one ping (head-on seed 93: a return of 210, saturating):
         // a glimpse, of one beam and confidence 0, for the tracker. A weaker one-ping echo
-        // leaves as a faint sighting (it may be a spurious target: `Feature::faint`), and a
-        // weaker one still leaves nothing.
-        let fly = |level: u8| {
+        // leaves as a faint sighting (it may be a spurious target: `Feature::faint`) — ahead,
+        // a weaker one too — and a weaker one still leaves nothing.
+        // `off`: the head's bearing from the bow.
+        let fly_off = |level: u8, off: f32| {
             let mut bins = [0u8; 300];
             bins[80..83].fill(level);
             let quiet = [0u8; 300];
             let mut ex = Extractor::new(ExtractorConfig::default()).unwrap();
             let mut found = heapless::Vec::<Feature, 4>::new();
             for (k, b) in [&quiet, &bins, &quiet, &quiet].iter().enumerate() {
-                let sl = nth_line(k, &b[..]);
+                let mut sl = nth_line(k, &b[..]);
+                sl.bearing_rad += off;
                 ex.push_scanline(&sl, STILL.pose(0.0), &mut |f| found.push(f).is_ok())
                     .unwrap();
             }
             ex.flush(&mut |f| found.push(f).is_ok());
             found
         };
+        let fly = |level| fly_off(level, 0.0);
         let strong = fly(200);
         assert_eq!(strong.len(), 1, "{strong:?}");
         assert!(strong
             .iter()
             .all(|f| f.beams == 1 && f.confidence == 0.0 && !f.faint));
         assert!(strong.iter().all(|f| (f.center.norm() - 8.0).abs() < 0.5));
-        // At 8 m (gain 1.32): a raw 120 is 158, a raw 100 is 132.
-        let faint = fly(120);
-        assert_eq!(faint.len(), 1, "{faint:?}");
-        assert!(faint.iter().all(|f| f.beams == 1 && f.faint));
-        assert!(fly(100).is_empty());
+        // At 8 m (gain 1.32): a raw 120 is 158, a raw 95 is 125, a raw 80 is 106.
+        let faint =
+            |found: &[Feature]| found.len() == 1 && found.iter().all(|f| f.beams == 1 && f.faint);
+        assert!(faint(&fly(120)) && faint(&fly(95)));
+        assert!(fly(80).is_empty());
+        // Astern 125 is not enough, nor 60° off the bow; 40° off it is.
+        assert!(faint(&fly_off(120, PI - 0.1)));
+        assert!(fly_off(95, PI - 0.1).is_empty());
+        assert!(fly_off(95, 60f32.to_radians()).is_empty());
+        assert!(faint(&fly_off(95, -40f32.to_radians())));
     }
 
     #[test]

@@ -57,7 +57,8 @@
 //!    kept: a strong single beam leaves as a *glimpse* ([`GLIMPSE_INTENSITY`]: one
 //!    beam, confidence 0) that alone never opens a track and gives a track seen once its
 //!    second look (`crate::guidance::tracks`, "Glimpses"); it, and any other beam of one hit
-//!    at least [`FAINT_INTENSITY`] (a *faint* sighting), the tracker believes as a new target
+//!    at least [`FAINT_INTENSITY`] (within [`FAINT_AHEAD_RAD`] of the bow,
+//!    [`FAINT_AHEAD_INTENSITY`]: a *faint* sighting), the tracker believes as a new target
 //!    only as one of two a sweep apart on a collision course (`crate::guidance::faint`).
 //!
 //! **Vehicles it is told about.** An echo on a vehicle the host reports (`Contacts` of kind
@@ -110,7 +111,9 @@ pub use detect::Echo;
 pub use evidence::{
     Beam, EvidenceConfig, EvidenceError, EvidenceMap, Near, Window, MAP_SIDE, MAX_REACH_CELLS,
 };
-pub use extractor::{Extractor, FAINT_INTENSITY, GLIMPSE_INTENSITY};
+pub use extractor::{
+    Extractor, FAINT_AHEAD_INTENSITY, FAINT_AHEAD_RAD, FAINT_INTENSITY, GLIMPSE_INTENSITY,
+};
 pub use known::{KnownVehicles, ECHO_MARGIN_M, MAX_AGE_MS, MAX_KNOWN};
 pub use lookout::{Lookout, LOOK_SECTORS};
 pub use wakes::{Wakes, MAX_WAKES};
@@ -369,7 +372,9 @@ pub struct Feature {
     pub beams: u16,
     /// Believed structure runs on beyond it in the evidence map (set by
     /// `Extractor::push_scanline_mapped`, [`EvidenceMap::runs_on`]): a fragment of a wall, a
-    /// pier or a cluster of rocks, which the tracker never gives a velocity.
+    /// pier or a cluster of rocks, which the tracker never gives a velocity. For a faint
+    /// sighting, any believed cell 1–2 m from it ([`EvidenceMap::occupied_between`]): the edge
+    /// of a wall seen on one beam, which the tracker pairs with nothing.
     pub runs_on: bool,
     /// One beam of an echo too weak to be a glimpse: alone it may be a spurious target, so the
     /// tracker takes it only as one of a pair on a collision course
