@@ -398,11 +398,11 @@ impl Extractor {
             let single = hits == 1;
             let mean = c.moments.mean_intensity();
             let glimpse = single && (c.seconded || mean >= GLIMPSE_INTENSITY);
-            let faint_ahead = single && !glimpse && mean >= FAINT_AHEAD_INTENSITY;
+            let candidate = single && !glimpse && mean >= FAINT_AHEAD_INTENSITY;
             // A one-beam echo not a glimpse but bright enough (ahead, less) leaves as a faint
             // sighting.
-            let faint = |f: &Feature| faint_ahead && faint_enough(mean, f.center, last.as_ref());
-            let feature = (hits >= u32::from(cfg.min_beams) || glimpse || faint_ahead)
+            let faint = |f: &Feature| candidate && faint_enough(mean, f.center, last.as_ref());
+            let feature = (hits >= u32::from(cfg.min_beams) || glimpse || candidate)
                 .then(|| c.moments.fit(c.spanned(), c.time_ms, cfg))
                 .flatten()
                 .filter(|f| f.confidence >= cfg.min_confidence || glimpse || faint(f))
