@@ -119,13 +119,7 @@ pub fn cli(a: &Args) -> std::process::ExitCode {
                     }
                 }
             }
-            match crate::output::stdout::print(&text) {
-                Ok(()) => std::process::ExitCode::SUCCESS,
-                Err(e) => {
-                    eprintln!("hil beliefs: standard output: {e}");
-                    std::process::ExitCode::from(2)
-                }
-            }
+            crate::output::stdout::print_report("hil beliefs", &text)
         }
         Err(e) => {
             eprintln!("hil beliefs: {e}");

@@ -246,13 +246,7 @@ pub fn cli(a: &Args) -> std::process::ExitCode {
                 }
                 text.push('\n');
             }
-            match crate::output::stdout::print(&text) {
-                Ok(()) => std::process::ExitCode::SUCCESS,
-                Err(e) => {
-                    eprintln!("hil echoes: standard output: {e}");
-                    std::process::ExitCode::from(2)
-                }
-            }
+            crate::output::stdout::print_report("hil echoes", &text)
         }
         Err(e) => {
             eprintln!("hil echoes: {e}");

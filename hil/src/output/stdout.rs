@@ -12,3 +12,15 @@ pub fn print(text: &str) -> std::io::Result<()> {
         r => r,
     }
 }
+
+/// [`print`]s a command's report: success, or exit status 2 with the failure on standard
+/// error, named after `command` (`hil beliefs`, `hil echoes`).
+pub fn print_report(command: &str, text: &str) -> std::process::ExitCode {
+    match print(text) {
+        Ok(()) => std::process::ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("{command}: standard output: {e}");
+            std::process::ExitCode::from(2)
+        }
+    }
+}
