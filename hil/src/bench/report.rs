@@ -194,7 +194,7 @@ impl Report {
         for (config, lines) in &self.tables {
             let _ = writeln!(s, "### {config} ({})\n", self.params);
             s.push_str(
-                "| family | runs | success | collisions | collision rate (95 % bound) | not flown \
+                "| family | runs | success (of flown) | collisions | collision rate (95 % bound) | not flown \
                  | clearance worst / median (m) | time / ref (median) | path / shortest (median) \
                  | guard periods (median) | under way: at cruise / held (mean) \
                  | perception miss mean / p95 (m) | false cells | formation spacing error \
@@ -202,8 +202,11 @@ impl Report {
                  |---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
             );
             for l in lines {
-                let pct = if l.runs > 0 {
-                    100.0 * l.successes as f64 / l.runs as f64
+                // Of the worlds flown, like the collision rate: a world with no feasible draw
+                // for the craft (one that does not fit its turning radius) is no world to fail.
+                let flown = l.runs - l.errors;
+                let pct = if flown > 0 {
+                    100.0 * l.successes as f64 / flown as f64
                 } else {
                     0.0
                 };
@@ -296,6 +299,20 @@ mod tests {
         assert!((all.mean_cruise_frac.unwrap() - 2.0 / 3.0).abs() < 1e-12);
         let md = r.markdown();
         assert!(md.contains("| clutter | 2 | 1 (50 %) | 1 |"), "{md}");
+        // A world not flown (no feasible draw for the craft) counts in the runs, not in the
+        // share that succeeded.
+        let mut not_flown = row("harbour", false, false, 0.0);
+        not_flown.error = Some("no feasible draw in 20: no path wide enough for the hull".into());
+        let short = Report::of(
+            &[row("harbour", true, false, 2.0), not_flown],
+            &Params::default(),
+            None,
+        )
+        .markdown();
+        assert!(
+            short.contains("| harbour | 2 | 1 (100 %) | 0 | ≤ 95.0 % | 1 |"),
+            "{short}"
+        );
         assert!(md.contains("| 60 % / 10 % |"), "{md}");
         assert!(
             md.contains("| **all** | 3 | 2 (67 %) | 1 | ≤ 86.5 % |"),
