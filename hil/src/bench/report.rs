@@ -22,6 +22,10 @@ pub struct Line {
     pub collisions: usize,
     /// Runs not flown (no feasible draw, a refused scenario, a firmware that failed).
     pub errors: usize,
+    /// Runs whose world had a feasible draw for the craft: the share that succeeded is of
+    /// these. A world with none (a short serpentine for the flat-fish's 22 m turns) is no
+    /// world to fail; a refused scenario or a firmware that failed is a failure.
+    pub drawn: usize,
     /// One-sided 95 % upper bound on the collision rate over the runs flown ([`upper95`]).
     pub collision_rate_upper95: Option<f64>,
     /// Worst minimum clearance, m.
@@ -126,6 +130,8 @@ fn line(family: &str, rows: &[&Row]) -> Line {
         successes: rows.iter().filter(|r| r.success).count(),
         collisions,
         errors,
+        // The reference time comes with the draw (`super::case`).
+        drawn: rows.iter().filter(|r| r.reference_s.is_some()).count(),
         // Over the runs flown: one not flown says nothing of the rate.
         collision_rate_upper95: upper95(collisions, rows.len() - errors),
         worst_clearance_m: rows
@@ -194,7 +200,7 @@ impl Report {
         for (config, lines) in &self.tables {
             let _ = writeln!(s, "### {config} ({})\n", self.params);
             s.push_str(
-                "| family | runs | success (of flown) | collisions | collision rate (95 % bound) | not flown \
+                "| family | runs | success (of worlds drawn) | collisions | collision rate (95 % bound) | not flown \
                  | clearance worst / median (m) | time / ref (median) | path / shortest (median) \
                  | guard periods (median) | under way: at cruise / held (mean) \
                  | perception miss mean / p95 (m) | false cells | formation spacing error \
@@ -202,11 +208,8 @@ impl Report {
                  |---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
             );
             for l in lines {
-                // Of the worlds flown, like the collision rate: a world with no feasible draw
-                // for the craft (one that does not fit its turning radius) is no world to fail.
-                let flown = l.runs - l.errors;
-                let pct = if flown > 0 {
-                    100.0 * l.successes as f64 / flown as f64
+                let pct = if l.drawn > 0 {
+                    100.0 * l.successes as f64 / l.drawn as f64
                 } else {
                     0.0
                 };
@@ -299,20 +302,21 @@ mod tests {
         assert!((all.mean_cruise_frac.unwrap() - 2.0 / 3.0).abs() < 1e-12);
         let md = r.markdown();
         assert!(md.contains("| clutter | 2 | 1 (50 %) | 1 |"), "{md}");
-        // A world not flown (no feasible draw for the craft) counts in the runs, not in the
-        // share that succeeded.
-        let mut not_flown = row("harbour", false, false, 0.0);
-        not_flown.error = Some("no feasible draw in 20: no path wide enough for the hull".into());
-        let short = Report::of(
-            &[row("harbour", true, false, 2.0), not_flown],
-            &Params::default(),
-            None,
-        )
-        .markdown();
+        // A world with no feasible draw for the craft counts in the runs, not in the share
+        // that succeeded; a run whose firmware failed is a failure.
+        let mut undrawn = row("harbour", false, false, 0.0);
+        undrawn.reference_s = None;
+        undrawn.error = Some("no feasible draw in 20: no path wide enough for the hull".into());
+        let mut broke = row("harbour", false, false, 0.0);
+        broke.error = Some("the firmware exited".into());
+        let of = |rows: &[Row]| Report::of(rows, &Params::default(), None).markdown();
+        let short = of(&[row("harbour", true, false, 2.0), undrawn]);
         assert!(
             short.contains("| harbour | 2 | 1 (100 %) | 0 | ≤ 95.0 % | 1 |"),
             "{short}"
         );
+        let short = of(&[row("harbour", true, false, 2.0), broke]);
+        assert!(short.contains("| harbour | 2 | 1 (50 %) | 0 |"), "{short}");
         assert!(md.contains("| 60 % / 10 % |"), "{md}");
         assert!(
             md.contains("| **all** | 3 | 2 (67 %) | 1 | ≤ 86.5 % |"),
