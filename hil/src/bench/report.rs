@@ -302,6 +302,11 @@ mod tests {
         assert!((all.mean_cruise_frac.unwrap() - 2.0 / 3.0).abs() < 1e-12);
         let md = r.markdown();
         assert!(md.contains("| clutter | 2 | 1 (50 %) | 1 |"), "{md}");
+        assert!(md.contains("| 60 % / 10 % |"), "{md}");
+        assert!(
+            md.contains("| **all** | 3 | 2 (67 %) | 1 | ≤ 86.5 % |"),
+            "{md}"
+        );
         // A world with no feasible draw for the craft counts in the runs, not in the share
         // that succeeded; a run whose firmware failed is a failure.
         let mut undrawn = row("harbour", false, false, 0.0);
@@ -317,11 +322,6 @@ mod tests {
         );
         let short = of(&[row("harbour", true, false, 2.0), broke]);
         assert!(short.contains("| harbour | 2 | 1 (50 %) | 0 |"), "{short}");
-        assert!(md.contains("| 60 % / 10 % |"), "{md}");
-        assert!(
-            md.contains("| **all** | 3 | 2 (67 %) | 1 | ≤ 86.5 % |"),
-            "{md}"
-        );
     }
 
     #[test]
