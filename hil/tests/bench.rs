@@ -3,7 +3,7 @@
 //! VideoRay with its own sonar (scanlines, the schema's default set-up), default parameters, VPF, on the host-process
 //! firmware. Nothing may be touched; the perception columns must be filled (the firmware
 //! reported its map) and honest (a perfect-perception run reports none); the formation must
-//! keep its lattice.
+//! keep its lattice; the berth must be held.
 //!
 //! And a flat-fish in a current, for the estimate it reports (it is not steered by it).
 //!
@@ -58,6 +58,14 @@ fn one_world_of_every_family_is_flown_without_contact() {
             r.id
         );
     }
+    // The berth is reached and held for a minute, a metre or two off the quay: before the
+    // route took the goal's own cell for the goal and the VPF held on it, this one was pushed
+    // off after arriving (`hil bench --families berth`).
+    let berth = rows.iter().find(|r| r.family == "berth");
+    assert!(
+        berth.is_some_and(|r| r.success),
+        "berth not held: {berth:?}"
+    );
     // The formation keeps its lattice in transit: its mates are not rocks. With their echoes
     // in the map (each mate's wake believed), this world's spacing error was 122 % of λ; 22 %
     // with them left out.

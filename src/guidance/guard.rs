@@ -277,8 +277,8 @@
 //! The guard runs after the planner's step, outside its 100 000-instruction budget. Its worst
 //! case for this and the head-on hypothesis, every table slot a contact seen once ahead and
 //! alone, is a phase of `cargo selftest` (a VideoRay at cruise among 32 of them, 4.7 m apart):
-//! the whole period is at most 512 520 instructions with the evidence map empty (the nearest
-//! contact, 3 m ahead, in close quarters) and 727 320 with its 32 cells, which every "alone"
+//! the whole period is at most 512 560 instructions with the evidence map empty (the nearest
+//! contact, 3 m ahead, in close quarters) and 727 360 with its 32 cells, which every "alone"
 //! test reads; about 4 ms of the 100 ms period at the STM32G431's 170 MHz.
 //!
 //! **Mates may stop.** A craft that turns slowly also judges the other vehicles the host
@@ -364,9 +364,9 @@
 //! (at most 32 × 32); for each contact seen once ahead, two "alone" tests over the table and
 //! the map's cells. The worst cases: a slow-turning craft in traffic closing from all round,
 //! which searches every heading twice for a clear motion and once more for the least bad
-//! (`cargo selftest`'s flat-fish in traffic, whole period at most 437 680 instructions, the
-//! planner's step 90 840), and a vehicle among contacts seen once ("Close quarters" above:
-//! 727 320).
+//! (`cargo selftest`'s flat-fish in traffic, whole period at most 437 360 instructions, the
+//! planner's step 90 520), and a vehicle among contacts seen once ("Close quarters" above:
+//! 727 360).
 
 use super::tracks::Tracks;
 use crate::math::{cos, max, min, sin, wrap_angle, Vec2};

@@ -26,7 +26,7 @@ const TRACK_GAIN: f32 = 0.3;
 /// Once arrived, the alternative strategies hold zero speed until the vehicle is this many
 /// arrival radii from the goal: a vehicle that cannot brake or turn on the spot (the flat-fish
 /// coasts for metres) would otherwise circle the goal, re-approaching each time it drifts out.
-const ARRIVAL_RELEASE: f32 = 4.0;
+pub(super) const ARRIVAL_RELEASE: f32 = 4.0;
 
 /// Cosine between two successive navigation-function descent directions below which the
 /// descent counts as reversed, i.e. the vehicle crossed a critical point (a saddle) along its

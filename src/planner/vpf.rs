@@ -4,11 +4,25 @@
 //! Moving obstacles enter at their predicted positions ([`Context::shifts`]): their stator and
 //! rotor PDFs are evaluated around the shifted shape. Other vehicles are not shifted: their
 //! circles also place the formation's virtual leader, which must see where they are.
+//!
+//! **Holding at the goal** (not in the seeds; only with the route layer, so the papers'
+//! experiments fly as published). A goal within an obstacle's reach is no minimum of E: the
+//! goal-point's Gaussian core pulls with A⁻·ε·d/σ² (0.008 m/s² a metre out, with the
+//! defaults) and a quay 2 m off pushes with f′(r) of eq. 12, a hundred times that — the
+//! "goals non-reachable with obstacles nearby" of Ge and Cui (*New potential functions for
+//! mobile robot path planning*, IEEE T-RA 16(5), 2000). A VideoRay sent to a point 1–2 m
+//! off a wall arrived and was pushed out again, its rotors circling it round the goal at up
+//! to 0.9 m/s for minutes. So once arrived (latched, and released
+//! [`ARRIVAL_RELEASE`] arrival radii out, as the other strategies hold) its field is the
+//! goal-point, the other vehicles and the virtual leader: the obstacles, the map and the
+//! rotors are left to the guard, which keeps the hull off what is believed whatever the
+//! field asks.
 
 use heapless::Vec;
 
 use super::escape::StallCause;
 use super::gradient::Field;
+use super::strategy::ARRIVAL_RELEASE;
 use super::{Context, Motion, Planner};
 use crate::field::{GoalPdf, RotorSense, RotorTerm};
 use crate::math::{min_num, Vec2};
@@ -117,6 +131,13 @@ impl Planner {
             Approach::Detour
         };
 
+        // Holding at the goal (module notes): latched on arrival, released as the other
+        // strategies release theirs.
+        let d = (cx.mission.goal - p).norm();
+        let reach = if m.arrived { ARRIVAL_RELEASE } else { 1.0 };
+        m.arrived = how == Approach::Routed && d <= reach * cx.leg.radius;
+        let holds = m.arrived;
+
         // Attractors: the active goal-point — as a cruise goal-point when far — and the
         // virtual leader (001 Table 1).
         let goal = goal_point(p, target, how, &prm, cx.leg.radius);
@@ -191,7 +212,7 @@ impl Planner {
         m.rotor_sense = common;
 
         let field = Field {
-            obstacles: world.obstacles(),
+            obstacles: if holds { &[] } else { world.obstacles() },
             shifts: cx.shifts,
             distances: &distances,
             agents: world.agents(),
@@ -199,9 +220,9 @@ impl Planner {
             agent_stator: self.agent_stator,
             goal,
             leader: leader.map(|(_, pdf)| pdf),
-            rotor_gradient,
+            rotor_gradient: if holds { Vec2::ZERO } else { rotor_gradient },
             origin: p,
-            map: world.map_cells(),
+            map: if holds { &[] } else { world.map_cells() },
             map_radius: world.map_radius(),
             map_stator: self.map_stator,
             leave_to_map: world.map_in_use(),

@@ -142,6 +142,16 @@
 //! the grid knows) it gets nothing: the planner runs exactly as without this layer, ghost
 //! goal-points included. `Params::route_cell_m` = 0 turns the layer
 //! off: the papers' planner unchanged.
+//!
+//! **Beside structure.** A goal a metre or two off a quay's face shares its 2 m cell with the
+//! wall's echoes, so the line to it is never clear and the walk ends in a blocked cell: the
+//! aim was then the centre of a cell beside the goal, and another as the vehicle moved, 1–1.5
+//! m from the goal either way. A VideoRay that had arrived 1.7 m off a wall was sent back and
+//! forth between two such centres at up to 1 m/s for the rest of the run (a world written by
+//! hand, not generated). A way whose farthest cell in sight is the goal's own or one beside
+//! it is now `Clear`: at this resolution that cell is the goal, and the last metres are the
+//! local planner's and the guard's. Measured with the hold at the goal (`hil bench --families
+//! berth`, `crate::planner::vpf`).
 
 pub mod grid;
 pub mod handoff;
@@ -553,6 +563,12 @@ impl Router {
             }
         }
         let c = walk.get(lo).copied().unwrap_or(first);
+        // A way's last step into the goal's own cell (or one beside it) is the goal at this
+        // resolution ("Beside structure", module notes).
+        let beside = |a: u8, b: usize| usize::from(a).abs_diff(b) <= 1;
+        if cell == source && beside(c.0, source.0) && beside(c.1, source.1) {
+            return (RouteStatus::Clear, goal);
+        }
         (RouteStatus::Detour, center(&c))
     }
 }

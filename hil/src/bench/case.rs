@@ -11,7 +11,7 @@ use vpf::{Params, Strategy};
 
 use super::feasible::{self, Infeasible};
 use super::turning;
-use super::worlds::{self, Family, World};
+use super::worlds::{self, Family, World, BERTH_HOLD_S};
 use crate::error::Error;
 use crate::output::{plot, RunOutput, Summary};
 use crate::runner::{hull_radius, run_quiet, turning_radius, QuietRun};
@@ -466,7 +466,12 @@ pub fn fly_keeping(
         }
     };
     row.reference_s = Some(reference);
-    let text = scenario_text(&world, attempt, case, duration_s(reference));
+    let hold_s = if case.family == Family::Berth {
+        BERTH_HOLD_S
+    } else {
+        0.0
+    };
+    let text = scenario_text(&world, attempt, case, duration_s(reference) + hold_s);
     let mut sc = match scenario::parse(&text, &case.id()) {
         Ok(s) => s,
         Err(e) => {
@@ -481,7 +486,11 @@ pub fn fly_keeping(
             ..*p
         };
     }
-    let out = match run_quiet(&sc, run) {
+    let run = QuietRun {
+        hold_s,
+        ..run.clone()
+    };
+    let out = match run_quiet(&sc, &run) {
         Ok(o) => o,
         Err(e) => {
             row.error = Some(e.to_string());
@@ -489,6 +498,7 @@ pub fn fly_keeping(
         }
     };
     measure(&mut row, &out, &world, shortest, reference);
+    row.success &= held(&out, hold_s);
     let text = || format!("{}{text}", flown_with(recipe.map(|(_, f)| f)));
     if !row.success {
         keep_failure(failed_dir, case, &text(), &out);
@@ -548,6 +558,27 @@ fn measure(row: &mut Row, out: &RunOutput, world: &World, shortest: f64, referen
         }
         _ => None,
     };
+}
+
+/// Whether every vehicle, from its first sample within the arrival radius, stayed within
+/// twice it for `hold_s` (trivially so with 0): it arrived and stayed, rather than touched
+/// the goal and was pushed off (`hil bench --families berth`).
+pub fn held(out: &RunOutput, hold_s: f64) -> bool {
+    let r = out.arrival_radius_m;
+    hold_s <= 0.0
+        || out.vehicles.iter().all(|v| {
+            let near = |s: &&crate::types::Sample| s.state.position.sub(v.goal).norm() <= r;
+            let Some(first) = v.samples.iter().find(near) else {
+                return false;
+            };
+            let after = v.samples.iter().filter(|s| s.t >= first.t);
+            let (mut last, mut kept) = (first.t, true);
+            for s in after {
+                last = s.t;
+                kept &= s.state.position.sub(v.goal).norm() <= 2.0 * r;
+            }
+            kept && last - first.t >= hold_s - 1e-6
+        })
 }
 
 /// A speed command under this, m/s, is a stop.
@@ -715,6 +746,33 @@ mod tests {
             set(v, &[("Hold(StaleNav)", 0.0)]);
         }
         assert_eq!(time_shares(&out), (None, None));
+    }
+
+    #[test]
+    fn a_berth_is_held_only_by_a_vehicle_that_arrives_and_stays_for_the_hold() {
+        let mut out = crate::output::test_support::run();
+        out.arrival_radius_m = 1.0;
+        out.vehicles.truncate(1);
+        // One sample a second: 10 m out, then 0.5 m off the goal from t = 1 s.
+        let at = |d: &[f64]| {
+            let mut o = out.clone();
+            let v = &mut o.vehicles[0];
+            v.samples.truncate(d.len());
+            for (k, (s, &d)) in v.samples.iter_mut().zip(d).enumerate() {
+                s.t = k as f64;
+                s.state.position = v.goal.add(P2::new(d, 0.0));
+            }
+            o
+        };
+        let stays = at(&[10.0, 0.5, 0.9, 1.9, 0.5, 0.5]);
+        assert!(held(&stays, 4.0), "within twice the radius for 4 s");
+        assert!(!held(&stays, 5.0), "the run ended before the hold did");
+        assert!(
+            !held(&at(&[10.0, 0.5, 2.1, 0.5, 0.5, 0.5]), 4.0),
+            "pushed off"
+        );
+        assert!(!held(&at(&[10.0, 3.0, 2.0]), 1.0), "never arrived");
+        assert!(held(&at(&[10.0, 3.0]), 0.0), "no hold asked");
     }
 
     #[test]

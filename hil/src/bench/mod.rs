@@ -8,8 +8,9 @@
 //!           [--keep-worlds]
 //! ```
 //!
-//! - [`worlds`]: the twelve families, and the waypoint-mission family `survey` (flown when
-//!   named), each world deterministic from (family, seed);
+//! - [`worlds`]: the twelve families, and the mission families `survey` (waypoints) and
+//!   `berth` (a goal by a quay, held for a minute), flown when named, each world
+//!   deterministic from (family, seed);
 //! - [`feasible`]: the grid search that checks a world is flyable by the craft and gives the
 //!   shortest feasible path (the reference time is that path at cruise speed);
 //! - [`turning`]: for a craft with a turning radius, the hybrid-A* search that checks it can
@@ -162,8 +163,8 @@ impl Default for Options {
 )]
 pub struct Args {
     /// world families (default: these twelve): clutter, boxes, wall_gap, harbour, utrap, ltrap,
-    /// channel, serpentine, rocks, crossing, head_on, formation; and, when named, the waypoint
-    /// missions: survey
+    /// channel, serpentine, rocks, crossing, head_on, formation; and, when named, the missions:
+    /// survey (waypoints), berth (a goal by a quay, held for a minute)
     #[arg(long, value_name = "a,b,...", value_delimiter = ',', value_parser = family)]
     families: Vec<Family>,
     /// worlds per family, seeds F .. F+N-1 (default 17: 204 worlds)

@@ -15,9 +15,12 @@ use std::f64::consts::PI;
 use crate::sim::Rng;
 use crate::types::{SimObstacle, SimShape, P2};
 
-/// Families of waypoint missions, flown when named (`--families survey`): not in the default
+/// Families of missions flown when named (`--families survey,berth`): not in the default
 /// set, so that its 204 worlds stay comparable from one change to the next.
-pub const MISSION_FAMILIES: [Family; 1] = [Family::Survey];
+pub const MISSION_FAMILIES: [Family; 2] = [Family::Survey, Family::Berth];
+
+/// How long a berth world's vehicle must hold at its goal after arriving, s ([`Family::Berth`]).
+pub const BERTH_HOLD_S: f64 = 60.0;
 
 /// The families, in table order (the default set).
 pub const FAMILIES: [Family; 12] = [
@@ -68,6 +71,11 @@ pub enum Family {
     /// scattered across the area, none within 5 m of a waypoint: a waypoint mission of 8–16
     /// legs, every one checked flyable; the reference time is the sum of the legs'.
     Survey,
+    /// A berth alongside a quay: the goal 0.8–2.8 m beyond the hull off the quay's face, by
+    /// a pier on one side or both (a slip) or none, reached across light clutter — and held
+    /// for [`BERTH_HOLD_S`] after arriving (an inspection station, a docking approach). The
+    /// other families end at arrival, so only this one measures whether the vehicle stays.
+    Berth,
 }
 
 impl Family {
@@ -87,6 +95,7 @@ impl Family {
             Family::HeadOn => "head_on",
             Family::Formation => "formation",
             Family::Survey => "survey",
+            Family::Berth => "berth",
         }
     }
 
@@ -472,6 +481,40 @@ pub fn generate(family: Family, seed: u64, attempt: u64, hull_m: f64) -> World {
             .collect();
             survey = Some(s);
         }
+        Family::Berth => {
+            // The quay's face across the track beyond the goal; the goal `off` m in front of
+            // it, `lateral` m off the track.
+            let off = hull_m + between(&mut rng, 0.8, 2.8);
+            let lateral = between(&mut rng, -10.0, 10.0);
+            crafts[0].goal = P2::new(length, lateral);
+            let face = length + off;
+            let half = between(&mut rng, 30.0, 60.0);
+            shapes.push(wall(
+                P2::new(face + 2.0, lateral - half),
+                P2::new(face + 2.0, lateral + half),
+                4.0,
+            ));
+            // Piers 8–20 m long out of the face, 1.5–4 m beyond the hull either side of the
+            // goal: none, one or two.
+            let piers = (rng.uniform() * 3.0) as usize;
+            let first = if rng.uniform() < 0.5 { -1.0 } else { 1.0 };
+            for k in 0..piers {
+                let side = if k == 0 { first } else { -first };
+                let y = lateral + side * (hull_m + between(&mut rng, 1.5, 4.0) + 0.75);
+                let reach = between(&mut rng, 8.0, 20.0);
+                shapes.push(wall(P2::new(face - reach, y), P2::new(face, y), 1.5));
+            }
+            shapes.extend(scatter(
+                &mut rng,
+                (length / 20.0) as usize,
+                (10.0, length - 25.0),
+                20.0,
+                3.0,
+                &[start],
+                6.0,
+                &mut |r, c| circle(c, between(r, 0.8, 2.5)),
+            ));
+        }
         Family::Formation => {
             let lattice = formation_lattice(hull_m);
             let room = lattice / 4.0;
@@ -574,6 +617,27 @@ mod tests {
                     let gap = a.start.sub(b.start).norm() - 2.0 * hull;
                     assert!(gap >= 4.0, "seed {seed}: {gap}");
                 }
+            }
+        }
+    }
+
+    #[test]
+    fn a_berth_goal_lies_a_little_more_than_the_hull_off_the_quay() {
+        for hull in [0.2, 2.25] {
+            for seed in 0..16 {
+                let w = generate(Family::Berth, seed, 0, hull);
+                let goal = w.crafts[0].goal;
+                let quay = w.obstacles[0].shape.signed_distance(goal);
+                assert!(
+                    (hull + 0.8 - 1e-9..=hull + 2.8 + 1e-9).contains(&quay),
+                    "hull {hull}, seed {seed}: {quay} m off the quay"
+                );
+                let nearest = w
+                    .obstacles
+                    .iter()
+                    .map(|o| o.shape.signed_distance(goal))
+                    .fold(f64::INFINITY, f64::min);
+                assert!(nearest >= hull + 0.8 - 1e-9, "seed {seed}: {nearest}");
             }
         }
     }

@@ -138,6 +138,9 @@ pub struct QuietRun {
     /// End the run at the first period where a vehicle has collided (negative clearance) or
     /// every vehicle is within `arrival_radius_m` of its goal, instead of at `duration_s`.
     pub stop_early: bool,
+    /// With `stop_early`, how long every vehicle must have been arrived before the run ends,
+    /// s (0: at once): the time it must hold there (a berth, `crate::bench::worlds`).
+    pub hold_s: f64,
     /// The host-process firmware on a Unix socket pair instead of a pty
     /// ([`Firmware::start_host_socket`](crate::firmware::Firmware::start_host_socket)); other targets ignore it.
     pub socket: bool,
@@ -155,6 +158,7 @@ impl QuietRun {
             target: Target::Host,
             binary: firmware::build(&Target::Host)?,
             stop_early: true,
+            hold_s: 0.0,
             socket: true,
             in_process: true,
         })
@@ -170,6 +174,7 @@ pub fn run(sc: &Scenario, cfg: &RunConfig) -> Result<RunResult, RunError> {
         log_dir: Some(&cfg.out_dir),
         progress: cfg.progress,
         stop_early: false,
+        hold_s: 0.0,
         socket: false,
         in_process: false,
     };
@@ -193,6 +198,7 @@ pub fn run_quiet(sc: &Scenario, q: &QuietRun) -> Result<RunOutput, RunError> {
         log_dir: None,
         progress: false,
         stop_early: q.stop_early,
+        hold_s: q.hold_s,
         socket: q.socket,
         in_process: q.in_process,
     };
@@ -200,12 +206,13 @@ pub fn run_quiet(sc: &Scenario, q: &QuietRun) -> Result<RunOutput, RunError> {
 }
 
 /// How [`simulate`] runs: frame logs into `log_dir` if given, a progress bar if `progress`,
-/// the end at arrival or collision if `stop_early`, the host firmware on a socket if `socket`
-/// (in this process if `in_process`).
+/// the end at arrival (held for `hold_s`) or collision if `stop_early`, the host firmware on
+/// a socket if `socket` (in this process if `in_process`).
 struct RunOptions<'a> {
     log_dir: Option<&'a std::path::Path>,
     progress: bool,
     stop_early: bool,
+    hold_s: f64,
     socket: bool,
     in_process: bool,
 }

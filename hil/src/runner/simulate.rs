@@ -230,6 +230,8 @@ pub(super) fn simulate(
         how.progress && std::io::stderr().is_terminal(),
         "t = {msg} s",
     );
+    // When every vehicle had first arrived (the hold's clock, `RunOptions::hold_s`).
+    let mut arrived_at: Option<f64> = None;
     for k in 0..steps {
         let t = k as f64 * sc.dt_s;
         let t_ms = (t * 1000.0).round() as u64;
@@ -293,8 +295,18 @@ pub(super) fn simulate(
             bar.set_position(k + 1);
             bar.set_message(format!("{t:7.1}"));
         }
-        if how.stop_early && finished(&sims, f64::from(params.arrival_radius_m)) {
-            break;
+        if how.stop_early {
+            match finished(&sims, f64::from(params.arrival_radius_m)) {
+                (true, _) => break,
+                (false, arrived) => {
+                    if arrived {
+                        arrived_at.get_or_insert(t);
+                    }
+                    if arrived_at.is_some_and(|a| t - a >= how.hold_s) {
+                        break;
+                    }
+                }
+            }
         }
     }
     end_progress(&bar);
@@ -332,10 +344,10 @@ pub(super) fn simulate(
     })
 }
 
-/// Whether a run can end early: a vehicle has collided at the last sample, or every vehicle's
-/// last sample is within `arrival_radius_m` of its goal (a waypoint mission: every waypoint
+/// Whether a run can end early: (a vehicle has collided at the last sample, every vehicle's
+/// last sample is within `arrival_radius_m` of its goal — a waypoint mission: every waypoint
 /// reached, in order).
-fn finished(sims: &[SimVehicle], arrival_radius_m: f64) -> bool {
+fn finished(sims: &[SimVehicle], arrival_radius_m: f64) -> (bool, bool) {
     let last = |s: &SimVehicle| s.record.samples.last().cloned();
     let collided = sims
         .iter()
@@ -346,7 +358,7 @@ fn finished(sims: &[SimVehicle], arrival_radius_m: f64) -> bool {
         }
         last(s).is_some_and(|x| x.state.position.sub(s.record.goal).norm() <= arrival_radius_m)
     });
-    collided || arrived
+    (collided, arrived)
 }
 
 /// A vehicle's waypoints as the harness judges them (`WaypointMark`): empty for a single goal.

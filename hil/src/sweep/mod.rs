@@ -235,6 +235,7 @@ pub fn sweep(spec_path: &Path, opts: &Options) -> Result<Outcome, Error> {
                 target: Target::Host,
                 binary,
                 stop_early: true,
+                hold_s: 0.0,
                 socket: !opts.pty,
                 in_process: !opts.process && !opts.pty,
             },
