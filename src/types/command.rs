@@ -49,7 +49,8 @@ pub enum Mode {
     Transit,
     /// Following the field to a ghost goal-point (000 §III).
     Escape,
-    /// Within the arrival radius of the goal (the field keeps station).
+    /// Within the arrival radius of the goal, or held there since it came within it (released
+    /// four arrival radii out): the planner keeps station on the goal.
     Arrived,
     /// The waypoint mission is complete and the vehicle circles its last waypoint
     /// ([`MissionEnd::Loiter`]).
