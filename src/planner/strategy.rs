@@ -26,7 +26,17 @@ const TRACK_GAIN: f32 = 0.3;
 /// Once arrived, the alternative strategies hold zero speed until the vehicle is this many
 /// arrival radii from the goal: a vehicle that cannot brake or turn on the spot (the flat-fish
 /// coasts for metres) would otherwise circle the goal, re-approaching each time it drifts out.
-pub(super) const ARRIVAL_RELEASE: f32 = 4.0;
+const ARRIVAL_RELEASE: f32 = 4.0;
+
+/// Whether a vehicle `d` m from a goal of arrival radius `radius` is arrived, given whether it
+/// was ([`ARRIVAL_RELEASE`]): within the radius, or within the release since it was.
+pub(super) fn still_arrived(was: bool, d: f32, radius: f32) -> bool {
+    d <= if was {
+        ARRIVAL_RELEASE * radius
+    } else {
+        radius
+    }
+}
 
 /// Cosine between two successive navigation-function descent directions below which the
 /// descent counts as reversed, i.e. the vehicle crossed a critical point (a saddle) along its
@@ -225,11 +235,7 @@ impl Planner {
             m.arrived = false;
             return min(prm.v_max, turn);
         }
-        m.arrived = if m.arrived {
-            d <= ARRIVAL_RELEASE * cx.leg.radius
-        } else {
-            d <= cx.leg.radius
-        };
+        m.arrived = still_arrived(m.arrived, d, cx.leg.radius);
         if m.arrived {
             0.0
         } else {

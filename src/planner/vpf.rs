@@ -12,8 +12,8 @@
 //! "goals non-reachable with obstacles nearby" of Ge and Cui (*New potential functions for
 //! mobile robot path planning*, IEEE T-RA 16(5), 2000). A VideoRay sent to a point 1–2 m
 //! off a wall arrived and was pushed out again, its rotors circling it round the goal at up
-//! to 0.9 m/s for minutes. So once arrived (latched, and released
-//! [`ARRIVAL_RELEASE`] arrival radii out, as the other strategies hold) its field is the
+//! to 0.9 m/s for minutes. So once arrived (latched until four arrival radii out, as the
+//! other strategies hold: [`still_arrived`]) its field is the
 //! goal-point, the other vehicles and the virtual leader: the obstacles, the map and the
 //! rotors are left to the guard, which keeps the hull off what is believed whatever the
 //! field asks.
@@ -22,7 +22,7 @@ use heapless::Vec;
 
 use super::escape::StallCause;
 use super::gradient::Field;
-use super::strategy::ARRIVAL_RELEASE;
+use super::strategy::still_arrived;
 use super::{Context, Motion, Planner};
 use crate::field::{GoalPdf, RotorSense, RotorTerm};
 use crate::math::{min_num, Vec2};
@@ -134,8 +134,7 @@ impl Planner {
         // Holding at the goal (module notes): latched on arrival, released as the other
         // strategies release theirs.
         let d = (cx.mission.goal - p).norm();
-        let reach = if m.arrived { ARRIVAL_RELEASE } else { 1.0 };
-        m.arrived = how == Approach::Routed && d <= reach * cx.leg.radius;
+        m.arrived = how == Approach::Routed && still_arrived(m.arrived, d, cx.leg.radius);
         let holds = m.arrived;
 
         // Attractors: the active goal-point — as a cruise goal-point when far — and the

@@ -11,7 +11,7 @@ use vpf::{Params, Strategy};
 
 use super::feasible::{self, Infeasible};
 use super::turning;
-use super::worlds::{self, Family, World, BERTH_HOLD_S};
+use super::worlds::{self, Family, World};
 use crate::error::Error;
 use crate::output::{plot, RunOutput, Summary};
 use crate::runner::{hull_radius, run_quiet, turning_radius, QuietRun};
@@ -466,11 +466,7 @@ pub fn fly_keeping(
         }
     };
     row.reference_s = Some(reference);
-    let hold_s = if case.family == Family::Berth {
-        BERTH_HOLD_S
-    } else {
-        0.0
-    };
+    let hold_s = case.family.hold_s();
     let text = scenario_text(&world, attempt, case, duration_s(reference) + hold_s);
     let mut sc = match scenario::parse(&text, &case.id()) {
         Ok(s) => s,
@@ -567,17 +563,13 @@ pub fn held(out: &RunOutput, hold_s: f64) -> bool {
     let r = out.arrival_radius_m;
     hold_s <= 0.0
         || out.vehicles.iter().all(|v| {
-            let near = |s: &&crate::types::Sample| s.state.position.sub(v.goal).norm() <= r;
-            let Some(first) = v.samples.iter().find(near) else {
-                return false;
-            };
-            let after = v.samples.iter().filter(|s| s.t >= first.t);
-            let (mut last, mut kept) = (first.t, true);
-            for s in after {
-                last = s.t;
-                kept &= s.state.position.sub(v.goal).norm() <= 2.0 * r;
-            }
-            kept && last - first.t >= hold_s - 1e-6
+            let off = |s: &crate::types::Sample| s.state.position.sub(v.goal).norm();
+            let after = v.samples.iter().skip_while(|s| off(s) > r);
+            let (first, last) = (after.clone().next(), after.clone().last());
+            after.clone().all(|s| off(s) <= 2.0 * r)
+                && first
+                    .zip(last)
+                    .is_some_and(|(a, b)| b.t - a.t >= hold_s - 1e-6)
         })
 }
 

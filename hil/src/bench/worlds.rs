@@ -99,6 +99,16 @@ impl Family {
         }
     }
 
+    /// How long a world's vehicles must hold at their goals after arriving, s: the run goes
+    /// on that long after they all arrived ([`BERTH_HOLD_S`] for a berth, else none).
+    pub fn hold_s(self) -> f64 {
+        if self == Family::Berth {
+            BERTH_HOLD_S
+        } else {
+            0.0
+        }
+    }
+
     /// The family named `s`.
     pub fn parse(s: &str) -> Option<Family> {
         FAMILIES

@@ -296,16 +296,12 @@ pub(super) fn simulate(
             bar.set_message(format!("{t:7.1}"));
         }
         if how.stop_early {
-            match finished(&sims, f64::from(params.arrival_radius_m)) {
-                (true, _) => break,
-                (false, arrived) => {
-                    if arrived {
-                        arrived_at.get_or_insert(t);
-                    }
-                    if arrived_at.is_some_and(|a| t - a >= how.hold_s) {
-                        break;
-                    }
-                }
+            let (collided, arrived) = finished(&sims, f64::from(params.arrival_radius_m));
+            if arrived {
+                arrived_at.get_or_insert(t);
+            }
+            if collided || arrived_at.is_some_and(|a| t - a >= how.hold_s) {
+                break;
             }
         }
     }
@@ -344,9 +340,9 @@ pub(super) fn simulate(
     })
 }
 
-/// Whether a run can end early: (a vehicle has collided at the last sample, every vehicle's
-/// last sample is within `arrival_radius_m` of its goal — a waypoint mission: every waypoint
-/// reached, in order).
+/// Whether, at the last sample, a vehicle has collided, and whether every vehicle is within
+/// `arrival_radius_m` of its goal (a waypoint mission: every waypoint reached, in order): the
+/// run can end early.
 fn finished(sims: &[SimVehicle], arrival_radius_m: f64) -> (bool, bool) {
     let last = |s: &SimVehicle| s.record.samples.last().cloned();
     let collided = sims
