@@ -1,6 +1,6 @@
 //! Waypoint missions on the kinematic vehicle of seed 000 eq. 8 (`common`): the order, passing
-//! intermediate waypoints at speed, braking onto the last, a leg's own speed, loitering, a
-//! survey, a formation flying the same list, and refusals.
+//! intermediate waypoints at speed, braking onto the last (one at a rock's face too), a leg's
+//! own speed, loitering, a survey, a formation flying the same list, and refusals.
 //!
 //! The route layer's part is played by hand: each period the planner is told the goal is in
 //! plain sight (`Planner::set_route(Some(goal))`), which is what the runtime does in open water.
@@ -97,6 +97,32 @@ fn waypoints_are_flown_in_order_passed_at_speed_and_the_last_is_braked_onto() {
     // At cruise: the 155 m took little more than 155 s at 1 m/s (turns and the final brake).
     let arrived = trace.iter().find(|x| x.4 == 4).unwrap().0;
     assert!(arrived < 200.0, "arrived after {arrived} s");
+}
+
+#[test]
+fn a_goal_at_a_rocks_face_is_reached_and_held() {
+    // Ge and Cui's "goal non-reachable with obstacles nearby": 0.1 m off a rock's face (where
+    // a sonar's cells put a face half a metre off) the rock's stator outpulls the goal-point,
+    // and with the rock in the field to the end the vehicle stopped 2 m short
+    // (`crate::planner::vpf`, "The final approach"). Within four arrival radii the field is
+    // the goal-point's alone; the kinematic vehicle has no guard, so this also shows that the
+    // field does not drive it at the rock.
+    let goal = Vec2::new(40.0, 0.0);
+    let rock = common::circle(1, 44.1, 0.0, 4.0);
+    let mut v = Vehicle::new(Params::default(), Vec2::new(0.0, 3.0), 0.0, goal);
+    v.world = common::world_of(&[rock]);
+    let trace = fly(&mut v, 120.0);
+    let r = Params::default().arrival_radius_m;
+    let first = trace.iter().position(|s| (s.1 - goal).norm() <= r);
+    let first = first.expect("arrives");
+    assert!(trace[first].0 < 60.0, "arrived at {} s", trace[first].0);
+    // Held: within the radius for the rest of the run, never touching the rock.
+    for s in &trace[first..] {
+        assert!((s.1 - goal).norm() <= r, "{s:?}");
+    }
+    for s in &trace {
+        assert!(v.world.clearance(s.1, 0.0) > 0.0, "{s:?}");
+    }
 }
 
 #[test]

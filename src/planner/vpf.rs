@@ -5,24 +5,28 @@
 //! rotor PDFs are evaluated around the shifted shape. Other vehicles are not shifted: their
 //! circles also place the formation's virtual leader, which must see where they are.
 //!
-//! **Holding at the goal** (not in the seeds; only with the route layer, so the papers'
-//! experiments fly as published). A goal within an obstacle's reach is no minimum of E: the
-//! goal-point's Gaussian core pulls with A⁻·ε·d/σ² (0.008 m/s² a metre out, with the
-//! defaults) and a quay 2 m off pushes with f′(r) of eq. 12, a hundred times that — the
-//! "goals non-reachable with obstacles nearby" of Ge and Cui (*New potential functions for
-//! mobile robot path planning*, IEEE T-RA 16(5), 2000). A VideoRay sent to a point 1–2 m
-//! off a wall arrived and was pushed out again, its rotors circling it round the goal at up
-//! to 0.9 m/s for minutes. So once arrived (latched until four arrival radii out, as the
-//! other strategies hold: [`still_arrived`]) its field is the
-//! goal-point, the other vehicles and the virtual leader: the obstacles, the map and the
-//! rotors are left to the guard, which keeps the hull off what is believed whatever the
-//! field asks.
-
+//! **The final approach and holding at the goal** (not in the seeds; only with the route
+//! layer, so the papers' experiments fly as published). A goal within an obstacle's reach is
+//! no minimum of E: the goal-point's Gaussian core pulls with A⁻·ε·d/σ² (0.008 m/s² a metre
+//! out, with the defaults) and a quay 2 m off pushes with f′(r) of eq. 12, a hundred times
+//! that — the "goals non-reachable with obstacles nearby" of Ge and Cui (*New potential
+//! functions for mobile robot path planning*, IEEE T-RA 16(5), 2000). A VideoRay sent to a
+//! point 1–2 m off a wall arrived and was pushed out again, its rotors circling it round the
+//! goal at up to 0.9 m/s for minutes; sent to one 0.5 m off a rock's face, it never arrived:
+//! the field held it 2 m short, its rotors swinging it from side to side. So within
+//! [`ARRIVAL_RELEASE`] arrival radii of a goal in plain sight — where a vehicle that has
+//! arrived is held (latched on arrival, released there, as the other strategies hold:
+//! [`still_arrived`]) — its field is the goal-point, the other vehicles and the virtual
+//! leader: the obstacles, the map and the rotors are left to the guard, which keeps the hull
+//! off what is believed whatever the field asks. Ge and Cui make the goal the minimum by
+//! scaling the repulsion with the distance to the goal; leaving the last metres to the guard
+//! does the same without a second tuning, and the route has already said the way is clear.
+//!
 use heapless::Vec;
 
 use super::escape::StallCause;
 use super::gradient::Field;
-use super::strategy::still_arrived;
+use super::strategy::{still_arrived, ARRIVAL_RELEASE};
 use super::{Context, Motion, Planner};
 use crate::field::{GoalPdf, RotorSense, RotorTerm};
 use crate::math::{min_num, Vec2};
@@ -131,11 +135,11 @@ impl Planner {
             Approach::Detour
         };
 
-        // Holding at the goal (module notes): latched on arrival, released as the other
-        // strategies release theirs.
+        // The final approach and the hold (module notes): arrival latched as the other
+        // strategies latch theirs; the field the goal's alone within their release.
         let d = (cx.mission.goal - p).norm();
         m.arrived = how == Approach::Routed && still_arrived(m.arrived, d, cx.leg.radius);
-        let holds = m.arrived;
+        let holds = how == Approach::Routed && d <= ARRIVAL_RELEASE * cx.leg.radius;
 
         // Attractors: the active goal-point — as a cruise goal-point when far — and the
         // virtual leader (001 Table 1).
@@ -249,7 +253,14 @@ impl Planner {
         // is then the guard that holds the vehicle): the flat-fish with its recipe, seeds
         // 0–33, 358 → 310 of 408 — its guard holds it at every bend of a channel while it
         // turns on the spot, and the ghosts led it off the way (channels 31 → 16).
+        // On the final approach the field has a way down by construction: what holds the
+        // vehicle is the guard, at something believed, so a ghost goal-point takes it round
+        // with the whole field (module notes).
+        let approaching = holds && !m.arrived;
         let cause = |target: Vec2| {
+            if approaching {
+                return StallCause::Static;
+            }
             let free = |f: Vec2| f.norm() > prm.mu * prm.stall_speed;
             if let Some((f, _)) = leader {
                 if free(forces.without_leader) {

@@ -195,6 +195,13 @@ impl Grid {
         }
     }
 
+    /// Marks window cell (column, row) in the sensed layer (nothing outside the window).
+    pub fn mark_sensed_cell(&mut self, (c, r): (usize, usize)) {
+        if let Some(row) = self.sensed.get_mut(r) {
+            *row |= 1u64.checked_shl(c as u32).unwrap_or(0);
+        }
+    }
+
     /// Whether the segment `a`→`b` crosses no cell set in `blocked` (cell `skip`, the
     /// vehicle's own, excepted; outside the window nothing is known, so nothing blocks).
     pub fn line_clear(&self, blocked: &Rows, a: Vec2, b: Vec2, skip: (usize, usize)) -> bool {

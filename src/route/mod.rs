@@ -152,6 +152,14 @@
 //! it is now `Clear`: at this resolution that cell is the goal, and the last metres are the
 //! local planner's and the guard's. Measured with the hold at the goal (`hil bench --families
 //! berth`, `crate::planner::vpf`).
+//!
+//! That cell may hold the wall too, and then the wall's far side is one step from the goal:
+//! a wall at 45° to the grid leaves the goal's cell open only at two corners, one on each
+//! side. A VideoRay sent to a point 1.2 m off such a wall's face was routed round its end to
+//! the far side and back for the whole run (a world written by hand). So the goal's
+//! neighbour cells that the goal cannot see through the evidence map's believed cells (at
+//! 0.5 m) are marked occupied ([`Router::close_hidden`]): the way into the goal's cell is
+//! from the goal's own side.
 
 pub mod grid;
 pub mod handoff;
@@ -408,7 +416,7 @@ impl Router {
             self.grid.absorb(m);
         }
         self.counters.replans = self.counters.replans.saturating_add(1);
-        let (status, aim) = self.plan(p, goal);
+        let (status, aim) = self.plan(p, goal, map);
         if status == RouteStatus::Blocked {
             self.counters.blocked = self.counters.blocked.saturating_add(1);
         }
@@ -421,12 +429,15 @@ impl Router {
     }
 
     /// Steps 2–3 of the module notes.
-    fn plan(&mut self, p: Vec2, goal: Vec2) -> (RouteStatus, Vec2) {
+    fn plan(&mut self, p: Vec2, goal: Vec2, map: Option<&EvidenceMap>) -> (RouteStatus, Vec2) {
         let Some(start) = self.grid.cell_of(p) else {
             return (RouteStatus::Blocked, goal);
         };
         let inside = self.grid.cell_of(goal);
         let source = inside.unwrap_or_else(|| self.grid.clamp(goal));
+        if let (Some(c), Some(m)) = (inside, map) {
+            self.close_hidden(goal, c, m);
+        }
         if !self.choose_pass(start, source) {
             return (RouteStatus::Blocked, goal);
         }
@@ -436,6 +447,19 @@ impl Router {
             self.grid.center(source.0, source.1)
         };
         self.aim(p, start, source, end, goal)
+    }
+
+    /// Marks occupied, in the sensed layer, the neighbours of the goal's cell `cell` whose
+    /// centres the goal cannot see through the evidence map's believed cells ("Beside
+    /// structure", module notes; believed cells within [`OWN_CELL_M`] of the goal hide
+    /// nothing: a speckle cell on the goal is not a wall). The map's next absorb rewrites them.
+    fn close_hidden(&mut self, goal: Vec2, (c, r): Cell, map: &EvidenceMap) {
+        for (dc, dr) in NEIGHBOURS {
+            let n = (c.wrapping_add_signed(dc), r.wrapping_add_signed(dr));
+            if map.occupied_along(goal, self.grid.center(n.0, n.1), OWN_CELL_M) {
+                self.grid.mark_sensed_cell(n);
+            }
+        }
     }
 
     /// Spreads the passes, widest first, and leaves `blocked` and the wavefront holding the
@@ -608,6 +632,21 @@ impl Router {
     }
 }
 
+/// The eight neighbours of a route cell, (column, row) steps.
+const NEIGHBOURS: [(isize, isize); 8] = [
+    (1, 0),
+    (1, 1),
+    (0, 1),
+    (-1, 1),
+    (-1, 0),
+    (-1, -1),
+    (0, -1),
+    (1, -1),
+];
+
+/// Believed map cells this near the goal do not hide its neighbours from it, m.
+const OWN_CELL_M: f32 = 0.5;
+
 /// The longest way, in steps, taken to keep the route off obstacles when a way `shortest`
 /// steps long passes nearer them: a quarter longer and 4 cells more.
 fn acceptable(shortest: u32) -> u32 {
@@ -703,6 +742,44 @@ mod tests {
         // No replan before `replan_ms`.
         assert_eq!(r.on_nav(Vec2::ZERO, 500, None), None);
         assert!(r.on_nav(Vec2::ZERO, 1000, None).is_some());
+    }
+
+    #[test]
+    fn a_goal_beside_a_wall_is_reached_from_its_own_side() {
+        // A 30 m wall 1 m thick at −44.4° to the grid; the goal 1.18 m off its south-western
+        // face shares a 2 m cell with it, whose only open neighbours are its corners — one on
+        // each side (`hil run`, a world written by hand: the vehicle was routed round the
+        // wall's end to the far side, and back, for the whole run). The sonar sees the face
+        // towards the vehicle.
+        let dir = Vec2::new(0.714, -0.700);
+        let far = Vec2::new(0.700, 0.714);
+        let centre = Vec2::new(61.17, 1.2);
+        let goal = Vec2::new(60.0, 0.0);
+        let side = |v: Vec2| (v - centre).dot(far);
+        for (p, face) in [
+            (Vec2::new(60.3, -3.3), -0.5),
+            (Vec2::new(52.5, 0.0), -0.5),
+            (Vec2::new(66.7, 2.7), 0.5),
+            (Vec2::new(59.7, 9.6), 0.5),
+        ] {
+            let map = EvidenceMap::new(crate::sonar::EvidenceConfig::default()).unwrap();
+            map.follow(p);
+            (-60..=60).for_each(|k| map.believe(centre + dir * (0.25 * k as f32) + far * face));
+            let mut r = Router::new(RouteConfig::default());
+            r.grid.follow(p);
+            r.set_goal(Some(goal));
+            let route = r.on_nav(p, 0, Some(&map)).unwrap();
+            if side(p) < 0.0 {
+                assert_eq!(route.status, RouteStatus::Clear, "{p:?}: {route:?}");
+            } else {
+                // Round an end of the wall, never through it to the goal.
+                assert_eq!(route.status, RouteStatus::Detour, "{p:?}: {route:?}");
+                assert!(
+                    side(route.aim) > 0.0 || (route.aim - centre).dot(dir).abs() > 15.0,
+                    "{p:?}: {route:?}"
+                );
+            }
+        }
     }
 
     #[test]

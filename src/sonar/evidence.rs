@@ -683,6 +683,18 @@ impl EvidenceMap {
         false
     }
 
+    /// Whether the segment `a`→`b` passes through a believed cell farther than `skip_m` from
+    /// `a` (false with no window), at [`ALONG_SAMPLES`] points.
+    #[inline(never)]
+    pub fn occupied_along(&self, a: Vec2, b: Vec2, skip_m: f32) -> bool {
+        let Some(w) = self.window() else { return false };
+        (1..=ALONG_SAMPLES).any(|k| {
+            let x = a + (b - a) * (k as f32 / ALONG_SAMPLES as f32);
+            let (i, j) = self.cell_of(x);
+            (x - a).norm2() > skip_m * skip_m && self.is_occupied(w, i, j)
+        })
+    }
+
     /// Row `r` (0 ..= [`MAP_SIDE`] − 1) of window `w` as a bitmap, bit k = column `w.x0 + k`.
     pub fn row_bits(&self, w: Window, r: i32) -> u64 {
         let j = w.y0.wrapping_add(r);
@@ -695,6 +707,10 @@ impl EvidenceMap {
         })
     }
 }
+
+/// Points [`EvidenceMap::occupied_along`] looks at: a quarter of a 0.5 m cell apart over the
+/// 4.2 m from a goal to the far corner of a 2 m route cell's neighbour.
+const ALONG_SAMPLES: u32 = 32;
 
 /// The eight neighbours of a cell.
 const NEIGHBOURS: [(i32, i32); 8] = [
