@@ -3,7 +3,7 @@
 //! VideoRay with its own sonar (scanlines, the schema's default set-up), default parameters, VPF, on the host-process
 //! firmware. Nothing may be touched; the perception columns must be filled (the firmware
 //! reported its map) and honest (a perfect-perception run reports none); the formation must
-//! keep its lattice; the berth must be held.
+//! keep its lattice; the berth must be held, and a goal nearer a rock's face (face seed 15).
 //!
 //! And a flat-fish in a current, for the estimate it reports (it is not steered by it).
 //!
@@ -11,7 +11,7 @@
 //! change that makes the vehicle drive into what it saw fails here.
 
 use hil::bench::case::{self, Case};
-use hil::bench::worlds::{FAMILIES, MISSION_FAMILIES};
+use hil::bench::worlds::{Family, FAMILIES, MISSION_FAMILIES};
 use hil::runner::QuietRun;
 use hil::scenario::Sensing;
 use std::path::Path;
@@ -66,6 +66,11 @@ fn one_world_of_every_family_is_flown_without_contact() {
         berth.is_some_and(|r| r.success),
         "berth not held: {berth:?}"
     );
+    // A goal 0.5 m beyond the hull off a rock's face, reached and held: before the VPF's final
+    // approach left the last metres to the goal-point and the guard, the field held the
+    // vehicle short of it for the whole run (`hil bench --families face`).
+    let face = case::fly(&Case::new(Family::Face, 15), None, &run, &failed_dir());
+    assert!(face.success && !face.collided, "face 15: {face:?}");
     // The formation keeps its lattice in transit: its mates are not rocks. With their echoes
     // in the map (each mate's wake believed), this world's spacing error was 122 % of λ; 22 %
     // with them left out.

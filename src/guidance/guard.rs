@@ -364,8 +364,8 @@
 //! (at most 32 × 32); for each contact seen once ahead, two "alone" tests over the table and
 //! the map's cells. The worst cases: a slow-turning craft in traffic closing from all round,
 //! which searches every heading twice for a clear motion and once more for the least bad
-//! (`cargo selftest`'s flat-fish in traffic, whole period at most 437 560 instructions, the
-//! planner's step 90 720), and a vehicle among contacts seen once ("Close quarters" above:
+//! (`cargo selftest`'s flat-fish in traffic, whole period at most 437 400 instructions, the
+//! planner's step 90 600), and a vehicle among contacts seen once ("Close quarters" above:
 //! 727 360).
 
 use super::tracks::Tracks;

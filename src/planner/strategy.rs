@@ -26,7 +26,7 @@ const TRACK_GAIN: f32 = 0.3;
 /// Once arrived, the alternative strategies hold zero speed until the vehicle is this many
 /// arrival radii from the goal: a vehicle that cannot brake or turn on the spot (the flat-fish
 /// coasts for metres) would otherwise circle the goal, re-approaching each time it drifts out.
-/// Within as many radii of a routed goal the VPF's field is the goal-point's alone (its final
+/// Within as many radii of a routed goal the VPF's field is the goal-point's alone (the final
 /// approach and hold, `crate::planner::vpf`).
 pub(super) const ARRIVAL_RELEASE: f32 = 4.0;
 

@@ -21,7 +21,15 @@
 //! off what is believed whatever the field asks. Ge and Cui make the goal the minimum by
 //! scaling the repulsion with the distance to the goal; leaving the last metres to the guard
 //! does the same without a second tuning, and the route has already said the way is clear.
-//!
+//! Such a field always has a way down, so a stall on the final approach is the guard's, at
+//! something believed beside the way (a lone speckle cell 0.5 m off held a VideoRay 2 m
+//! short for the rest of a run: bench rocks seed 43); it places a ghost goal-point, which
+//! brings back the whole field, and a ghost is dropped once the goal is reached.
+//! Not for a craft that turns slowly (`Params::turns_slowly`): it reaches its wider arrival
+//! circle on the whole field, and stopped by its guard 11 m short of a berth, it could not
+//! turn out (the flat-fish with its recipe, berth seeds 0–59, 57 → 56; its nine other
+//! families, seeds 0–169, 1 335 → 1 334: nothing gained); it holds once arrived, as before.
+
 use heapless::Vec;
 
 use super::escape::StallCause;
@@ -119,6 +127,12 @@ impl Planner {
         let p = cx.nav.position;
         let prm = self.params;
         let world = cx.world;
+        // A ghost goal-point placed on the final approach is moot at the goal (module notes);
+        // without a route the papers' ghosts run their course.
+        let d = (cx.mission.goal - p).norm();
+        if cx.routed && d <= cx.leg.radius {
+            m.escape.reset();
+        }
         let target = m.escape.active_target(cx.aim);
         let how = if target != cx.aim {
             // A ghost goal-point is up: the field as published.
@@ -137,9 +151,9 @@ impl Planner {
 
         // The final approach and the hold (module notes): arrival latched as the other
         // strategies latch theirs; the field the goal's alone within their release.
-        let d = (cx.mission.goal - p).norm();
         m.arrived = how == Approach::Routed && still_arrived(m.arrived, d, cx.leg.radius);
-        let holds = how == Approach::Routed && d <= ARRIVAL_RELEASE * cx.leg.radius;
+        let approach = !prm.turns_slowly() && d <= ARRIVAL_RELEASE * cx.leg.radius;
+        let holds = how == Approach::Routed && (m.arrived || approach);
 
         // Attractors: the active goal-point — as a cruise goal-point when far — and the
         // virtual leader (001 Table 1).

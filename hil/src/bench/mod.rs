@@ -8,8 +8,9 @@
 //!           [--keep-worlds]
 //! ```
 //!
-//! - [`worlds`]: the twelve families, and the mission families `survey` (waypoints) and
-//!   `berth` (a goal by a quay, held for a minute), flown when named, each world
+//! - [`worlds`]: the twelve families, and the mission families `survey` (waypoints),
+//!   `berth` (a goal by a quay, held for a minute) and `face` (a goal nearer a rock's, a
+//!   pile's or a wall's face, held for a minute), flown when named, each world
 //!   deterministic from (family, seed);
 //! - [`feasible`]: the grid search that checks a world is flyable by the craft and gives the
 //!   shortest feasible path (the reference time is that path at cruise speed);
@@ -164,7 +165,8 @@ impl Default for Options {
 pub struct Args {
     /// world families (default: these twelve): clutter, boxes, wall_gap, harbour, utrap, ltrap,
     /// channel, serpentine, rocks, crossing, head_on, formation; and, when named, the missions:
-    /// survey (waypoints), berth (a goal by a quay, held for a minute)
+    /// survey (waypoints), berth (a goal by a quay, held for a minute), face (a goal 0.5–1.5 m
+    /// beyond the hull off a rock, a pile or a wall, held for a minute)
     #[arg(long, value_name = "a,b,...", value_delimiter = ',', value_parser = family)]
     families: Vec<Family>,
     /// worlds per family, seeds F .. F+N-1 (default 17: 204 worlds)

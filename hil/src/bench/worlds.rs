@@ -15,11 +15,12 @@ use std::f64::consts::PI;
 use crate::sim::Rng;
 use crate::types::{SimObstacle, SimShape, P2};
 
-/// Families of missions flown when named (`--families survey,berth`): not in the default
-/// set, so that its 204 worlds stay comparable from one change to the next.
-pub const MISSION_FAMILIES: [Family; 2] = [Family::Survey, Family::Berth];
+/// Families of missions flown when named (`--families survey,berth,face`): not in the
+/// default set, so that its 204 worlds stay comparable from one change to the next.
+pub const MISSION_FAMILIES: [Family; 3] = [Family::Survey, Family::Berth, Family::Face];
 
-/// How long a berth world's vehicle must hold at its goal after arriving, s ([`Family::Berth`]).
+/// How long a berth's or a face's vehicle must hold at its goal after arriving, s
+/// ([`Family::Berth`], [`Family::Face`]).
 pub const BERTH_HOLD_S: f64 = 60.0;
 
 /// The families, in table order (the default set).
@@ -76,6 +77,11 @@ pub enum Family {
     /// for [`BERTH_HOLD_S`] after arriving (an inspection station, a docking approach). The
     /// other families end at arrival, so only this one measures whether the vehicle stays.
     Berth,
+    /// A goal 0.5–1.5 m beyond the hull off the face of one structure — a rock 2–16 m across,
+    /// a pile, a wall at any angle to the way in, a wall's corner — reached across light
+    /// clutter and held for [`BERTH_HOLD_S`] (an inspection station: nearer than a berth, as
+    /// near as the feasibility check's margin allows).
+    Face,
 }
 
 impl Family {
@@ -96,13 +102,15 @@ impl Family {
             Family::Formation => "formation",
             Family::Survey => "survey",
             Family::Berth => "berth",
+            Family::Face => "face",
         }
     }
 
     /// How long a world's vehicles must hold at their goals after arriving, s: the run goes
-    /// on that long after they all arrived ([`BERTH_HOLD_S`] for a berth, else none).
+    /// on that long after they all arrived ([`BERTH_HOLD_S`] for a berth or a face, else
+    /// none).
     pub fn hold_s(self) -> f64 {
-        if self == Family::Berth {
+        if matches!(self, Family::Berth | Family::Face) {
             BERTH_HOLD_S
         } else {
             0.0
@@ -525,6 +533,54 @@ pub fn generate(family: Family, seed: u64, attempt: u64, hull_m: f64) -> World {
                 &mut |r, c| circle(c, between(r, 0.8, 2.5)),
             ));
         }
+        Family::Face => {
+            // The face `off` m beyond the goal along `u`, which leans at most 70° off the way
+            // in, so the goal's open side faces the start.
+            let off = hull_m + between(&mut rng, 0.5, 1.5);
+            let lean = between(&mut rng, -1.2, 1.2);
+            let (u, along) = (
+                P2::new(lean.cos(), lean.sin()),
+                P2::new(-lean.sin(), lean.cos()),
+            );
+            let goal = P2::new(length, between(&mut rng, -10.0, 10.0));
+            crafts[0].goal = goal;
+            let face = goal.add(u.scale(off));
+            match (rng.uniform() * 4.0) as usize {
+                0 => {
+                    let r = between(&mut rng, 1.0, 8.0);
+                    shapes.push(circle(face.add(u.scale(r)), r));
+                }
+                1 => shapes.push(circle(face.add(u.scale(0.3)), 0.3)),
+                k => {
+                    let (half, t) = (between(&mut rng, 10.0, 25.0), 1.0);
+                    let mid = face.add(u.scale(0.5 * t));
+                    shapes.push(wall(
+                        mid.sub(along.scale(half)),
+                        mid.add(along.scale(half)),
+                        t,
+                    ));
+                    if k == 3 {
+                        // A second wall square to it, its face 1–3 m beyond the hull beside
+                        // the goal, reaching 8–15 m out of the first.
+                        let side = if rng.uniform() < 0.5 { -1.0 } else { 1.0 };
+                        let beside = hull_m + between(&mut rng, 1.0, 3.0) + 0.5 * t;
+                        let at = mid.add(along.scale(side * beside));
+                        let reach = between(&mut rng, 8.0, 15.0);
+                        shapes.push(wall(at, at.sub(u.scale(reach)), t));
+                    }
+                }
+            }
+            shapes.extend(scatter(
+                &mut rng,
+                (length / 20.0) as usize,
+                (10.0, length - 25.0),
+                20.0,
+                3.0,
+                &[start],
+                6.0,
+                &mut |r, c| circle(c, between(r, 0.8, 2.5)),
+            ));
+        }
         Family::Formation => {
             let lattice = formation_lattice(hull_m);
             let room = lattice / 4.0;
@@ -648,6 +704,27 @@ mod tests {
                     .map(|o| o.shape.signed_distance(goal))
                     .fold(f64::INFINITY, f64::min);
                 assert!(nearest >= hull + 0.8 - 1e-9, "seed {seed}: {nearest}");
+            }
+        }
+    }
+
+    #[test]
+    fn a_face_goal_lies_half_a_metre_to_a_metre_and_a_half_beyond_the_hull_off_it() {
+        for hull in [0.2, 2.25] {
+            for seed in 0..32 {
+                let w = generate(Family::Face, seed, 0, hull);
+                let goal = w.crafts[0].goal;
+                let face = w.obstacles[0].shape.signed_distance(goal);
+                assert!(
+                    (hull + 0.5 - 1e-9..=hull + 1.5 + 1e-9).contains(&face),
+                    "hull {hull}, seed {seed}: {face} m off the face"
+                );
+                let nearest = w
+                    .obstacles
+                    .iter()
+                    .map(|o| o.shape.signed_distance(goal))
+                    .fold(f64::INFINITY, f64::min);
+                assert!(nearest >= hull + 0.5 - 1e-9, "seed {seed}: {nearest}");
             }
         }
     }
