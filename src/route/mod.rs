@@ -172,6 +172,7 @@ pub use wavefront::Wavefront;
 use crate::field::Shape;
 use crate::math::Vec2;
 use crate::params::Params;
+use crate::sonar::evidence::NEIGHBOURS;
 use crate::sonar::{EvidenceMap, Feature, FeatureKind};
 use wavefront::Cell;
 
@@ -455,7 +456,10 @@ impl Router {
     /// nothing: a speckle cell on the goal is not a wall). The map's next absorb rewrites them.
     fn close_hidden(&mut self, goal: Vec2, (c, r): Cell, map: &EvidenceMap) {
         for (dc, dr) in NEIGHBOURS {
-            let n = (c.wrapping_add_signed(dc), r.wrapping_add_signed(dr));
+            let n = (
+                c.wrapping_add_signed(dc as isize),
+                r.wrapping_add_signed(dr as isize),
+            );
             if map.occupied_along(goal, self.grid.center(n.0, n.1), OWN_CELL_M) {
                 self.grid.mark_sensed_cell(n);
             }
@@ -631,18 +635,6 @@ impl Router {
         }
     }
 }
-
-/// The eight neighbours of a route cell, (column, row) steps.
-const NEIGHBOURS: [(isize, isize); 8] = [
-    (1, 0),
-    (1, 1),
-    (0, 1),
-    (-1, 1),
-    (-1, 0),
-    (-1, -1),
-    (0, -1),
-    (1, -1),
-];
 
 /// Believed map cells this near the goal do not hide its neighbours from it, m.
 const OWN_CELL_M: f32 = 0.5;

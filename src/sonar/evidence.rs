@@ -712,8 +712,8 @@ impl EvidenceMap {
 /// 4.2 m from a goal to the far corner of a 2 m route cell's neighbour.
 const ALONG_SAMPLES: u32 = 32;
 
-/// The eight neighbours of a cell.
-const NEIGHBOURS: [(i32, i32); 8] = [
+/// The eight neighbours of a cell (of this map's, or of the route's grid).
+pub(crate) const NEIGHBOURS: [(i32, i32); 8] = [
     (1, 0),
     (1, 1),
     (0, 1),
