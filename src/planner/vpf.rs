@@ -127,8 +127,9 @@ impl Planner {
         let p = cx.nav.position;
         let prm = self.params;
         let world = cx.world;
-        // A ghost goal-point placed on the final approach is moot at the goal (module notes);
-        // without a route the papers' ghosts run their course.
+        // A ghost goal-point is moot at the goal: one placed on the final approach outlived
+        // the arrival and led a held vehicle off its berth (module notes). Without a route the
+        // papers' ghosts run their course.
         let d = (cx.mission.goal - p).norm();
         if cx.routed && d <= cx.leg.radius {
             m.escape.reset();

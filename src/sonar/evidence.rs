@@ -684,7 +684,8 @@ impl EvidenceMap {
     }
 
     /// Whether the segment `a`→`b` passes through a believed cell farther than `skip_m` from
-    /// `a` (false with no window), at [`ALONG_SAMPLES`] points.
+    /// `a` (false with no window), at [`ALONG_SAMPLES`] points. (Out of line: 48 bytes less
+    /// flash than inlined into the route's replan.)
     #[inline(never)]
     pub fn occupied_along(&self, a: Vec2, b: Vec2, skip_m: f32) -> bool {
         let Some(w) = self.window() else { return false };
@@ -708,8 +709,9 @@ impl EvidenceMap {
     }
 }
 
-/// Points [`EvidenceMap::occupied_along`] looks at: a quarter of a 0.5 m cell apart over the
-/// 4.2 m from a goal to the far corner of a 2 m route cell's neighbour.
+/// Points [`EvidenceMap::occupied_along`] looks at: about a quarter of a 0.5 m cell apart
+/// over the longest segment the route asks about, 4.2 m from a goal in a corner of its 2 m
+/// cell to the centre of the diagonal neighbour beyond it.
 const ALONG_SAMPLES: u32 = 32;
 
 /// The eight neighbours of a cell (of this map's, or of the route's grid).
